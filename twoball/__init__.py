@@ -1,0 +1,23 @@
+"""twoball: the two-ball bounce solved exactly (see model.md and the README)."""
+
+from importlib.metadata import PackageNotFoundError, version
+
+from twoball.model import Parameters, check_parameters
+from twoball.observables import ContactInterval, Result, Trajectory
+from twoball.solve import METHODS, simulate
+
+try:
+    __version__ = version("twoball")
+except PackageNotFoundError:  # running from a source tree that was not installed
+    __version__ = "0+unknown"
+
+__all__ = [
+    "METHODS",
+    "ContactInterval",
+    "Parameters",
+    "Result",
+    "Trajectory",
+    "__version__",
+    "check_parameters",
+    "simulate",
+]

@@ -1,0 +1,216 @@
+"""The two-ball model: parameters, restitution and damping, initial condition (model.md).
+
+Everything here is plain physics: no solver, no UI. Parameters are declared once, in
+:class:`Parameters`, with their bounds and documentation; :func:`check_parameters` validates plain
+floats against those same declarations, so the library, the command line and the app share one
+definition of what is allowed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import param
+
+DEFAULT_HEIGHT = 1.0e4
+
+
+class Parameters(param.Parameterized):
+    """The inputs of one drop (model.md, "Bodies, coordinates, forces" and "Initial condition")."""
+
+    eps = param.Number(
+        0.816,
+        bounds=(0.0, 1.0),
+        inclusive_bounds=(False, True),
+        doc="Coefficient of restitution of the floor contact (eps01); also of the ball contact "
+        "unless eps12 is given.",
+    )
+    eps12 = param.Number(
+        None,
+        allow_None=True,
+        bounds=(0.0, 1.0),
+        inclusive_bounds=(False, True),
+        doc="Coefficient of restitution of the ball-ball contact; None means equal to eps.",
+    )
+    mu = param.Number(
+        0.05,
+        bounds=(0.0, None),
+        inclusive_bounds=(False, True),
+        doc="Mass ratio m2/m1 (upper over lower ball).",
+    )
+    tau_ratio = param.Number(
+        0.3,
+        bounds=(0.0, None),
+        doc="tau_d/tau_f: delay between the balls' arrivals over the floor contact time.",
+    )
+    height = param.Number(
+        DEFAULT_HEIGHT,
+        bounds=(0.0, None),
+        inclusive_bounds=(False, True),
+        doc="Dimensionless drop height H = h k / (m1 g) of the lower ball.",
+    )
+
+
+def _allowed_range(name: str) -> str:
+    """The allowed range of a declared parameter, written as an interval."""
+    declared = Parameters.param[name]
+    low, high = declared.bounds
+    low_closed, high_closed = declared.inclusive_bounds
+    left = ("[" if low_closed else "(") + ("-inf" if low is None else f"{low:g}")
+    closing = "]" if high_closed and high is not None else ")"
+    right = ("inf" if high is None else f"{high:g}") + closing
+    return f"{left}, {right}"
+
+
+def check_value(name: str, value: object) -> float:
+    """Return ``value`` as a float if it lies in the declared range of ``name``, else raise.
+
+    Raises ``ValueError`` naming the parameter and its allowed range (NaN and infinities included).
+    """
+    declared = Parameters.param[name]
+    try:
+        number = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"{name} must be a number in {_allowed_range(name)}; got {value!r}"
+        ) from None
+    low, high = declared.bounds
+    low_closed, high_closed = declared.inclusive_bounds
+    ok = math.isfinite(number)
+    if ok and low is not None:
+        ok = number >= low if low_closed else number > low
+    if ok and high is not None:
+        ok = number <= high if high_closed else number < high
+    if not ok:
+        raise ValueError(f"{name} must be a finite number in {_allowed_range(name)}; got {value!r}")
+    return number
+
+
+@dataclass(frozen=True)
+class Drop:
+    """A validated drop: the parameters and everything derived from them (model.md).
+
+    ``zeta01`` and ``zeta12`` are the damping ratios of the two contacts, ``tau_f`` the floor
+    contact time, ``x1_0`` and ``x2_0`` the initial heights.
+    """
+
+    eps: float
+    eps12: float
+    mu: float
+    tau_ratio: float
+    height: float
+    zeta01: float
+    zeta12: float
+    tau_f: float
+    x1_0: float
+    x2_0: float
+
+
+def check_parameters(
+    eps: float,
+    mu: float,
+    tau_ratio: float,
+    *,
+    eps12: float | None = None,
+    height: float = DEFAULT_HEIGHT,
+) -> Drop:
+    """Validate the inputs of one drop and derive damping, contact time and initial state."""
+    eps = check_value("eps", eps)
+    eps12 = eps if eps12 is None else check_value("eps12", eps12)
+    mu = check_value("mu", mu)
+    tau_ratio = check_value("tau_ratio", tau_ratio)
+    height = check_value("height", height)
+    zeta01, zeta12 = damping_ratios(eps, eps12, mu)
+    tau_f = floor_contact_time(zeta01)
+    x2_0 = initial_gap_height(height, tau_ratio * tau_f)
+    return Drop(eps, eps12, mu, tau_ratio, height, zeta01, zeta12, tau_f, height, x2_0)
+
+
+def restitution(r: float) -> float:
+    """Coefficient of restitution of one clamped contact with decay ratio r = beta/w0 (model.md,
+    "Restitution and damping"), on both branches; eps(1) = exp(-2)."""
+    if r < 0.0 or not math.isfinite(r):
+        raise ValueError(f"r must be a finite number in [0, inf); got {r!r}")
+    if r < 1.0:
+        return math.exp(-r / math.sqrt(1.0 - r * r) * math.acos(2.0 * r * r - 1.0))
+    if r == 1.0:
+        return math.exp(-2.0)
+    return math.exp(-r / math.sqrt(r * r - 1.0) * math.acosh(2.0 * r * r - 1.0))
+
+
+def _log_restitution(r: float) -> float:
+    """-log eps(r), smooth and increasing in r; equal to 2 at r = 1 from both sides."""
+    if r < 1.0:
+        return r / math.sqrt(1.0 - r * r) * math.acos(2.0 * r * r - 1.0)
+    if r == 1.0:
+        return 2.0
+    return r / math.sqrt(r * r - 1.0) * math.acosh(2.0 * r * r - 1.0)
+
+
+def decay_ratio(eps: float) -> float:
+    """The unique r = beta/w0 with restitution(r) = eps, for eps in (0, 1] (model.md).
+
+    Solved on -log eps, which is increasing in r, by bisection to the last bit; within a few
+    units of 1 on either side of r = 1 the two branches meet, so bisection is safe across it.
+    """
+    if not 0.0 < eps <= 1.0:
+        raise ValueError(f"a restitution must be a number in (0, 1]; got {eps!r}")
+    if eps == 1.0:
+        return 0.0
+    target = -math.log(eps)
+    low, high = 0.0, 1.0
+    while _log_restitution(high) < target:
+        low, high = high, 2.0 * high
+    while True:
+        mid = 0.5 * (low + high)
+        if mid in (low, high):
+            break
+        if _log_restitution(mid) < target:
+            low = mid
+        else:
+            high = mid
+    # pick the closer of the two neighbouring floats
+    low_error = abs(_log_restitution(low) - target)
+    return low if low_error <= abs(_log_restitution(high) - target) else high
+
+
+def damping_ratios(eps01: float, eps12: float, mu: float) -> tuple[float, float]:
+    """zeta01 and zeta12 from the two restitutions (model.md, "Restitution and damping").
+
+    Floor: w0 = 1, so zeta01 = r(eps01). Ball pair: w0^2 = (1 + mu)/mu and beta = zeta12 w0^2,
+    so zeta12 = r(eps12) sqrt(mu/(1 + mu)).
+    """
+    return decay_ratio(eps01), decay_ratio(eps12) * math.sqrt(mu / (1.0 + mu))
+
+
+def floor_contact_time(r: float) -> float:
+    """Duration tau_f of one floor contact with decay ratio r = zeta01 (model.md)."""
+    if r < 1.0:
+        return math.acos(2.0 * r * r - 1.0) / math.sqrt(1.0 - r * r)
+    if r == 1.0:
+        return 2.0
+    return math.acosh(2.0 * r * r - 1.0) / math.sqrt(r * r - 1.0)
+
+
+def initial_gap_height(height: float, tau_d: float) -> float:
+    """X2(0) = (sqrt(H) + tau_d/sqrt(2))^2 (model.md, "Initial condition")."""
+    return (math.sqrt(height) + tau_d / math.sqrt(2.0)) ** 2
+
+
+def icm_height(height: float, gap: float, eps01: float, eps12: float, mu: float) -> float:
+    """Apex of the upper ball in the independent contact model (model.md, paper section II).
+
+    The steps of the paper with eps01 at the floor and eps12 between the balls: the lower ball
+    reaches the floor at v_i = sqrt(2H) and leaves at eps01 v_i; the balls meet at
+    t_c = dH/(v_i (1 + eps01)); the upper ball leaves that collision at v2' and rises to
+    z_c + v2'^2/2. With eps01 = eps12 = eps this is exactly
+    (H (eps^2 + 2 eps - mu)^2 + dH (1 + mu)(mu - eps)) / (1 + mu)^2.
+    """
+    v_i = math.sqrt(2.0 * height)
+    t_c = gap / (v_i * (1.0 + eps01))
+    v1 = eps01 * v_i - t_c
+    v2 = -v_i - t_c
+    z_c = eps01 * v_i * t_c - 0.5 * t_c * t_c
+    v2_after = (mu * v2 + v1 + eps12 * (v1 - v2)) / (1.0 + mu)
+    return z_c + 0.5 * v2_after * v2_after

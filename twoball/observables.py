@@ -1,0 +1,158 @@
+"""What a run measures (model.md, "What is measured"): apexes, contacts, ICM and ratios.
+
+Every solver returns a :class:`Result`; the observables are derived from the apexes and the
+contact intervals it found, the same way whatever the method.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from twoball.model import Drop, icm_height
+
+FLOOR_CONTACT, BALL_CONTACT = 0, 1
+
+
+@dataclass(frozen=True)
+class ContactInterval:
+    """One interval during which a contact pushes: ``contact`` is "floor" or "ball"."""
+
+    contact: str
+    start: float
+    end: float
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Sampled heights, velocities and contact forces of both balls (dimensionless)."""
+
+    t: np.ndarray
+    x1: np.ndarray
+    x2: np.ndarray
+    v1: np.ndarray
+    v2: np.ndarray
+    f01: np.ndarray
+    f12: np.ndarray
+
+
+@dataclass
+class Result:
+    """The outcome of one drop.
+
+    ``apex_t`` and ``apex_h`` list the upper ball's apexes in free flight (model.md), in order.
+    ``reason`` is None when the run reached what was asked, else why it stopped early.
+    ``contacts`` lists every contact interval found; ``trajectory`` is set only when asked.
+    """
+
+    drop: Drop
+    method: str
+    apex_t: list[float]
+    apex_h: list[float]
+    contacts: list[ContactInterval]
+    end_time: float
+    reason: str | None = None
+    contacts_first: int = 0
+    floor_contacts_first: int = 0
+    rtol: float | None = None
+    atol: float | None = None
+    trajectory: Trajectory | None = field(default=None, repr=False)
+
+    def _apex(self, values: list[float], index: int) -> float | None:
+        return values[index] if len(values) > index else None
+
+    @property
+    def h1(self) -> float | None:
+        """Height X2 of the first apex after release, None if there was none."""
+        return self._apex(self.apex_h, 0)
+
+    @property
+    def h2(self) -> float | None:
+        """Height X2 of the second apex, None if it does not happen."""
+        return self._apex(self.apex_h, 1)
+
+    @property
+    def t1(self) -> float | None:
+        return self._apex(self.apex_t, 0)
+
+    @property
+    def t2(self) -> float | None:
+        return self._apex(self.apex_t, 1)
+
+    @property
+    def x2_0(self) -> float:
+        """Initial height X2(0) of the upper ball."""
+        return self.drop.x2_0
+
+    @property
+    def h_icm(self) -> float:
+        """First apex of the upper ball in the independent contact model."""
+        d = self.drop
+        return icm_height(d.x1_0, d.x2_0 - d.x1_0, d.eps, d.eps12, d.mu)
+
+    @property
+    def h1_over_icm(self) -> float | None:
+        return None if self.h1 is None else self.h1 / self.h_icm
+
+    @property
+    def h1_over_drop(self) -> float | None:
+        return None if self.h1 is None else self.h1 / self.x2_0
+
+    @property
+    def h2_over_drop(self) -> float | None:
+        return None if self.h2 is None else self.h2 / self.x2_0
+
+    @property
+    def h2_over_h1(self) -> float | None:
+        return None if self.h1 is None or self.h2 is None else self.h2 / self.h1
+
+    @property
+    def delayed_rebound(self) -> bool | None:
+        """h2 > h1; None when either bounce is missing."""
+        return None if self.h1 is None or self.h2 is None else self.h2 > self.h1
+
+    def contacts_per_bounce(self, contact: str = "ball") -> list[int]:
+        """Contact intervals of one kind that start before each apex and after the previous one."""
+        counts = []
+        previous = -math.inf
+        for apex in self.apex_t:
+            counts.append(
+                sum(1 for c in self.contacts if c.contact == contact and previous <= c.start < apex)
+            )
+            previous = apex
+        return counts
+
+    def summary(self) -> dict[str, float | int | str | bool | None]:
+        """The observables as plain values (JSON-ready: None where absent)."""
+        d = self.drop
+        return {
+            "eps": d.eps,
+            "eps12": d.eps12,
+            "mu": d.mu,
+            "tau_ratio": d.tau_ratio,
+            "height": d.height,
+            "method": self.method,
+            "h1": self.h1,
+            "h2": self.h2,
+            "t1": self.t1,
+            "t2": self.t2,
+            "contacts_first": self.contacts_first,
+            "floor_contacts_first": self.floor_contacts_first,
+            "h_icm": self.h_icm,
+            "x2_0": self.x2_0,
+            "h1_over_icm": self.h1_over_icm,
+            "h1_over_drop": self.h1_over_drop,
+            "h2_over_drop": self.h2_over_drop,
+            "h2_over_h1": self.h2_over_h1,
+            "delayed_rebound": self.delayed_rebound,
+            "reason": self.reason,
+        }
+
+
+def contact_intervals(rows: np.ndarray) -> list[ContactInterval]:
+    """Contact intervals from rows (contact, start, end), sorted by start."""
+    names = {FLOOR_CONTACT: "floor", BALL_CONTACT: "ball"}
+    intervals = [ContactInterval(names[int(c)], float(s), float(e)) for c, s, e in rows]
+    return sorted(intervals, key=lambda interval: interval.start)
