@@ -68,97 +68,80 @@ ROUNDING = 16.0 * 2.220446049250313e-16  # tolerance in units of relative roundi
 P_MU, P_Z01, P_Z12, P_W2, P_F1, P_F2, P_RF, P_RB, P_NOISE = range(9)
 
 
-def _oscillator_bound(alpha: float, beta: float, b: float, omega: float) -> float:
+@numba.njit(cache=True)
+def _oscillator_bound(alpha, beta, b, omega):
     """c1 for s = alpha u + beta u' on u'' + 2 b u' + omega^2 u = 0: |s''| <= c1 sqrt(2 e_w)."""
     return abs(alpha - 2.0 * b * beta) + omega * abs(beta)
 
 
-def _coupled_bound(alpha, beta, mass, damping, stiffness) -> float:
+@numba.njit(cache=True)
+def _coupled_bound(alpha, beta, mass, damping, stiffness):
     """c1 for s = alpha.q + beta.q' in the both-contact phase (energy norm, Cauchy-Schwarz)."""
     gamma = beta / mass
     first = (alpha - damping @ gamma) / np.sqrt(mass)
-    return float(np.linalg.norm(first) + math.sqrt(max(gamma @ stiffness @ gamma, 0.0)))
+    return np.sqrt(first @ first) + math.sqrt(max(gamma @ (stiffness @ gamma), 0.0))
 
 
-class Prepared:
-    """What the kernel needs for one drop: parameters, bound tables and the both-contact modes."""
+@numba.njit(cache=True)
+def _rest_coefficient(alpha, beta, mass, stiffness_inv):
+    """R with |g(y) - g(y*)| <= R sqrt(2 E_dev), E_dev the energy of the deviation from rest."""
+    scaled = beta / np.sqrt(mass)
+    return np.sqrt(scaled @ scaled) + math.sqrt(alpha @ (stiffness_inv @ alpha))
 
-    __slots__ = ("params", "c0", "c1", "lam", "vec", "vec_inv", "modal", "a_both", "y_rest")
 
-    def __init__(self, drop: Drop):
-        mu, z01, z12 = drop.mu, drop.zeta01, drop.zeta12
-        w2 = (1.0 + mu) / mu
-        nu2 = mu / (1.0 + mu)
-        b12, om12 = z12 * w2, math.sqrt(w2)
-        mass = np.array([1.0, mu])
-        stiffness = np.array([[2.0, -1.0], [-1.0, 1.0]])
-        damping = np.array([[2 * z01 + 2 * z12, -2 * z12], [-2 * z12, 2 * z12]])
-        # c0[kind, contact, part] + c1[...] sqrt(2 e_w) bounds |F''|; part 0 is eta, part 1 is g.
-        c0 = np.zeros((4, 2, 2))
-        c1 = np.zeros((4, 2, 2))
-        c0[FREE] = [[1.0, 1.0], [0.0, 0.0]]
-        c0[FLOOR, 1] = [1.0, 1.0]
-        c1[FLOOR, 0] = [
-            _oscillator_bound(1.0, 0.0, z01, 1.0),
-            _oscillator_bound(1.0, 2 * z01, z01, 1.0),
-        ]
-        c1[FLOOR, 1] = [
-            _oscillator_bound(-1.0, 0.0, z01, 1.0),
-            _oscillator_bound(-1.0, -2 * z12, z01, 1.0),
-        ]
-        c0[BALL, 0] = [1.0, 1.0]
-        c1[BALL, 0] = [
-            _oscillator_bound(-nu2, 0.0, b12, om12),
-            _oscillator_bound(-nu2, -2 * z01 * nu2, b12, om12),
-        ]
-        c1[BALL, 1] = [
-            _oscillator_bound(1.0, 0.0, b12, om12),
-            _oscillator_bound(1.0, 2 * z12, b12, om12),
-        ]
-        floor_eta, floor_g = np.array([1.0, 0.0]), np.array([2 * z01, 0.0])
-        ball_eta, ball_g = np.array([-1.0, 1.0]), 2 * z12 * np.array([-1.0, 1.0])
-        zero = np.zeros(2)
-        c1[BOTH, 0] = [
-            _coupled_bound(floor_eta, zero, mass, damping, stiffness),
-            _coupled_bound(floor_eta, floor_g, mass, damping, stiffness),
-        ]
-        c1[BOTH, 1] = [
-            _coupled_bound(ball_eta, zero, mass, damping, stiffness),
-            _coupled_bound(ball_eta, ball_g, mass, damping, stiffness),
-        ]
-        # Rest certificate: |g(y) - g(y*)| <= R sqrt(2 E_dev) with E_dev the deviation energy.
-        k_inv = np.linalg.inv(stiffness)
+@numba.njit(cache=True)
+def prepare(mu, z01, z12):
+    """What the kernel needs for one drop: parameter vector, bound tables, both-contact modes.
 
-        def rest_coefficient(alpha, beta):
-            return float(np.linalg.norm(beta / np.sqrt(mass)) + math.sqrt(alpha @ k_inv @ alpha))
-
-        self.params = np.array(
-            [
-                mu,
-                z01,
-                z12,
-                w2,
-                1.0 + mu,  # -g01 at rest: the floor carries both weights
-                mu,  # -g12 at rest: the lower ball carries the upper one
-                rest_coefficient(floor_eta, floor_g),
-                rest_coefficient(ball_eta, ball_g),
-                0.0,  # rounding amplification of the both-contact evaluation, set below
-            ]
-        )
-        self.c0, self.c1 = c0, c1
-        a_both = np.zeros((4, 4))
-        a_both[0, 2] = a_both[1, 3] = 1.0
-        a_both[2:, :2] = -stiffness / mass[:, None]
-        a_both[2:, 2:] = -damping / mass[:, None]
-        lam, vec = np.linalg.eig(a_both.astype(complex))
-        condition = float(np.linalg.cond(vec))
-        self.modal = condition < MODAL_CONDITION_LIMIT
-        self.params[P_NOISE] = condition if self.modal else 16.0
-        self.lam = lam
-        self.vec = vec
-        self.vec_inv = np.linalg.inv(vec)
-        self.a_both = a_both
-        self.y_rest = np.array([-(1.0 + mu), -(1.0 + 2.0 * mu), 0.0, 0.0])
+    Returns (params, c0, c1, lam, vec, vec_inv, modal, a_both, y_rest); c0[kind, contact, part]
+    + c1[...] sqrt(2 E_w) bounds |F''| (part 0 is eta, part 1 is g).
+    """
+    w2 = (1.0 + mu) / mu
+    nu2 = mu / (1.0 + mu)
+    b12, om12 = z12 * w2, math.sqrt(w2)
+    mass = np.array([1.0, mu])
+    stiffness = np.array([[2.0, -1.0], [-1.0, 1.0]])
+    damping = np.array([[2 * z01 + 2 * z12, -2 * z12], [-2 * z12, 2 * z12]])
+    c0 = np.zeros((4, 2, 2))
+    c1 = np.zeros((4, 2, 2))
+    c0[FREE, 0, 0] = c0[FREE, 0, 1] = 1.0  # x1'' = -1 and (x1 + 2 z01 v1)'' = -1
+    c0[FLOOR, 1, 0] = c0[FLOOR, 1, 1] = 1.0  # the upper ball's parabola
+    c1[FLOOR, 0, 0] = _oscillator_bound(1.0, 0.0, z01, 1.0)
+    c1[FLOOR, 0, 1] = _oscillator_bound(1.0, 2 * z01, z01, 1.0)
+    c1[FLOOR, 1, 0] = _oscillator_bound(-1.0, 0.0, z01, 1.0)
+    c1[FLOOR, 1, 1] = _oscillator_bound(-1.0, -2 * z12, z01, 1.0)
+    c0[BALL, 0, 0] = c0[BALL, 0, 1] = 1.0  # the centre of mass's parabola
+    c1[BALL, 0, 0] = _oscillator_bound(-nu2, 0.0, b12, om12)
+    c1[BALL, 0, 1] = _oscillator_bound(-nu2, -2 * z01 * nu2, b12, om12)
+    c1[BALL, 1, 0] = _oscillator_bound(1.0, 0.0, b12, om12)
+    c1[BALL, 1, 1] = _oscillator_bound(1.0, 2 * z12, b12, om12)
+    floor_eta, floor_g = np.array([1.0, 0.0]), np.array([2 * z01, 0.0])
+    ball_eta, ball_g = np.array([-1.0, 1.0]), np.array([-2 * z12, 2 * z12])
+    zero = np.zeros(2)
+    c1[BOTH, 0, 0] = _coupled_bound(floor_eta, zero, mass, damping, stiffness)
+    c1[BOTH, 0, 1] = _coupled_bound(floor_eta, floor_g, mass, damping, stiffness)
+    c1[BOTH, 1, 0] = _coupled_bound(ball_eta, zero, mass, damping, stiffness)
+    c1[BOTH, 1, 1] = _coupled_bound(ball_eta, ball_g, mass, damping, stiffness)
+    stiffness_inv = np.array([[1.0, 1.0], [1.0, 2.0]])
+    a_both = np.zeros((4, 4))
+    a_both[0, 2] = a_both[1, 3] = 1.0
+    for i in range(2):
+        for j in range(2):
+            a_both[2 + i, j] = -stiffness[i, j] / mass[i]
+            a_both[2 + i, 2 + j] = -damping[i, j] / mass[i]
+    lam, vec = np.linalg.eig(a_both.astype(np.complex128))
+    vec_inv = np.linalg.inv(vec)
+    condition = np.abs(vec).sum(axis=0).max() * np.abs(vec_inv).sum(axis=0).max()  # 1-norm
+    modal = condition < MODAL_CONDITION_LIMIT
+    params = np.empty(9)
+    params[P_MU], params[P_Z01], params[P_Z12], params[P_W2] = mu, z01, z12, w2
+    params[P_F1] = 1.0 + mu  # -g01 at rest: the floor carries both weights
+    params[P_F2] = mu  # -g12 at rest: the lower ball carries the upper one
+    params[P_RF] = _rest_coefficient(floor_eta, floor_g, mass, stiffness_inv)
+    params[P_RB] = _rest_coefficient(ball_eta, ball_g, mass, stiffness_inv)
+    params[P_NOISE] = condition if modal else 16.0  # rounding growth of the both-contact state
+    y_rest = np.array([-(1.0 + mu), -(1.0 + 2.0 * mu), 0.0, 0.0])
+    return params, c0, c1, lam, vec, vec_inv, modal, a_both, y_rest
 
 
 @numba.njit(cache=True)
@@ -572,7 +555,7 @@ def run(
 
 
 @numba.njit(cache=True)
-def sample(phases, times, params, lam, vec, vec_inv, modal, a_both, y_rest):
+def sample(phases, times, params, c0, c1, lam, vec, vec_inv, modal, a_both, y_rest):
     """Exact state and forces at the given times from the recorded phases.
 
     Returns an array (len(times), 6): x1, x2, v1, v2, f01, f12.
@@ -611,41 +594,17 @@ def solve(drop: Drop, apexes: int, t_end: float, *, dense: bool | np.ndarray = F
     Returns (apex_t, apex_h, contacts rows, end time, status text or None, ball contacts before
     the first apex, floor contacts before it, sampled rows or None).
     """
-    prepared = Prepared(drop)
+    prepared = prepare(drop.mu, drop.zeta01, drop.zeta12)
     record_phases = dense is not False
     (status, end, apex_t, apex_h, n_apex, ball_first, floor_first, contacts, phases, _) = run(
-        drop.x1_0,
-        drop.x2_0,
-        max(apexes, 1),
-        t_end,
-        prepared.params,
-        prepared.c0,
-        prepared.c1,
-        prepared.lam,
-        prepared.vec,
-        prepared.vec_inv,
-        prepared.modal,
-        prepared.a_both,
-        prepared.y_rest,
-        True,
-        record_phases,
+        drop.x1_0, drop.x2_0, max(apexes, 1), t_end, *prepared, True, record_phases
     )
     samples = None
     if record_phases:
         times = default_times(phases, end) if dense is True else np.asarray(dense, dtype=float)
         samples = (
             times,
-            sample(
-                phases,
-                times,
-                prepared.params,
-                prepared.lam,
-                prepared.vec,
-                prepared.vec_inv,
-                prepared.modal,
-                prepared.a_both,
-                prepared.y_rest,
-            ),
+            sample(phases, times, *prepared),
         )
     return (
         list(apex_t[:n_apex]),

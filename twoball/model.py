@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import param
 
 DEFAULT_HEIGHT = 1.0e4
@@ -139,6 +140,7 @@ def restitution(r: float) -> float:
     return math.exp(-r / math.sqrt(r * r - 1.0) * math.acosh(2.0 * r * r - 1.0))
 
 
+@numba.njit(cache=True)
 def _log_restitution(r: float) -> float:
     """-log eps(r), smooth and increasing in r; equal to 2 at r = 1 from both sides."""
     if r < 1.0:
@@ -151,11 +153,16 @@ def _log_restitution(r: float) -> float:
 def decay_ratio(eps: float) -> float:
     """The unique r = beta/w0 with restitution(r) = eps, for eps in (0, 1] (model.md).
 
-    Solved on -log eps, which is increasing in r, by bisection to the last bit; within a few
-    units of 1 on either side of r = 1 the two branches meet, so bisection is safe across it.
+    Solved on -log eps, which is increasing in r, by bisection to the last bit; the two branches
+    join continuously at r = 1, so bisection is safe across the switch.
     """
     if not 0.0 < eps <= 1.0:
         raise ValueError(f"a restitution must be a number in (0, 1]; got {eps!r}")
+    return _decay_ratio(eps)
+
+
+@numba.njit(cache=True)
+def _decay_ratio(eps: float) -> float:
     if eps == 1.0:
         return 0.0
     target = -math.log(eps)
@@ -164,7 +171,7 @@ def decay_ratio(eps: float) -> float:
         low, high = high, 2.0 * high
     while True:
         mid = 0.5 * (low + high)
-        if mid in (low, high):
+        if mid == low or mid == high:  # noqa: SIM109 (numba)
             break
         if _log_restitution(mid) < target:
             low = mid

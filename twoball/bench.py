@@ -1,0 +1,115 @@
+"""``twoball bench``: run time of the exact solver against LSODA as the paper used it.
+
+Random points of the paper's cube (eps in (0.5, 1), mu in (0.01, 1/3), tau_d/tau_f in (0.01, 1),
+H = 1e4), each run to the second apex in one process: the exact solver, and LSODA through
+``odeint`` with rtol = atol = 1e-8 on a time grid (the paper's way). Each time is the median of
+repeats; the ratio is per case, then summarised by its median. Accuracy is checked against an
+independent method, DOP853 at rtol = atol = 1e-12 with restarts at every apex.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import numpy as np
+
+from twoball.solve import simulate
+
+PAPER_CUBE = {"eps": (0.5, 1.0), "mu": (0.01, 1.0 / 3.0), "tau_ratio": (0.01, 1.0)}
+
+
+def random_cases(count: int, seed: int) -> list[tuple[float, float, float]]:
+    """``count`` points drawn uniformly from the paper's cube (eps, mu, tau_ratio)."""
+    rng = np.random.default_rng(seed)
+    columns = [rng.uniform(low, high, count) for low, high in PAPER_CUBE.values()]
+    return [tuple(float(c[i]) for c in columns) for i in range(count)]
+
+
+def _median_time(run, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def _relative(value: float | None, truth: float | None) -> float:
+    if value is None or truth is None:
+        return float("nan") if value is truth else float("inf")
+    return abs(value - truth) / abs(truth)
+
+
+def benchmark(count: int = 50, seed: int = 0, repeats: int = 5, height: float = 1e4) -> dict:
+    """Time and check both methods on ``count`` random cases; returns the figures."""
+    simulate(0.8, 0.1, 0.5)  # compile (or load) the kernel outside the timings
+    rows = []
+    for eps, mu, tau_ratio in random_cases(count, seed):
+
+        def exact_run(eps=eps, mu=mu, tau_ratio=tau_ratio):
+            return simulate(eps, mu, tau_ratio, height=height)
+
+        def lsoda_run(eps=eps, mu=mu, tau_ratio=tau_ratio):
+            return simulate(eps, mu, tau_ratio, height=height, method="odeint")
+
+        exact = exact_run()
+        lsoda = lsoda_run()
+        check = simulate(eps, mu, tau_ratio, height=height, method="DOP853", rtol=1e-12, atol=1e-12)
+        rows.append(
+            {
+                "eps": eps,
+                "mu": mu,
+                "tau_ratio": tau_ratio,
+                "exact_s": _median_time(exact_run, repeats),
+                "lsoda_s": _median_time(lsoda_run, max(1, repeats // 2)),
+                "exact_vs_dop853": max(
+                    _relative(exact.h1, check.h1), _relative(exact.h2, check.h2)
+                ),
+                "lsoda_vs_exact": max(_relative(lsoda.h1, exact.h1), _relative(lsoda.h2, exact.h2)),
+            }
+        )
+    ratios = [row["lsoda_s"] / row["exact_s"] for row in rows]
+    return {
+        "cases": rows,
+        "exact_median_s": statistics.median(row["exact_s"] for row in rows),
+        "lsoda_median_s": statistics.median(row["lsoda_s"] for row in rows),
+        "speedup_median": statistics.median(ratios),
+        "speedup_min": min(ratios),
+        "exact_vs_dop853_max": max(row["exact_vs_dop853"] for row in rows),
+        "lsoda_vs_exact_median": statistics.median(row["lsoda_vs_exact"] for row in rows),
+    }
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("bench", help="time the exact solver against LSODA (odeint)")
+    parser.add_argument("--cases", type=int, default=50, help="random cases (default 50)")
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--repeats", type=int, default=5, help="timed repeats per case")
+    parser.set_defaults(func=_main)
+
+
+def _main(args: argparse.Namespace) -> int:
+    if args.cases < 1 or args.repeats < 1:
+        raise ValueError("--cases and --repeats must be at least 1")
+    figures = benchmark(args.cases, args.seed, args.repeats)
+    print(f"{args.cases} random cases of the paper's cube, H = 1e4, to the second apex")
+    print(f"exact solver      median {figures['exact_median_s'] * 1e3:9.3f} ms per case")
+    print(
+        f"LSODA (odeint)    median {figures['lsoda_median_s'] * 1e3:9.3f} ms per case "
+        "(rtol = atol = 1e-8, grid step 0.01)"
+    )
+    print(
+        f"speed-up          median {figures['speedup_median']:9.1f} x, "
+        f"slowest case {figures['speedup_min']:.1f} x"
+    )
+    print(
+        f"exact vs DOP853 (rtol = atol = 1e-12): max relative difference in h1, h2 "
+        f"{figures['exact_vs_dop853_max']:.2e}"
+    )
+    print(
+        f"LSODA (odeint) vs exact: median relative error in h1, h2 "
+        f"{figures['lsoda_vs_exact_median']:.2e}"
+    )
+    return 0

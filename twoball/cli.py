@@ -1,0 +1,95 @@
+"""The ``twoball`` command line.
+
+Bad input never shows a traceback: it prints one line on stderr and exits with status 2.
+Each subcommand lives in the module of its idea, which adds its own parser with
+``add_parser(subparsers)`` and sets ``func`` to a function of the parsed arguments.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+
+# The modules that contribute subcommands, in the order --help lists them.
+SUBCOMMAND_MODULES = ("twoball.cli", "twoball.bench")
+
+
+class UsageError(Exception):
+    """Bad input on the command line: reported in one line, exit status 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # argparse's own errors: one line, status 2
+        raise UsageError(message)
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    """``twoball simulate``: one drop, its observables as text or JSON."""
+    parser = subparsers.add_parser("simulate", help="simulate one drop and print its bounces")
+    parser.add_argument("--eps", required=True, help="restitution eps in (0, 1]")
+    parser.add_argument("--mu", required=True, help="mass ratio m2/m1 > 0")
+    parser.add_argument("--tau-ratio", required=True, help="tau_d/tau_f >= 0")
+    parser.add_argument("--eps12", default=None, help="ball-ball restitution (default: eps)")
+    parser.add_argument("--height", default="1e4", help="dimensionless drop height H > 0")
+    parser.add_argument(
+        "--method", default="exact", help="exact, LSODA, Radau, BDF, DOP853, RK45 or odeint"
+    )
+    parser.add_argument("--until", default="second", help="first, second or a time")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.set_defaults(func=_simulate)
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    from twoball import simulate
+
+    until = args.until if args.until in ("first", "second") else _number("until", args.until)
+    result = simulate(
+        _number("eps", args.eps),
+        _number("mu", args.mu),
+        _number("tau_ratio", args.tau_ratio),
+        eps12=None if args.eps12 is None else _number("eps12", args.eps12),
+        height=_number("height", args.height),
+        until=until,
+        method=args.method,
+    )
+    summary = result.summary()
+    if args.json:
+        print(json.dumps(summary))
+        return 0
+    width = max(len(key) for key in summary)
+    for key, value in summary.items():
+        shown = f"{value:.12g}" if isinstance(value, float) else value
+        print(f"{key:<{width}}  {'-' if value is None else shown}")
+    return 0
+
+
+def _number(name: str, text: str) -> float:
+    """A number from the command line, or a one-line error naming the parameter."""
+    try:
+        return float(text)
+    except ValueError:
+        raise UsageError(f"{name} must be a number; got {text!r}") from None
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="twoball", description="The two-ball bounce, solved exactly.")
+    subparsers = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for name in SUBCOMMAND_MODULES:
+        importlib.import_module(name).add_parser(subparsers)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``twoball`` console script; returns the exit status."""
+    try:
+        args = build_parser().parse_args(argv)
+        return args.func(args)
+    except (UsageError, ValueError) as error:
+        print(f"twoball: error: {error}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
