@@ -1,0 +1,259 @@
+"""Error against run time: every integrator over a range of tolerances (issue 3).
+
+:func:`work_precision` runs the exact solver and the scipy integrators of
+:mod:`twoball.reference` on one drop, to the second apex (model.md, "What is measured"), and
+returns one row per method and tolerance: the relative errors in h1 and h2 against the exact
+solver and the median run time. The exact solver's own error is established independently by
+:mod:`twoball.truth` (``twoball precision`` reports it beside the table).
+
+``twoball precision --out DIR`` does this on the documented :data:`CASES` over the full range of
+tolerances and writes ``DIR/work_precision.csv`` and ``DIR/work_precision.png``.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import statistics
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from matplotlib.figure import Figure
+
+from twoball import reference
+from twoball.model import DEFAULT_HEIGHT, check_parameters
+from twoball.solve import simulate
+
+METHODS = ("exact", *reference.IVP_METHODS)
+# Cheap enough for the app (a few seconds on benign cases); the command line uses FULL_TOLERANCES.
+APP_TOLERANCES = (1e-3, 1e-6, 1e-9)
+FULL_TOLERANCES = tuple(10.0**-k for k in range(3, 13))
+# Once one run of a method takes longer than this, its tighter tolerances are not run (their
+# rows say so with seconds = inf and NaN errors): tighter only gets slower.
+APP_BUDGET_SECONDS = 2.0
+COLUMNS = ("method", "tolerance", "case", "rel_err_h1", "rel_err_h2", "seconds")
+
+# The documented cases of ``twoball precision``: name -> (eps, mu, tau_ratio), H = 1e4.
+CASES = {
+    "paper close-up": (0.9, 0.01, 0.01),
+    "benign": (0.816, 0.05, 0.3),
+    "stiff, small mu": (0.816, 1e-4, 0.1),
+    "overdamped": (0.1, 0.2, 0.5),
+    "nearly elastic": (0.999, 0.05, 0.3),
+}
+
+
+def relative_error(value: float | None, reference_value: float | None) -> float:
+    """|value - reference| / |reference|; inf when only the method lacks the value, NaN when
+    neither has it (there is no such bounce to compare)."""
+    if reference_value is None:
+        return math.nan
+    if value is None or not math.isfinite(value):
+        return math.inf
+    return abs(value - reference_value) / abs(reference_value)
+
+
+def _median_seconds(run: Callable[[], object], repeats: int) -> float:
+    times = []
+    for _ in range(max(repeats, 1)):
+        start = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def case_label(eps: float, mu: float, tau_ratio: float, eps12: float | None, height: float) -> str:
+    """A short name of one drop for tables and legends."""
+    label = f"eps={eps:g}, mu={mu:g}, tau_ratio={tau_ratio:g}, H={height:g}"
+    return label if eps12 is None else f"{label}, eps12={eps12:g}"
+
+
+def work_precision(
+    eps: float,
+    mu: float,
+    tau_ratio: float,
+    *,
+    eps12: float | None = None,
+    height: float = DEFAULT_HEIGHT,
+    methods: Sequence[str] | None = None,
+    tolerances: Sequence[float] | None = None,
+    repeats: int = 1,
+) -> list[dict]:
+    """Error against run time of each method at each tolerance, on one drop.
+
+    methods: any of :data:`METHODS` (default all); tolerances: rtol = atol for the scipy methods
+    (default :data:`APP_TOLERANCES`). Returns rows with keys ``method, tolerance, case,
+    rel_err_h1, rel_err_h2, seconds``: tolerance None for the exact solver; errors relative to
+    the exact solver (0 for itself), inf where a method failed or missed a bounce the exact
+    solver found, NaN where the exact solver has no such bounce; seconds the median of
+    ``repeats`` runs. A failing method never raises. Raises ValueError for bad parameters.
+    """
+    return measure_case(
+        case_label(eps, mu, tau_ratio, eps12, height),
+        eps,
+        mu,
+        tau_ratio,
+        eps12=eps12,
+        height=height,
+        methods=methods,
+        tolerances=tolerances,
+        repeats=repeats,
+        budget=APP_BUDGET_SECONDS,
+    )
+
+
+def measure_case(
+    case: str,
+    eps: float,
+    mu: float,
+    tau_ratio: float,
+    *,
+    eps12: float | None = None,
+    height: float = DEFAULT_HEIGHT,
+    methods: Sequence[str] | None = None,
+    tolerances: Sequence[float] | None = None,
+    repeats: int = 1,
+    budget: float = math.inf,
+) -> list[dict]:
+    """:func:`work_precision` with a case name and a per-method time budget (see
+    :data:`APP_BUDGET_SECONDS`)."""
+    check_parameters(eps, mu, tau_ratio, eps12=eps12, height=height)
+    methods = METHODS if methods is None else tuple(methods)
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown:
+        raise ValueError(f"methods must be among {', '.join(METHODS)}; got {unknown!r}")
+    tolerances = APP_TOLERANCES if tolerances is None else tuple(float(t) for t in tolerances)
+    for tol in tolerances:
+        if not (math.isfinite(tol) and 0.0 < tol < 1.0):
+            raise ValueError(f"tolerances must be finite numbers in (0, 1); got {tol!r}")
+    if repeats < 1:
+        raise ValueError(f"repeats must be at least 1; got {repeats!r}")
+    drop = {"eps12": eps12, "height": height}
+    truth = simulate(eps, mu, tau_ratio, **drop)  # also loads the compiled kernel
+    rows = []
+    for method in methods:
+        over_budget = False
+        for tol in (None,) if method == "exact" else tolerances:
+            row = {"method": method, "tolerance": tol, "case": case}
+            if over_budget:
+                rows.append({**row, "rel_err_h1": math.nan, "rel_err_h2": math.nan})
+                rows[-1]["seconds"] = math.inf
+                continue
+
+            def run(method=method, tol=tol):
+                return simulate(eps, mu, tau_ratio, method=method, rtol=tol, atol=tol, **drop)
+
+            start = time.perf_counter()
+            try:
+                result = run()
+            except (ValueError, ArithmeticError, RuntimeError):
+                h1 = h2 = None
+                seconds = time.perf_counter() - start
+            else:
+                h1, h2 = result.h1, result.h2
+                first = time.perf_counter() - start
+                seconds = first if repeats == 1 else _median_seconds(run, repeats)
+            over_budget = seconds > budget
+            row["rel_err_h1"] = relative_error(h1, truth.h1)
+            row["rel_err_h2"] = relative_error(h2, truth.h2)
+            row["seconds"] = seconds
+            rows.append(row)
+    return rows
+
+
+def write_csv(rows: Sequence[dict], path: str | Path) -> None:
+    """The rows as CSV with the columns :data:`COLUMNS` (empty tolerance for the exact solver)."""
+    with open(path, "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=COLUMNS, extrasaction="ignore")
+        writer.writeheader()
+        for row in rows:
+            writer.writerow(
+                {**row, "tolerance": "" if row["tolerance"] is None else row["tolerance"]}
+            )
+
+
+# Errors below this are drawn on it (a relative error of 0 has no place on a log axis).
+ERROR_FLOOR = 1e-17
+FAILED_ERROR = 10.0  # where failed runs (infinite error) are drawn
+
+
+def work_precision_figure(rows: Sequence[dict], title: str | None = None) -> Figure:
+    """Error against run time, log-log, one panel per case and one line per method.
+
+    The error of a run is the larger of its relative errors in h1 and h2; runs that failed or
+    missed a bounce are drawn as crosses at the top of the panel.
+    """
+    cases = list(dict.fromkeys(row["case"] for row in rows))
+    methods = list(dict.fromkeys(row["method"] for row in rows))
+    columns = min(len(cases), 3)
+    lines = math.ceil(len(cases) / columns)
+    figure = Figure(figsize=(5.2 * columns, 4.2 * lines + 0.6), layout="constrained")
+    axes = figure.subplots(lines, columns, squeeze=False).ravel()
+    markers = dict(zip(METHODS, "*osD^v", strict=True))
+    for axis, case in zip(axes, cases, strict=False):
+        for index, method in enumerate(methods):
+            mine = [r for r in rows if r["case"] == case and r["method"] == method]
+            color = f"C{index}"
+            good = [
+                (r["seconds"], max(_finite_or(r["rel_err_h1"]), _finite_or(r["rel_err_h2"])), r)
+                for r in mine
+                if math.isfinite(r["seconds"])
+            ]
+            shown = [(s, max(e, ERROR_FLOOR)) for s, e, _ in good if math.isfinite(e)]
+            failed = [s for s, e, _ in good if not math.isfinite(e)]
+            if shown:
+                axis.plot(
+                    [s for s, _ in shown],
+                    [e for _, e in shown],
+                    marker=markers.get(method, "o"),
+                    color=color,
+                    markersize=9 if method == "exact" else 5,
+                    label=method,
+                )
+                for seconds, error, row in (good[0], good[-1]) if len(good) > 1 else ():
+                    if row["tolerance"] is not None and math.isfinite(error):
+                        axis.annotate(
+                            f"{row['tolerance']:.0e}",
+                            (seconds, max(error, ERROR_FLOOR)),
+                            fontsize=7,
+                            color=color,
+                            xytext=(4, 2),
+                            textcoords="offset points",
+                        )
+            if failed:
+                axis.plot(
+                    failed,
+                    [FAILED_ERROR] * len(failed),
+                    linestyle="none",
+                    marker="x",
+                    color=color,
+                    label=None if shown else method,
+                )
+        axis.set_xscale("log")
+        axis.set_yscale("log")
+        axis.axhline(FAILED_ERROR, color="0.7", linewidth=0.8, linestyle=":")
+        axis.set_title(case, fontsize=10)
+        axis.set_xlabel("run time per drop [s] (median)")
+        axis.set_ylabel("relative error of h1, h2 (larger)")
+        axis.grid(True, which="major", alpha=0.3)
+    for axis in axes[len(cases) :]:
+        axis.set_visible(False)
+    axes[0].legend(fontsize=8, loc="lower left")
+    figure.suptitle(
+        title
+        or "Error against run time to the second apex (crosses at 10: failed or missed a bounce;"
+        f" errors below {ERROR_FLOOR:.0e} drawn at it)",
+        fontsize=10,
+    )
+    return figure
+
+
+def _finite_or(value: float) -> float:
+    """NaN (no such bounce for anyone) counts as no error; inf stays inf."""
+    return 0.0 if math.isnan(value) else value
+
+
+def plot_work_precision(rows: Sequence[dict], path: str | Path, title: str | None = None) -> None:
+    """Write :func:`work_precision_figure` of the rows to ``path`` (PNG)."""
+    work_precision_figure(rows, title).savefig(path, dpi=110)
