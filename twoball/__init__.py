@@ -2,6 +2,7 @@
 
 from importlib.metadata import PackageNotFoundError, version
 
+from twoball.cubes import load_cube
 from twoball.model import Parameters, check_parameters
 from twoball.observables import ContactInterval, Result, Trajectory
 from twoball.solve import METHODS, simulate
@@ -19,5 +20,6 @@ __all__ = [
     "Trajectory",
     "__version__",
     "check_parameters",
+    "load_cube",
     "simulate",
 ]

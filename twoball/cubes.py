@@ -1,0 +1,34 @@
+"""The precomputed sweep cubes shipped in ``precomputed/`` (each made by ``twoball sweep``)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+PRECOMPUTED = Path(__file__).resolve().parent.parent / "precomputed"
+
+
+def cube_names() -> list[str]:
+    """Names of the shipped cubes (``precomputed/NAME.zarr``)."""
+    return sorted(path.name.removesuffix(".zarr") for path in PRECOMPUTED.glob("*.zarr"))
+
+
+def cube_path(name: str) -> Path:
+    """The store of a shipped cube; ValueError naming the cubes that exist."""
+    path = PRECOMPUTED / f"{name}.zarr"
+    if not (path / "zarr.json").is_file():
+        raise ValueError(f"no cube named {name!r}; shipped cubes: {', '.join(cube_names())}")
+    return path
+
+
+def load_cube(name: str | os.PathLike):
+    """Open a sweep cube lazily as an ``xarray.Dataset`` (dims eps, mu, tau_ratio).
+
+    ``name`` is a shipped cube ("paper", "map", "contacts") or the path of any ``twoball sweep``
+    store. Nothing is read until a slice is asked for; one eps slice reads one chunk per variable.
+    """
+    import xarray as xr
+
+    text = os.fspath(name)
+    path = Path(text) if text.endswith(".zarr") or os.sep in text else cube_path(text)
+    return xr.open_zarr(path, consolidated=False)
