@@ -7,11 +7,13 @@ closed-form solution:
 - floor contact only: the lower ball is a damped oscillator about X1 = -1, the upper ball a
   parabola;
 - ball contact only: the centre of mass is a parabola, the overlap X2 - X1 a damped oscillator;
-- both contacts: a two-degree-of-freedom damped system, solved by its eigenmodes, or by the
-  matrix exponential where the modes are close to defective (eps near exp(-2) with small mu).
+- both contacts: a two-degree-of-freedom damped system, split by a real similarity into two
+  decoupled 2x2 blocks (its two modes), each advanced like a damped oscillator.
 
-The scalar oscillators are written in a form that is exact across the damping branch switch
-(under-, critically and overdamped) without cancellation.
+Every oscillator, scalar or block, is written in a form that is exact across the damping branch
+switch (under-, critically and overdamped) without cancellation, so modes that are close to
+defective (eps near exp(-2)) cost no accuracy. The two eigenvalue pairs of the both-contact
+phase are grouped so that the two closest eigenvalues share a block.
 
 Switching times (a contact switching on or off, an apex of the upper ball) are the first roots of
 the switching functions F(t) of model.md ("Restitution and damping"): for an inactive contact
@@ -20,15 +22,17 @@ F = -g, which reaches zero when the force does.
 
 Why no contact can be missed. Each step starts from a point where F > -tol and moves by the
 largest h for which the parabola F + F' h - M h^2 / 2 stays above -tol, where M is a proven
-bound on |F''| over the rest of the phase. The bound comes from an energy: the velocity
-w = (X1', X2') obeys the homogeneous phase equation M w'' + C w' + K w = 0, so
-E_w = w'.M.w'/2 + w.K.w/2 never increases during a phase, and |F''| <= c0 + c1 sqrt(2 E_w) with
-constants c0, c1 worked out once per phase type (Cauchy-Schwarz in the energy norm). Between
-steps F is therefore certified above -tol; a root can only be approached, never stepped over,
-however brief the contact or however tangent the touch. Near a simple root the steps converge
-quadratically (the parabola is a second-order model). ``tol`` is a few units of rounding in the
-state (16 ulp of |X1| + |X2| + |X1'| + |X2'| + 1); an overlap shallower than that is below what
-double precision can represent and is the only thing that can go unnoticed.
+bound on |F''| over the rest of the phase. The bound comes from energies that cannot grow: F''
+is a constant (from the parabolas) plus a linear form in the state of each damped oscillator of
+the phase, and each oscillator u'' + 2 b u' + w^2 u = 0 (b >= 0) has E = (u'^2 + w^2 u^2)/2
+non-increasing, so |F''| <= c0 + c1 sqrt(2 E_1) + c2 sqrt(2 E_2) with constants worked out once
+per drop (Cauchy-Schwarz). Bounding each mode on its own keeps the bound tight when the masses
+differ by orders of magnitude. Between steps F is therefore certified above -tol: a root can
+only be approached, never stepped over, however brief the contact or however tangent the touch.
+Near a simple root the steps converge quadratically (the parabola is a second-order model).
+``tol`` is a few units of rounding in the state (16 ulp of the largest terms of the closed form,
+times the condition of the mode split in the both-contact phase); an overlap shallower than that
+is below what double precision can represent and is the only thing that can go unnoticed.
 
 The upper ball at rest on the lower one (both contacts active for ever) is also proven rather
 than guessed: once the energy of the deviation from the static equilibrium is too small for
@@ -61,49 +65,166 @@ STATUS_TEXT = {
 
 MAX_STEPS_PER_PHASE = 100_000
 MAX_PHASES = 1_000_000
-MODAL_CONDITION_LIMIT = 1.0e3
 ROUNDING = 16.0 * 2.220446049250313e-16  # tolerance in units of relative rounding
 
 # Layout of the per-drop parameter vector passed to the kernel.
-P_MU, P_Z01, P_Z12, P_W2, P_F1, P_F2, P_RF, P_RB, P_NOISE = range(9)
+P_MU, P_Z01, P_Z12, P_W2, P_F1, P_F2, P_NOISE = range(7)
 
 
 @numba.njit(cache=True)
 def _oscillator_bound(alpha, beta, b, omega):
-    """c1 for s = alpha u + beta u' on u'' + 2 b u' + omega^2 u = 0: |s''| <= c1 sqrt(2 e_w)."""
+    """c for s = alpha u + beta u' on u'' + 2 b u' + omega^2 u = 0: |s''| <= c sqrt(2 E_w),
+    E_w the energy of w = u' (which obeys the same equation)."""
     return abs(alpha - 2.0 * b * beta) + omega * abs(beta)
 
 
 @numba.njit(cache=True)
-def _coupled_bound(alpha, beta, mass, damping, stiffness):
-    """c1 for s = alpha.q + beta.q' in the both-contact phase (energy norm, Cauchy-Schwarz)."""
-    gamma = beta / mass
-    first = (alpha - damping @ gamma) / np.sqrt(mass)
-    return np.sqrt(first @ first) + math.sqrt(max(gamma @ (stiffness @ gamma), 0.0))
+def _decay_pair(b, w2, tau):
+    """exp(-b tau) cos(W tau) and exp(-b tau) sin(W tau)/W with W^2 = w2 - b^2 (b >= 0, w2 > 0).
+
+    On the overdamped branch (W imaginary) cosh and sinh appear; all three branches are written
+    without cancellation, so W near 0 (critical damping) loses nothing.
+    """
+    d = w2 - b * b
+    if d > 0.0:
+        om = math.sqrt(d)
+        decay = math.exp(-b * tau)
+        return decay * math.cos(om * tau), decay * math.sin(om * tau) / om
+    if d < 0.0:
+        om = math.sqrt(-d)
+        slow = math.exp(-(w2 / (b + om)) * tau)  # exp(-(b - om) tau) without cancellation
+        return (
+            0.5 * slow * (1.0 + math.exp(-2.0 * om * tau)),
+            slow * (-math.expm1(-2.0 * om * tau)) / (2.0 * om),
+        )
+    decay = math.exp(-b * tau)
+    return decay, tau * decay
 
 
 @numba.njit(cache=True)
-def _rest_coefficient(alpha, beta, mass, stiffness_inv):
-    """R with |g(y) - g(y*)| <= R sqrt(2 E_dev), E_dev the energy of the deviation from rest."""
-    scaled = beta / np.sqrt(mass)
-    return np.sqrt(scaled @ scaled) + math.sqrt(alpha @ (stiffness_inv @ alpha))
+def _oscillator(u0, v0, b, w2, tau):
+    """u, u', u'' at tau for u'' + 2 b u' + w2 u = 0 from (u0, v0), on every damping branch."""
+    cos_part, sin_part = _decay_pair(b, w2, tau)
+    u = cos_part * u0 + sin_part * (v0 + b * u0)
+    v = cos_part * v0 - sin_part * (w2 * u0 + b * v0)
+    return u, v, -2.0 * b * v - w2 * u
+
+
+@numba.njit(cache=True)
+def _pair_polynomial(a, first, second):
+    """(A - first I)(A - second I) for an eigenvalue pair closed under conjugation (real)."""
+    trace = (first + second).real
+    product = (first * second).real
+    return a @ a - trace * a + product * np.eye(4)
+
+
+@numba.njit(cache=True)
+def _column_basis(p):
+    """An orthonormal basis (as columns) of the rank-2 column space of p, by pivoted
+    Gram-Schmidt."""
+    columns = np.ascontiguousarray(p.T)
+    basis = np.zeros((2, 4))
+    for k in range(2):
+        best, norm = 0, -1.0
+        for j in range(4):
+            col_norm = math.sqrt(columns[j] @ columns[j])
+            if col_norm > norm:
+                best, norm = j, col_norm
+        basis[k] = columns[best] / norm
+        for j in range(4):
+            columns[j] = columns[j] - (basis[k] @ columns[j]) * basis[k]
+    return basis.T
+
+
+@numba.njit(cache=True)
+def _split_modes(a):
+    """A real X with X^-1 A X = diag(B0, B1), 2x2 blocks holding one eigenvalue pair each.
+
+    Of the three ways to pair four eigenvalues, the admissible ones keep each pair real or
+    complex-conjugate; among them the one whose pairs lie furthest apart is taken, so the two
+    closest eigenvalues (a near-defective mode) share a block, where the closed form is exact.
+    """
+    lam = np.linalg.eigvals(a.astype(np.complex128))
+    scale = np.abs(lam).max()
+    pairings = ((0, 1, 2, 3), (0, 2, 1, 3), (0, 3, 1, 2))
+    chosen, separation = pairings[0], -1.0
+    for pairing in pairings:
+        ok = True
+        for k in range(2):
+            first, second = lam[pairing[2 * k]], lam[pairing[2 * k + 1]]
+            both_real = abs(first.imag) + abs(second.imag) <= 1e-12 * scale
+            conjugate = abs(first - np.conj(second)) <= 1e-12 * scale
+            ok = ok and (both_real or conjugate)
+        if not ok:
+            continue
+        gap = np.inf
+        for i in range(2):
+            for j in range(2, 4):
+                gap = min(gap, abs(lam[pairing[i]] - lam[pairing[j]]))
+        if gap > separation:
+            chosen, separation = pairing, gap
+    x = np.empty((4, 4))
+    # the column space of the other pair's polynomial is this pair's invariant subspace
+    x[:, 0:2] = _column_basis(_pair_polynomial(a, lam[chosen[2]], lam[chosen[3]]))
+    x[:, 2:4] = _column_basis(_pair_polynomial(a, lam[chosen[0]], lam[chosen[1]]))
+    x_inv = np.linalg.inv(x)
+    blocks = np.empty((2, 2, 2))
+    full = x_inv @ a @ x
+    blocks[0] = full[0:2, 0:2]
+    blocks[1] = full[2:4, 2:4]
+    return x, x_inv, blocks
+
+
+@numba.njit(cache=True)
+def _companion(block):
+    """R with (u, u') = R z, coordinates in which a 2x2 block is a damped oscillator.
+
+    u = r.z for a row r; then u'' = tr(B) u' - det(B) u (Cayley-Hamilton), an oscillator with
+    b = -tr(B)/2 >= 0 and w^2 = det(B) > 0 for these stable blocks. Of three choices of r the
+    best conditioned R = [r; r B] is taken.
+    """
+    best = np.eye(2)
+    quality = -1.0
+    for choice in range(3):
+        r = np.array([1.0, 0.0]) if choice == 0 else np.array([0.0, 1.0])
+        if choice == 2:
+            r = np.array([1.0, 1.0])
+        rb = r @ block
+        det = r[0] * rb[1] - r[1] * rb[0]
+        q = abs(det) / (math.sqrt(r @ r) * math.sqrt(rb @ rb) + 1e-300)
+        if q > quality:
+            quality = q
+            best = np.empty((2, 2))
+            best[0], best[1] = r, rb
+    return best
+
+
+@numba.njit(cache=True)
+def _block_coefficient(row, block, companion, power):
+    """c with |row . B^power z| <= c sqrt(2 E) for the block's oscillator energy E."""
+    ell = row.copy()
+    for _ in range(power):
+        ell = ell @ block
+    ell = ell @ np.linalg.inv(companion)
+    omega = math.sqrt(block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0])
+    return abs(ell[0]) / omega + abs(ell[1])
 
 
 @numba.njit(cache=True)
 def prepare(mu, z01, z12):
-    """What the kernel needs for one drop: parameter vector, bound tables, both-contact modes.
+    """What the kernel needs for one drop (pass it on as ``*prepare(...)``).
 
-    Returns (params, c0, c1, lam, vec, vec_inv, modal, a_both, y_rest); c0[kind, contact, part]
-    + c1[...] sqrt(2 E_w) bounds |F''| (part 0 is eta, part 1 is g).
+    Returns (params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest): c0[kind, contact,
+    part] + c1[...] sqrt(2 E_1) + c2[...] sqrt(2 E_2) bounds |F''| (part 0 is eta, part 1 is g);
+    rest[contact, block] bounds |g - g_rest| in the both-contact phase; x, blocks and companions
+    describe its two modes.
     """
     w2 = (1.0 + mu) / mu
     nu2 = mu / (1.0 + mu)
     b12, om12 = z12 * w2, math.sqrt(w2)
-    mass = np.array([1.0, mu])
-    stiffness = np.array([[2.0, -1.0], [-1.0, 1.0]])
-    damping = np.array([[2 * z01 + 2 * z12, -2 * z12], [-2 * z12, 2 * z12]])
     c0 = np.zeros((4, 2, 2))
     c1 = np.zeros((4, 2, 2))
+    c2 = np.zeros((4, 2, 2))
     c0[FREE, 0, 0] = c0[FREE, 0, 1] = 1.0  # x1'' = -1 and (x1 + 2 z01 v1)'' = -1
     c0[FLOOR, 1, 0] = c0[FLOOR, 1, 1] = 1.0  # the upper ball's parabola
     c1[FLOOR, 0, 0] = _oscillator_bound(1.0, 0.0, z01, 1.0)
@@ -115,86 +236,62 @@ def prepare(mu, z01, z12):
     c1[BALL, 0, 1] = _oscillator_bound(-nu2, -2 * z01 * nu2, b12, om12)
     c1[BALL, 1, 0] = _oscillator_bound(1.0, 0.0, b12, om12)
     c1[BALL, 1, 1] = _oscillator_bound(1.0, 2 * z12, b12, om12)
-    floor_eta, floor_g = np.array([1.0, 0.0]), np.array([2 * z01, 0.0])
-    ball_eta, ball_g = np.array([-1.0, 1.0]), np.array([-2 * z12, 2 * z12])
-    zero = np.zeros(2)
-    c1[BOTH, 0, 0] = _coupled_bound(floor_eta, zero, mass, damping, stiffness)
-    c1[BOTH, 0, 1] = _coupled_bound(floor_eta, floor_g, mass, damping, stiffness)
-    c1[BOTH, 1, 0] = _coupled_bound(ball_eta, zero, mass, damping, stiffness)
-    c1[BOTH, 1, 1] = _coupled_bound(ball_eta, ball_g, mass, damping, stiffness)
-    stiffness_inv = np.array([[1.0, 1.0], [1.0, 2.0]])
-    a_both = np.zeros((4, 4))
-    a_both[0, 2] = a_both[1, 3] = 1.0
-    for i in range(2):
-        for j in range(2):
-            a_both[2 + i, j] = -stiffness[i, j] / mass[i]
-            a_both[2 + i, 2 + j] = -damping[i, j] / mass[i]
-    lam, vec = np.linalg.eig(a_both.astype(np.complex128))
-    vec_inv = np.linalg.inv(vec)
-    condition = np.abs(vec).sum(axis=0).max() * np.abs(vec_inv).sum(axis=0).max()  # 1-norm
-    modal = condition < MODAL_CONDITION_LIMIT
-    params = np.empty(9)
+    # both contacts: y' = A (y - y_rest), A from M q'' = -C q' - K q (model.md)
+    a = np.zeros((4, 4))
+    a[0, 2] = a[1, 3] = 1.0
+    a[2, 0], a[2, 1], a[2, 2], a[2, 3] = -2.0, 1.0, -2.0 * (z01 + z12), 2.0 * z12
+    a[3, 0], a[3, 1], a[3, 2], a[3, 3] = 1.0 / mu, -1.0 / mu, 2.0 * z12 / mu, -2.0 * z12 / mu
+    x, x_inv, blocks = _split_modes(a)
+    companions = np.empty((2, 2, 2))
+    for block in range(2):
+        companions[block] = _companion(blocks[block])
+    functionals = np.zeros((2, 2, 4))
+    functionals[0, 0, 0] = functionals[0, 1, 0] = 1.0  # X1, X1 + 2 z01 X1'
+    functionals[0, 1, 2] = 2.0 * z01
+    functionals[1, 0, 0], functionals[1, 0, 1] = -1.0, 1.0  # X2 - X1, and its g
+    functionals[1, 1, 0], functionals[1, 1, 1] = -1.0, 1.0
+    functionals[1, 1, 2], functionals[1, 1, 3] = -2.0 * z12, 2.0 * z12
+    rest = np.zeros((2, 2))
+    for contact in range(2):
+        for part in range(2):
+            row = functionals[contact, part] @ x
+            c1[BOTH, contact, part] = _block_coefficient(row[0:2], blocks[0], companions[0], 2)
+            c2[BOTH, contact, part] = _block_coefficient(row[2:4], blocks[1], companions[1], 2)
+        row = functionals[contact, 1] @ x
+        rest[contact, 0] = _block_coefficient(row[0:2], blocks[0], companions[0], 0)
+        rest[contact, 1] = _block_coefficient(row[2:4], blocks[1], companions[1], 0)
+    params = np.empty(7)
     params[P_MU], params[P_Z01], params[P_Z12], params[P_W2] = mu, z01, z12, w2
     params[P_F1] = 1.0 + mu  # -g01 at rest: the floor carries both weights
     params[P_F2] = mu  # -g12 at rest: the lower ball carries the upper one
-    params[P_RF] = _rest_coefficient(floor_eta, floor_g, mass, stiffness_inv)
-    params[P_RB] = _rest_coefficient(ball_eta, ball_g, mass, stiffness_inv)
-    params[P_NOISE] = condition if modal else 16.0  # rounding growth of the both-contact state
+    # rounding growth of the both-contact state through x and x^-1 (1-norm condition)
+    params[P_NOISE] = np.abs(x).sum(axis=0).max() * np.abs(x_inv).sum(axis=0).max()
     y_rest = np.array([-(1.0 + mu), -(1.0 + 2.0 * mu), 0.0, 0.0])
-    return params, c0, c1, lam, vec, vec_inv, modal, a_both, y_rest
+    return params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest
 
 
 @numba.njit(cache=True)
-def _oscillator(u0, v0, b, w2, tau):
-    """u, u', u'' at tau for u'' + 2 b u' + w2 u = 0 from (u0, v0), on every damping branch."""
-    d = w2 - b * b
-    if d > 0.0:
-        om = math.sqrt(d)
-        decay = math.exp(-b * tau)
-        cos_part = decay * math.cos(om * tau)
-        sin_part = decay * math.sin(om * tau) / om
-    elif d < 0.0:
-        om = math.sqrt(-d)
-        slow = math.exp(-(w2 / (b + om)) * tau)  # exp(-(b - om) tau) without cancellation
-        fast = math.exp(-2.0 * om * tau)
-        cos_part = 0.5 * slow * (1.0 + fast)
-        sin_part = slow * (-math.expm1(-2.0 * om * tau)) / (2.0 * om)
-    else:
-        decay = math.exp(-b * tau)
-        cos_part = decay
-        sin_part = tau * decay
-    u = cos_part * u0 + sin_part * (v0 + b * u0)
-    v = cos_part * v0 - sin_part * (w2 * u0 + b * v0)
-    return u, v, -2.0 * b * v - w2 * u
+def _modes(x1, x2, v1, v2, x_inv, y_rest):
+    """Mode coordinates z = X^-1 (y - y_rest) of a both-contact state."""
+    dev = np.empty(4)
+    dev[0], dev[1], dev[2], dev[3] = x1 - y_rest[0], x2 - y_rest[1], v1, v2
+    return x_inv @ dev
 
 
 @numba.njit(cache=True)
-def _expm4(a, tau):
-    """exp(a tau) for a 4x4 matrix: scaling and squaring of a Taylor series (exact to rounding)."""
-    b = a * tau
-    norm = 0.0
-    for i in range(4):
-        row = 0.0
-        for j in range(4):
-            row += abs(b[i, j])
-        norm = max(norm, row)
-    squarings = 0
-    while norm > 0.25:
-        norm *= 0.5
-        squarings += 1
-    b = b / (2.0**squarings)
-    result = np.eye(4)
-    term = np.eye(4)
-    for k in range(1, 20):
-        term = term @ b / k
-        result = result + term
-    for _ in range(squarings):
-        result = result @ result
-    return result
+def _mode_energy_roots(z, blocks, companions):
+    """sqrt(2 E) of each block's oscillator energy, non-increasing along the phase."""
+    roots = np.empty(2)
+    for block in range(2):
+        b = blocks[block]
+        u = companions[block] @ z[2 * block : 2 * block + 2]  # (u, u')
+        det = b[0, 0] * b[1, 1] - b[0, 1] * b[1, 0]
+        roots[block] = math.sqrt(u[1] * u[1] + det * u[0] * u[0])
+    return roots
 
 
 @numba.njit(cache=True)
-def state_at(kind, tau, x1, x2, v1, v2, params, lam, vec, vec_inv, modal, a_both, y_rest):
+def state_at(kind, tau, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest):
     """Exact state (x1, x2, v1, v2, a1, a2) a time tau into a phase of the given kind."""
     mu, z01, z12, w2 = params[P_MU], params[P_Z01], params[P_Z12], params[P_W2]
     if kind == FREE:
@@ -225,31 +322,24 @@ def state_at(kind, tau, x1, x2, v1, v2, params, lam, vec, vec_inv, modal, a_both
             -1.0 - share1 * ddeta,
             -1.0 + share2 * ddeta,
         )
-    dev = np.empty(4)
-    dev[0] = x1 - y_rest[0]
-    dev[1] = x2 - y_rest[1]
-    dev[2] = v1
-    dev[3] = v2
-    out = np.empty(4)
-    if modal:
-        coef = vec_inv @ dev.astype(np.complex128)
-        for i in range(4):
-            coef[i] *= np.exp(lam[i] * tau)
-        now = vec @ coef
-        rate = vec @ (coef * lam)
-        for i in range(4):
-            out[i] = now[i].real
-        return (
-            y_rest[0] + out[0],
-            y_rest[1] + out[1],
-            out[2],
-            out[3],
-            rate[2].real,
-            rate[3].real,
-        )
-    out = _expm4(a_both, tau) @ dev
-    acc = a_both @ out
-    return y_rest[0] + out[0], y_rest[1] + out[1], out[2], out[3], acc[2], acc[3]
+    z = _modes(x1, x2, v1, v2, x_inv, y_rest)
+    now = np.empty(4)
+    rate = np.empty(4)
+    for block in range(2):
+        b = blocks[block]
+        half_trace = 0.5 * (b[0, 0] + b[1, 1])
+        det = b[0, 0] * b[1, 1] - b[0, 1] * b[1, 0]
+        cos_part, sin_part = _decay_pair(-half_trace, det, tau)
+        # exp(B tau) = cos_part I + sin_part (B - half_trace I)
+        z0, z1 = z[2 * block], z[2 * block + 1]
+        n0 = cos_part * z0 + sin_part * ((b[0, 0] - half_trace) * z0 + b[0, 1] * z1)
+        n1 = cos_part * z1 + sin_part * (b[1, 0] * z0 + (b[1, 1] - half_trace) * z1)
+        now[2 * block], now[2 * block + 1] = n0, n1
+        rate[2 * block] = b[0, 0] * n0 + b[0, 1] * n1
+        rate[2 * block + 1] = b[1, 0] * n0 + b[1, 1] * n1
+    y = x @ now
+    dy = x @ rate
+    return y_rest[0] + y[0], y_rest[1] + y[1], y[2], y[3], dy[2], dy[3]
 
 
 @numba.njit(cache=True)
@@ -265,7 +355,7 @@ def _safe_step(f, fp, bound):
 
 @numba.njit(cache=True)
 def _switching(
-    kind, contact, active, x1, x2, v1, v2, a1, a2, params, c0, c1, energy_root, tol_state, clock
+    kind, contact, active, x1, x2, v1, v2, a1, a2, params, c0, c1, c2, roots, tol_state, clock
 ):
     """One contact's switching function: (F, F', tol, step certified above -tol).
 
@@ -281,8 +371,12 @@ def _switching(
         dd = a2 - a1
     g = eta + 2.0 * zeta * deta
     dg = deta + 2.0 * zeta * dd
-    bound_eta = c0[kind, contact, 0] + c1[kind, contact, 0] * energy_root
-    bound_g = c0[kind, contact, 1] + c1[kind, contact, 1] * energy_root
+    bound_eta = (
+        c0[kind, contact, 0] + c1[kind, contact, 0] * roots[0] + c2[kind, contact, 0] * roots[1]
+    )
+    bound_g = (
+        c0[kind, contact, 1] + c1[kind, contact, 1] * roots[0] + c2[kind, contact, 1] * roots[1]
+    )
     tol_g = tol_state + ROUNDING * abs(dg) * clock
     if active:
         value, rate = -g, -dg
@@ -302,29 +396,27 @@ def _switching(
 
 
 @numba.njit(cache=True)
-def _energy_root(kind, v1, v2, a1, a2, params):
-    """sqrt(2 E_w) of the phase's velocity energy, non-increasing within the phase."""
-    if kind == FREE:
-        return 0.0
+def _energy_roots(kind, x1, x2, v1, v2, a1, a2, params, x_inv, blocks, companions, y_rest):
+    """sqrt(2 E) of each oscillator of the phase (of w = y' for one contact, of the modes for
+    both); each is non-increasing within the phase."""
+    roots = np.zeros(2)
     if kind == FLOOR:
-        return math.sqrt(a1 * a1 + v1 * v1)
-    if kind == BALL:
+        roots[0] = math.sqrt(a1 * a1 + v1 * v1)
+    elif kind == BALL:
         d, dd = v2 - v1, a2 - a1
-        return math.sqrt(dd * dd + params[P_W2] * d * d)
-    mu = params[P_MU]
-    kinetic = a1 * a1 + mu * a2 * a2
-    potential = 2.0 * v1 * v1 - 2.0 * v1 * v2 + v2 * v2
-    return math.sqrt(kinetic + potential)
+        roots[0] = math.sqrt(dd * dd + params[P_W2] * d * d)
+    elif kind == BOTH:
+        roots = _mode_energy_roots(_modes(x1, x2, v1, v2, x_inv, y_rest), blocks, companions)
+    return roots
 
 
 @numba.njit(cache=True)
-def _at_rest(x1, x2, v1, v2, params, y_rest, tol):
-    """True when neither contact of the both-contact phase can ever switch off again."""
-    mu = params[P_MU]
-    d1, d2 = x1 - y_rest[0], x2 - y_rest[1]
-    energy = v1 * v1 + mu * v2 * v2 + 2.0 * d1 * d1 - 2.0 * d1 * d2 + d2 * d2
-    root = math.sqrt(max(energy, 0.0))
-    return params[P_F1] - params[P_RF] * root > tol and params[P_F2] - params[P_RB] * root > tol
+def _at_rest(roots, params, rest, tol):
+    """True when neither contact of the both-contact phase can ever switch off again: the mode
+    energies are too small for -g to fall from its value at rest to zero."""
+    floor_margin = params[P_F1] - rest[0, 0] * roots[0] - rest[0, 1] * roots[1]
+    ball_margin = params[P_F2] - rest[1, 0] * roots[0] - rest[1, 1] * roots[1]
+    return floor_margin > tol and ball_margin > tol
 
 
 @numba.njit(cache=True)
@@ -340,11 +432,12 @@ def advance_phase(
     params,
     c0,
     c1,
-    lam,
-    vec,
-    vec_inv,
-    modal,
-    a_both,
+    c2,
+    rest,
+    x,
+    x_inv,
+    blocks,
+    companions,
     y_rest,
 ):
     """Advance one phase, started at time t, to its first event.
@@ -360,9 +453,11 @@ def advance_phase(
     tau = 0.0
     for _ in range(MAX_STEPS_PER_PHASE):
         y1, y2, w1, w2, a1, a2 = state_at(
-            kind, tau, x1, x2, v1, v2, params, lam, vec, vec_inv, modal, a_both, y_rest
+            kind, tau, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest
         )
-        energy_root = _energy_root(kind, w1, w2, a1, a2, params)
+        roots = _energy_roots(
+            kind, y1, y2, w1, w2, a1, a2, params, x_inv, blocks, companions, y_rest
+        )
         # rounding of the closed form at tau: its largest terms are x0, v0 tau and tau^2/2
         tol_state = ROUNDING * noise * (size + speed * (1.0 + tau) + tau * tau)
         clock = 1.0 + t + tau
@@ -384,7 +479,8 @@ def advance_phase(
                 params,
                 c0,
                 c1,
-                energy_root,
+                c2,
+                roots,
                 tol_state,
                 clock,
             )
@@ -399,14 +495,14 @@ def advance_phase(
                 step = min(step, h)
         if event >= 0:
             y1, y2, w1, w2, _, _ = state_at(
-                kind, best, x1, x2, v1, v2, params, lam, vec, vec_inv, modal, a_both, y_rest
+                kind, best, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest
             )
             return event, best, y1, y2, w1, w2
-        if kind == BOTH and _at_rest(y1, y2, w1, w2, params, y_rest, tol_state):
+        if kind == BOTH and _at_rest(roots, params, rest, tol_state):
             return EVENT_REST, tau, y1, y2, w1, w2
         if tau + step >= horizon:
             y1, y2, w1, w2, _, _ = state_at(
-                kind, horizon, x1, x2, v1, v2, params, lam, vec, vec_inv, modal, a_both, y_rest
+                kind, horizon, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest
             )
             return horizon_event, horizon, y1, y2, w1, w2
         if not 0.0 < step < np.inf:
@@ -424,11 +520,12 @@ def run(
     params,
     c0,
     c1,
-    lam,
-    vec,
-    vec_inv,
-    modal,
-    a_both,
+    c2,
+    rest,
+    x,
+    x_inv,
+    blocks,
+    companions,
     y_rest,
     record_contacts,
     record_phases,
@@ -483,11 +580,12 @@ def run(
             params,
             c0,
             c1,
-            lam,
-            vec,
-            vec_inv,
-            modal,
-            a_both,
+            c2,
+            rest,
+            x,
+            x_inv,
+            blocks,
+            companions,
             y_rest,
         )
         t += tau
@@ -555,7 +653,7 @@ def run(
 
 
 @numba.njit(cache=True)
-def sample(phases, times, params, c0, c1, lam, vec, vec_inv, modal, a_both, y_rest):
+def sample(phases, times, params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest):
     """Exact state and forces at the given times from the recorded phases.
 
     Returns an array (len(times), 6): x1, x2, v1, v2, f01, f12.
@@ -575,11 +673,9 @@ def sample(phases, times, params, c0, c1, lam, vec, vec_inv, modal, a_both, y_re
             row[4],
             row[5],
             params,
-            lam,
-            vec,
-            vec_inv,
-            modal,
-            a_both,
+            x,
+            x_inv,
+            blocks,
             y_rest,
         )
         f01 = max(-(x1 + 2.0 * z01 * v1), 0.0) if kind & 1 else 0.0
