@@ -13,7 +13,7 @@ import json
 import sys
 
 # The modules that contribute subcommands, in the order --help lists them.
-SUBCOMMAND_MODULES = ("twoball.cli", "twoball.bench", "twoball.sweep")
+SUBCOMMAND_MODULES = ("twoball.cli", "twoball.bench", "twoball.sweep", "twoball.report")
 
 
 class UsageError(Exception):
