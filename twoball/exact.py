@@ -205,7 +205,10 @@ def _block_coefficient(row, block, companion, power):
     ell = row.copy()
     for _ in range(power):
         ell = ell @ block
-    ell = ell @ np.linalg.inv(companion)
+    det = companion[0, 0] * companion[1, 1] - companion[0, 1] * companion[1, 0]
+    ell0 = (ell[0] * companion[1, 1] - ell[1] * companion[1, 0]) / det  # ell @ companion^-1
+    ell1 = (ell[1] * companion[0, 0] - ell[0] * companion[0, 1]) / det
+    ell = np.array([ell0, ell1])
     omega = math.sqrt(block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0])
     return abs(ell[0]) / omega + abs(ell[1])
 
@@ -271,23 +274,42 @@ def prepare(mu, z01, z12):
 
 
 @numba.njit(cache=True)
-def _modes(x1, x2, v1, v2, x_inv, y_rest):
-    """Mode coordinates z = X^-1 (y - y_rest) of a both-contact state."""
-    dev = np.empty(4)
-    dev[0], dev[1], dev[2], dev[3] = x1 - y_rest[0], x2 - y_rest[1], v1, v2
-    return x_inv @ dev
+def _row4(m, i, a, b, c, d):
+    """Row i of a 4x4 matrix times (a, b, c, d), without allocating."""
+    return m[i, 0] * a + m[i, 1] * b + m[i, 2] * c + m[i, 3] * d
 
 
 @numba.njit(cache=True)
-def _mode_energy_roots(z, blocks, companions):
-    """sqrt(2 E) of each block's oscillator energy, non-increasing along the phase."""
-    roots = np.empty(2)
-    for block in range(2):
-        b = blocks[block]
-        u = companions[block] @ z[2 * block : 2 * block + 2]  # (u, u')
-        det = b[0, 0] * b[1, 1] - b[0, 1] * b[1, 0]
-        roots[block] = math.sqrt(u[1] * u[1] + det * u[0] * u[0])
-    return roots
+def _modes(x1, x2, v1, v2, x_inv, y_rest):
+    """Mode coordinates z = X^-1 (y - y_rest) of a both-contact state."""
+    d1, d2 = x1 - y_rest[0], x2 - y_rest[1]
+    return (
+        _row4(x_inv, 0, d1, d2, v1, v2),
+        _row4(x_inv, 1, d1, d2, v1, v2),
+        _row4(x_inv, 2, d1, d2, v1, v2),
+        _row4(x_inv, 3, d1, d2, v1, v2),
+    )
+
+
+@numba.njit(cache=True)
+def _block_energy_root(block, companion, z0, z1):
+    """sqrt(2 E) of a block's oscillator energy E = (u'^2 + det(B) u^2)/2, (u, u') = R z."""
+    u = companion[0, 0] * z0 + companion[0, 1] * z1
+    du = companion[1, 0] * z0 + companion[1, 1] * z1
+    det = block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0]
+    return math.sqrt(du * du + det * u * u)
+
+
+@numba.njit(cache=True)
+def _block_flow(b, z0, z1, tau):
+    """exp(B tau) z and B exp(B tau) z for a 2x2 block, exact on every damping branch:
+    exp(B tau) = cos_part I + sin_part (B - tr(B)/2 I) with the oscillator's decay pair."""
+    half_trace = 0.5 * (b[0, 0] + b[1, 1])
+    det = b[0, 0] * b[1, 1] - b[0, 1] * b[1, 0]
+    cos_part, sin_part = _decay_pair(-half_trace, det, tau)
+    n0 = cos_part * z0 + sin_part * ((b[0, 0] - half_trace) * z0 + b[0, 1] * z1)
+    n1 = cos_part * z1 + sin_part * (b[1, 0] * z0 + (b[1, 1] - half_trace) * z1)
+    return n0, n1, b[0, 0] * n0 + b[0, 1] * n1, b[1, 0] * n0 + b[1, 1] * n1
 
 
 @numba.njit(cache=True)
@@ -322,24 +344,17 @@ def state_at(kind, tau, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest):
             -1.0 - share1 * ddeta,
             -1.0 + share2 * ddeta,
         )
-    z = _modes(x1, x2, v1, v2, x_inv, y_rest)
-    now = np.empty(4)
-    rate = np.empty(4)
-    for block in range(2):
-        b = blocks[block]
-        half_trace = 0.5 * (b[0, 0] + b[1, 1])
-        det = b[0, 0] * b[1, 1] - b[0, 1] * b[1, 0]
-        cos_part, sin_part = _decay_pair(-half_trace, det, tau)
-        # exp(B tau) = cos_part I + sin_part (B - half_trace I)
-        z0, z1 = z[2 * block], z[2 * block + 1]
-        n0 = cos_part * z0 + sin_part * ((b[0, 0] - half_trace) * z0 + b[0, 1] * z1)
-        n1 = cos_part * z1 + sin_part * (b[1, 0] * z0 + (b[1, 1] - half_trace) * z1)
-        now[2 * block], now[2 * block + 1] = n0, n1
-        rate[2 * block] = b[0, 0] * n0 + b[0, 1] * n1
-        rate[2 * block + 1] = b[1, 0] * n0 + b[1, 1] * n1
-    y = x @ now
-    dy = x @ rate
-    return y_rest[0] + y[0], y_rest[1] + y[1], y[2], y[3], dy[2], dy[3]
+    z0, z1, z2, z3 = _modes(x1, x2, v1, v2, x_inv, y_rest)
+    n0, n1, r0, r1 = _block_flow(blocks[0], z0, z1, tau)
+    n2, n3, r2, r3 = _block_flow(blocks[1], z2, z3, tau)
+    return (
+        y_rest[0] + _row4(x, 0, n0, n1, n2, n3),
+        y_rest[1] + _row4(x, 1, n0, n1, n2, n3),
+        _row4(x, 2, n0, n1, n2, n3),
+        _row4(x, 3, n0, n1, n2, n3),
+        _row4(x, 2, r0, r1, r2, r3),
+        _row4(x, 3, r0, r1, r2, r3),
+    )
 
 
 @numba.njit(cache=True)
@@ -399,15 +414,18 @@ def _switching(
 def _energy_roots(kind, x1, x2, v1, v2, a1, a2, params, x_inv, blocks, companions, y_rest):
     """sqrt(2 E) of each oscillator of the phase (of w = y' for one contact, of the modes for
     both); each is non-increasing within the phase."""
-    roots = np.zeros(2)
     if kind == FLOOR:
-        roots[0] = math.sqrt(a1 * a1 + v1 * v1)
-    elif kind == BALL:
+        return math.sqrt(a1 * a1 + v1 * v1), 0.0
+    if kind == BALL:
         d, dd = v2 - v1, a2 - a1
-        roots[0] = math.sqrt(dd * dd + params[P_W2] * d * d)
-    elif kind == BOTH:
-        roots = _mode_energy_roots(_modes(x1, x2, v1, v2, x_inv, y_rest), blocks, companions)
-    return roots
+        return math.sqrt(dd * dd + params[P_W2] * d * d), 0.0
+    if kind == BOTH:
+        z0, z1, z2, z3 = _modes(x1, x2, v1, v2, x_inv, y_rest)
+        return (
+            _block_energy_root(blocks[0], companions[0], z0, z1),
+            _block_energy_root(blocks[1], companions[1], z2, z3),
+        )
+    return 0.0, 0.0
 
 
 @numba.njit(cache=True)
@@ -684,27 +702,38 @@ def sample(phases, times, params, c0, c1, c2, rest, x, x_inv, blocks, companions
     return out
 
 
+@numba.njit(cache=True)
+def _run_drop(mu, z01, z12, x1, x2, apexes_wanted, t_end, record_phases):
+    """prepare and run in one compiled call (one dispatch instead of two, and no boxing of the
+    prepared arrays); contacts are recorded."""
+    return run(x1, x2, apexes_wanted, t_end, *prepare(mu, z01, z12), True, record_phases)
+
+
 def solve(drop: Drop, apexes: int, t_end: float, *, dense: bool | np.ndarray = False):
     """Run the exact solver on a validated drop; see :func:`twoball.simulate`.
 
     Returns (apex_t, apex_h, contacts rows, end time, status text or None, ball contacts before
     the first apex, floor contacts before it, sampled rows or None).
     """
-    prepared = prepare(drop.mu, drop.zeta01, drop.zeta12)
     record_phases = dense is not False
-    (status, end, apex_t, apex_h, n_apex, ball_first, floor_first, contacts, phases, _) = run(
-        drop.x1_0, drop.x2_0, max(apexes, 1), t_end, *prepared, True, record_phases
+    (status, end, apex_t, apex_h, n_apex, ball_first, floor_first, contacts, phases, _) = _run_drop(
+        drop.mu,
+        drop.zeta01,
+        drop.zeta12,
+        drop.x1_0,
+        drop.x2_0,
+        max(apexes, 1),
+        t_end,
+        record_phases,
     )
     samples = None
     if record_phases:
         times = default_times(phases, end) if dense is True else np.asarray(dense, dtype=float)
-        samples = (
-            times,
-            sample(phases, times, *prepared),
-        )
+        prepared = prepare(drop.mu, drop.zeta01, drop.zeta12)
+        samples = (times, sample(phases, times, *prepared))
     return (
-        list(apex_t[:n_apex]),
-        list(apex_h[:n_apex]),
+        apex_t[:n_apex].tolist(),
+        apex_h[:n_apex].tolist(),
         contacts,
         end,
         STATUS_TEXT[status] or None,

@@ -53,11 +53,19 @@ class Parameters(param.Parameterized):
     )
 
 
+def _declared_bounds(name: str) -> tuple[float | None, float | None, bool, bool]:
+    """(low, high, low closed, high closed) as declared on :class:`Parameters`."""
+    declared = Parameters.param[name]
+    return (*declared.bounds, *declared.inclusive_bounds)
+
+
+# Read once from the declarations: validation runs for every simulated drop.
+_BOUNDS = {name: _declared_bounds(name) for name in ("eps", "eps12", "mu", "tau_ratio", "height")}
+
+
 def _allowed_range(name: str) -> str:
     """The allowed range of a declared parameter, written as an interval."""
-    declared = Parameters.param[name]
-    low, high = declared.bounds
-    low_closed, high_closed = declared.inclusive_bounds
+    low, high, low_closed, high_closed = _BOUNDS[name]
     left = ("[" if low_closed else "(") + ("-inf" if low is None else f"{low:g}")
     closing = "]" if high_closed and high is not None else ")"
     right = ("inf" if high is None else f"{high:g}") + closing
@@ -69,15 +77,13 @@ def check_value(name: str, value: object) -> float:
 
     Raises ``ValueError`` naming the parameter and its allowed range (NaN and infinities included).
     """
-    declared = Parameters.param[name]
     try:
         number = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
         raise ValueError(
             f"{name} must be a number in {_allowed_range(name)}; got {value!r}"
         ) from None
-    low, high = declared.bounds
-    low_closed, high_closed = declared.inclusive_bounds
+    low, high, low_closed, high_closed = _BOUNDS[name]
     ok = math.isfinite(number)
     if ok and low is not None:
         ok = number >= low if low_closed else number > low
