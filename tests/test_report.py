@@ -49,7 +49,7 @@ def test_sweep_rows_count_what_simulate_finds(small_cube):
     within = sum(abs(r.h1_over_icm - 1.0) <= 0.05 for r in high)
     assert rows[3].ours.startswith(f"{100 * within / len(high):.1f} % ({within} of {len(high)})")
     worst = max(abs(r.h1_over_icm - 1.0) for r in high)
-    assert rows[3].ours.endswith(f"{worst:.3f}")
+    assert rows[3].ours.endswith(f"largest deviation {100 * worst:.1f} %")
     low, top = min(r.h1_over_icm for r in near), max(r.h1_over_icm for r in near)
     assert rows[4].ours == f"{low:.2f} to {top:.2f}" and "0.6500" in rows[4].note
     assert [row.paper for row in rows] == PAPER_VALUES[:6]

@@ -174,7 +174,7 @@ def _assert_cube_equals_block(store: Path, grid: Grid) -> None:
 
 def _sweep_command(store: Path, grid: Grid) -> list[str]:
     words = grid.command(store).split()[2:]
-    return [sys.executable, "-m", "twoball.cli", "sweep", *words, "--workers", "1"]
+    return [sys.executable, "-m", "twoball", "sweep", *words, "--workers", "1"]
 
 
 def test_resume_after_kill_9_finishes_without_recomputing(tmp_path):

@@ -76,7 +76,7 @@ def sweep_rows(cube) -> list[Row]:
         Row(
             "h1 within 5 % of the ICM for tau_d/tau_f > 0.85",
             "all",
-            f"{_percent(int(within.sum()), within.size)}; largest |h1/h_ICM - 1| {worst:.3f}",
+            f"{_percent(int(within.sum()), within.size)}; largest deviation {100 * worst:.1f} %",
             f"the {high_gap.shape[2]} tau_ratio values of the grid above 0.85",
         ),
         Row(
