@@ -113,7 +113,7 @@ def contact_row(cube) -> Row:
         ours,
         f"{_grid_words(cube)}, mu {mu[0]:g}..{mu[-1]:g}, tau_ratio "
         f"{cube.tau_ratio.values[0]:g}..{cube.tau_ratio.values[-1]:g}; the paper's mu range for "
-        "this map is not given (12 needs mu below 0.01); a contact is an interval with f12 > 0",
+        "this map is not given (12 needs mu below 1e-3); a contact is an interval with f12 > 0",
     )
 
 
