@@ -1,0 +1,130 @@
+"""Scene 4, accuracy: error against run time of every integrator at the current drop.
+
+The work is :func:`twoball.precision.work_precision` (a few seconds); it runs in a thread only
+while the scene is on screen, with a loading indicator, and a newer request supersedes an
+older one.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+
+import holoviews as hv
+import panel as pn
+import param
+from bokeh.palettes import Category10
+
+from twoball.precision import work_precision
+
+from .scene import Scene
+
+ERROR_FLOOR = 1e-17  # a relative error of 0 (the exact solver against itself) is drawn here
+FAILED_ERROR = 10.0  # where failed runs and missed bounces are drawn
+
+
+def shown_error(row: dict) -> float:
+    """The larger relative error of h1 and h2, NaN (no such bounce for anyone) counting as 0,
+    floored at :data:`ERROR_FLOOR`, failures at :data:`FAILED_ERROR`."""
+    errors = [0.0 if math.isnan(e) else e for e in (row["rel_err_h1"], row["rel_err_h2"])]
+    error = max(errors)
+    return FAILED_ERROR if not math.isfinite(error) else max(error, ERROR_FLOOR)
+
+
+class AccuracyScene(Scene):
+    """Work-precision diagram at the current parameters, computed only when opened."""
+
+    watched = ("eps", "eps12", "mu", "tau_ratio", "height")
+
+    def __init__(self, **params):
+        super().__init__(**params)
+        self.rows: list[dict] | None = None
+        self._request = 0
+        # a new figure per result (rare): the number of methods drawn varies
+        self.plot = pn.pane.HoloViews(
+            pn.bind(self._plot, self.param.revision), sizing_mode="stretch_width"
+        )
+        self.table = pn.pane.Markdown(
+            pn.bind(self._table, self.param.revision), sizing_mode="stretch_width"
+        )
+        self.view = pn.Column(
+            pn.pane.Markdown(
+                "Relative error of h1 and h2 (the larger) against the exact solver, and the "
+                "run time to the second apex, for each scipy integrator at rtol = atol = "
+                "1e-3, 1e-6, 1e-9. Crosses at 10: the method failed or missed a bounce."
+            ),
+            self.plot,
+            self.table,
+            sizing_mode="stretch_width",
+        )
+
+    def _state_changed(self, *events: param.parameterized.Event) -> None:
+        self._stale = True
+        if self.active:
+            self._start()
+
+    def _activated(self, event: param.parameterized.Event) -> None:
+        if event.new and self._stale:
+            self._start()
+
+    def _start(self) -> None:
+        self._stale = False
+        self._request += 1
+        self.view.loading = True
+        if pn.state.curdoc is not None and pn.state.curdoc.session_context is not None:
+            pn.state.execute(self._compute)
+        else:  # no server (a script or a test): compute now
+            asyncio.run(self._compute())
+
+    async def _compute(self) -> None:
+        request, s = self._request, self.state
+        self.computations += 1
+        rows = await asyncio.to_thread(
+            work_precision, s.eps, s.mu, s.tau_ratio, eps12=s.eps12, height=s.height
+        )
+        if request != self._request:
+            return  # superseded by a newer drop
+        self.rows = rows
+        self.revision += 1
+        self.view.loading = False
+
+    def _plot(self, revision: int) -> hv.Overlay:
+        time_dim = hv.Dimension("seconds", label="run time per drop [s]")
+        error_dim = hv.Dimension("error", label="relative error of h1, h2 (larger)")
+        layers = []
+        methods = dict.fromkeys(r["method"] for r in self.rows or [])
+        for method, color in zip(methods, Category10[10], strict=False):
+            mine = [r for r in self.rows if r["method"] == method and math.isfinite(r["seconds"])]
+            points = [(r["seconds"], shown_error(r)) for r in mine]
+            layers.append(hv.Curve(points, time_dim, error_dim, label=method).opts(color=color))
+            layers.append(
+                hv.Scatter(points, time_dim, error_dim, label=method).opts(color=color, size=8)
+            )
+        if not layers:
+            layers = [hv.Curve([], time_dim, error_dim)]
+        return hv.Overlay(layers).opts(
+            hv.opts.Overlay(
+                logx=True,
+                logy=True,
+                responsive=True,
+                height=420,
+                framewise=True,
+                legend_position="right",
+                title="Error against run time at the current parameters",
+            )
+        )
+
+    def _table(self, revision: int) -> str:
+        if not self.rows:
+            return ""
+        lines = ["| method | tolerance | error h1 | error h2 | seconds |", "|---|---|---|---|---|"]
+        for r in self.rows:
+            tol = "-" if r["tolerance"] is None else f"{r['tolerance']:.0e}"
+            lines.append(
+                f"| {r['method']} | {tol} | {r['rel_err_h1']:.2e} | {r['rel_err_h2']:.2e} "
+                f"| {r['seconds']:.3g} |"
+            )
+        return "\n".join(lines)
+
+    def __panel__(self) -> pn.viewable.Viewable:
+        return self.view

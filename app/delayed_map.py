@@ -1,0 +1,166 @@
+"""Scene 3, the delayed-rebound map: the shipped "map" cube's slice nearest the current eps.
+
+A heat map over mu and tau_d/tau_f (both logarithmic) of the chosen variable, the delayed
+rebounds (h2 > h1) marked, the current parameters marked; a click sets mu and tau_d/tau_f.
+Only the slice on screen is read from the cube (one chunk per variable), and slices are kept
+for all sessions.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import holoviews as hv
+import numpy as np
+import panel as pn
+import param
+import xarray as xr
+
+import twoball
+
+from .scene import Scene
+from .state import validate
+
+CUBE = "map"
+VARIABLES = {
+    "h2/h1": "h2_over_h1",
+    "h1/ICM": "h1_over_icm",
+    "h1/drop height": "h1_over_drop",
+    "h2/drop height": "h2_over_drop",
+    "ball contacts in the first bounce": "contacts_first",
+}
+RATIO_CENTRES = {"h2_over_h1": 1.0, "h1_over_icm": 1.0}
+
+
+@functools.cache
+def map_cube() -> xr.Dataset:
+    """The shipped map cube, opened lazily once per server."""
+    return twoball.load_cube(CUBE)
+
+
+@functools.lru_cache(maxsize=128)
+def eps_slice(eps: float, variable: str) -> xr.Dataset:
+    """One variable and the delayed-rebound flags at one of the cube's eps values."""
+    return map_cube()[[variable, "delayed_rebound"]].sel(eps=eps).load()
+
+
+def nearest_eps(eps: float) -> float:
+    """The cube's eps nearest to ``eps``."""
+    values = map_cube()["eps"].values
+    return float(values[np.abs(values - eps).argmin()])
+
+
+class MapScene(Scene):
+    """Heat map of one eps slice of the cube; a click moves mu and tau_d/tau_f."""
+
+    variable = param.Selector(
+        default="h2_over_h1", objects=VARIABLES, doc="The quantity coloured on the map."
+    )
+
+    def __init__(self, **params):
+        super().__init__(**params)
+        self.slice: xr.Dataset | None = None
+        self.slice_eps = float("nan")
+        self.error: str | None = None
+        # before the views below bind to it: a new variable makes the slice stale first
+        self.param.watch(self._variable_chosen, "variable")
+        self.choice = pn.widgets.Select.from_param(self.param.variable, name="Colour by")
+        self.note = pn.pane.Markdown(
+            pn.bind(self._note, self.param.revision), sizing_mode="stretch_width"
+        )
+        self.image = hv.DynamicMap(pn.bind(self._image, self.param.revision, self.param.variable))
+        self.marker = hv.DynamicMap(
+            pn.bind(self._marker, self.state.param.mu, self.state.param.tau_ratio)
+        )
+        self.tap = hv.streams.Tap(source=self.image, x=None, y=None)
+        self.tap.param.watch(self._tapped, ["x", "y"])
+
+    def _state_changed(self, *events: param.parameterized.Event) -> None:
+        if {e.name for e in events} <= {"mu", "tau_ratio"}:
+            return  # only the marker moves, and it follows mu and tau_ratio itself
+        super()._state_changed(*events)
+
+    def _variable_chosen(self, event: param.parameterized.Event) -> None:
+        self._stale = True
+
+    def update(self) -> None:
+        try:
+            self.slice_eps = nearest_eps(self.state.eps)
+            self.slice = eps_slice(self.slice_eps, self.variable)
+            self.error = None
+        except (OSError, ValueError, KeyError) as error:
+            self.slice, self.error = None, f"The map cube could not be read: {error}"
+
+    def _note(self, revision: int) -> str:
+        if not self.active:
+            return ""  # off screen: nothing is computed
+        self.current()
+        if self.error:
+            return f"**{self.error}**"
+        attrs = map_cube().attrs
+        s = self.state
+        lines = [
+            f"Slice of the shipped cube at **eps = {self.slice_eps:g}** (nearest to {s.eps:g}), "
+            f"H = {attrs.get('height'):g}, eps12 = eps. Crosses: delayed rebound (h2 > h1); "
+            "star: current parameters. Click the map to set mu and tau_d/tau_f."
+        ]
+        if s.height != attrs.get("height") or s.eps12 is not None:
+            lines.append(
+                f"The current drop (H = {s.height:g}, eps12 = "
+                f"{'eps' if s.eps12 is None else f'{s.eps12:g}'}) differs from the cube's: "
+                "the map shows the cube's."
+            )
+        return "  \n".join(lines)
+
+    def _image(self, revision: int, variable: str) -> hv.Overlay:
+        self.current()
+        label = next(k for k, v in VARIABLES.items() if v == variable)
+        mu_dim = hv.Dimension("mu", label="mu = m2/m1")
+        tau_dim = hv.Dimension("tau_ratio", label="tau_d/tau_f")
+        if self.slice is None:
+            return hv.QuadMesh(
+                ([1e-3, 1.0], [1e-3, 1.0], np.full((2, 2), np.nan)), [mu_dim, tau_dim]
+            )
+        values = self.slice[variable].transpose("tau_ratio", "mu")
+        mu, tau = self.slice["mu"].values, self.slice["tau_ratio"].values
+        mesh = hv.QuadMesh(
+            (mu, tau, values.values), [mu_dim, tau_dim], hv.Dimension(variable, label=label)
+        )
+        if variable in RATIO_CENTRES:
+            finite = values.values[np.isfinite(values.values) & (values.values > 0)]
+            spread = float(np.abs(np.log10(finite)).max()) if finite.size else 1.0
+            spread = max(spread, 0.05)
+            opts = dict(cmap="RdBu_r", logz=True, clim=(10**-spread, 10**spread))
+        else:
+            opts = dict(cmap="viridis", logz=False, clim=(np.nan, np.nan))
+        delayed = self.slice["delayed_rebound"].transpose("tau_ratio", "mu").values
+        tau_grid, mu_grid = np.meshgrid(tau, mu, indexing="ij")
+        crosses = hv.Points((mu_grid[delayed], tau_grid[delayed]), [mu_dim, tau_dim]).opts(
+            marker="x", color="black", size=4, alpha=0.6
+        )
+        return mesh.opts(colorbar=True, tools=["hover", "tap"], **opts) * crosses
+
+    def _marker(self, mu: float, tau_ratio: float) -> hv.Points:
+        return hv.Points([(mu, tau_ratio)], ["mu", "tau_ratio"]).opts(
+            marker="star", size=18, color="yellow", line_color="black"
+        )
+
+    def _tapped(self, *events: param.parameterized.Event) -> None:
+        if self.tap.x is None or self.tap.y is None:
+            return
+        mu, _ = validate("mu", self.tap.x, self.state.mu)
+        tau_ratio, _ = validate("tau_ratio", self.tap.y, self.state.tau_ratio)
+        self.state.param.update(mu=mu, tau_ratio=tau_ratio)
+
+    def __panel__(self) -> pn.viewable.Viewable:
+        return pn.Column(
+            pn.Row(self.choice),
+            self.note,
+            pn.pane.HoloViews(
+                (self.image * self.marker).opts(
+                    logx=True, logy=True, responsive=True, height=520, framewise=True
+                ),
+                sizing_mode="stretch_width",
+            ),
+            sizing_mode="stretch_width",
+        )

@@ -1,0 +1,81 @@
+"""The explorer: controls beside one tab per scene; only the scene on screen is computed."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from urllib.parse import urlencode
+
+import panel as pn
+import param
+
+from .accuracy import AccuracyScene
+from .closeup import CloseUpScene
+from .controls import Controls
+from .delayed_map import MapScene
+from .drop import DropScene
+from .scene import MODEL_PARAMETERS
+from .state import SCENES, ExplorerState, read_query, url_query
+
+TITLES = {
+    "drop": "Drop",
+    "closeup": "First collision",
+    "map": "Delayed-rebound map",
+    "accuracy": "Accuracy",
+}
+SCENE_CLASSES = {
+    "drop": DropScene,
+    "closeup": CloseUpScene,
+    "map": MapScene,
+    "accuracy": AccuracyScene,
+}
+
+
+class Explorer(pn.viewable.Viewer):
+    """One session of the app, built from a URL query (``{key: text}``)."""
+
+    state = param.ClassSelector(class_=ExplorerState)
+
+    def __init__(self, query: Mapping[str, str] | None = None, **params):
+        params.setdefault("state", ExplorerState())
+        super().__init__(**params)
+        values, messages = read_query(query or {}, self.state)
+        self.state.param.update(**values)
+        self.controls = Controls(state=self.state, messages=messages)
+        self.scenes = {name: SCENE_CLASSES[name](state=self.state) for name in SCENES}
+        self.tabs = pn.Tabs(
+            *((TITLES[name], scene) for name, scene in self.scenes.items()),
+            dynamic=True,
+            active=SCENES.index(self.state.scene),
+            sizing_mode="stretch_width",
+        )
+        self.tabs.param.watch(self._tab_chosen, "active")
+        self.state.param.watch(self._scene_chosen, "scene")
+        self.scenes[self.state.scene].active = True
+
+    def _tab_chosen(self, event: param.parameterized.Event) -> None:
+        self.state.scene = SCENES[event.new]
+
+    def _scene_chosen(self, event: param.parameterized.Event) -> None:
+        for name, scene in self.scenes.items():
+            scene.active = name == event.new
+        self.tabs.active = SCENES.index(event.new)
+
+    def follow_location(self, location: pn.io.location.Location) -> None:
+        """Keep the browser's URL equal to the state (bad values in it are replaced at once)."""
+
+        def write(*events: param.parameterized.Event) -> None:
+            location.search = "?" + urlencode(url_query(self.state))
+
+        self.state.param.watch(write, [*MODEL_PARAMETERS, "scene"])
+        write()
+
+    def __panel__(self) -> pn.viewable.Viewable:
+        return pn.Row(
+            pn.Column(
+                pn.pane.Markdown("## Two-ball bounce explorer"),
+                self.controls,
+                width=340,
+            ),
+            self.tabs,
+            sizing_mode="stretch_width",
+        )

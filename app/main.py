@@ -1,0 +1,13 @@
+"""``panel serve app``: one Explorer per browser session, its state read from the URL."""
+
+import panel as pn
+
+from .explorer import Explorer
+
+pn.extension(notifications=False)
+
+query = {key: values[-1].decode(errors="replace") for key, values in pn.state.session_args.items()}
+explorer = Explorer(query)
+if pn.state.location is not None:
+    explorer.follow_location(pn.state.location)
+explorer.servable(title="Two-ball bounce explorer")

@@ -1,0 +1,98 @@
+"""The explorer's shared state: the model's parameters plus the scene and the units shown.
+
+No widgets here. The parameters are the model's own (:class:`twoball.model.Parameters`, declared
+once with their bounds); the explorer only narrows them to the ranges its sliders can show.
+Values from the URL or from an input go through :func:`validate`, which never raises: a bad
+value gives a message and a valid fallback.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import param
+
+from twoball.model import Parameters, check_value
+
+SCENES = ("drop", "closeup", "map", "accuracy")
+UNITS = ("dimensionless", "SI")
+
+# What the explorer's controls can show (inside the model's bounds): name -> (low, high).
+APP_RANGES = {
+    "eps": (0.01, 1.0),
+    "eps12": (0.01, 1.0),
+    "mu": (1e-4, 10.0),
+    "tau_ratio": (1e-4, 10.0),
+    "height": (10.0, 1e8),
+}
+# Query-string keys of the parameters that the URL carries.
+URL_KEYS = {"eps": "eps", "mu": "mu", "tau_ratio": "tau_ratio", "height": "H", "eps12": "eps12"}
+
+
+class ExplorerState(Parameters):
+    """One session's drop (the model's parameters) and what is on screen."""
+
+    scene = param.Selector(default="drop", objects=list(SCENES), doc="The scene on screen.")
+    units = param.Selector(
+        default="dimensionless",
+        objects=list(UNITS),
+        doc="Show dimensionless X and tau, or metres and seconds (basketball, presets.py).",
+    )
+
+
+def validate(name: str, value: object, fallback: float | None) -> tuple[float | None, str | None]:
+    """(value to use, message or None) for a parameter typed or read from the URL.
+
+    The model decides what is valid (:func:`twoball.model.check_value`); a valid value outside
+    what the sliders show is clamped into :data:`APP_RANGES`. ``eps12`` may be empty or "none"
+    (equal to eps). Never raises.
+    """
+    if name == "eps12" and (value is None or str(value).strip().lower() in ("", "none")):
+        return None, None
+    try:
+        number = check_value(name, value)
+    except ValueError as error:
+        shown = "equal to eps" if fallback is None else f"{fallback:g}"
+        return fallback, f"{error}. Using {shown}."
+    low, high = APP_RANGES[name]
+    if number < low or number > high:
+        clamped = min(max(number, low), high)
+        message = f"{name} = {number:g} is outside the explorer's range [{low:g}, {high:g}]"
+        return clamped, f"{message}; using {clamped:g}."
+    return number, None
+
+
+def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, list[str]]:
+    """Parameter values and messages from a URL's query (keys :data:`URL_KEYS` and ``scene``).
+
+    Unknown keys are ignored; each bad value falls back to its default with a message.
+    """
+    values: dict = {}
+    messages = []
+    for name, key in URL_KEYS.items():
+        if key not in query:
+            continue
+        value, message = validate(name, query[key], getattr(defaults, name))
+        values[name] = value
+        if message:
+            messages.append(f"URL {key}: {message}")
+    if "scene" in query:
+        if query["scene"] in SCENES:
+            values["scene"] = query["scene"]
+        else:
+            messages.append(
+                f"URL scene: must be one of {', '.join(SCENES)}; got {query['scene']!r}. "
+                f"Using {defaults.scene}."
+            )
+    return values, messages
+
+
+def url_query(state: ExplorerState) -> dict[str, str]:
+    """The query string that restores ``state`` (eps12 left out when equal to eps)."""
+    query = {
+        key: f"{getattr(state, name):.12g}"
+        for name, key in URL_KEYS.items()
+        if getattr(state, name) is not None
+    }
+    query["scene"] = state.scene
+    return query
