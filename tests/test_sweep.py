@@ -19,6 +19,7 @@ import xarray as xr
 from scipy.optimize import brentq
 
 import twoball
+import twoball.sweep
 from twoball.cli import main
 from twoball.sweep import VARIABLES, Axis, Grid, compute_block, parse_axis, sweep
 
@@ -294,3 +295,15 @@ def test_bad_arguments_exit_2_with_one_line(tmp_path, capsys, words, named):
     assert err.count("\n") == 1 and err.startswith("twoball: error:") and named in err
     assert "Traceback" not in err
     assert not (tmp_path / "cube.zarr").exists()
+
+
+def test_unreachable_scheduler_exits_2_with_one_line(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(twoball.sweep, "SCHEDULER_TIMEOUT", "1s")
+    store = tmp_path / "cube.zarr"
+    argv = ["sweep", str(store), "--eps", "0.8", "--mu", "0.1", "--tau-ratio", "0.1", "--quiet"]
+    assert main([*argv, "--scheduler", "tcp://127.0.0.1:1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "scheduler" in err and "127.0.0.1:1" in err
+    assert not store.exists()
+    assert main([*argv, "--scheduler", "tcp://127.0.0.1:1", "--workers", "2"]) == 2
+    assert "workers" in capsys.readouterr().err

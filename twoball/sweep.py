@@ -45,6 +45,7 @@ DIMS = ("eps", "mu", "tau_ratio")
 SPACINGS = ("linear", "log")
 DTYPES = ("float64", "float32")
 SOLVER = "exact"
+SCHEDULER_TIMEOUT = "10s"  # to connect to a Dask scheduler
 PROGRESS_DIR = "_progress"  # a Zarr group holding one empty file per finished chunk
 
 HEIGHT_UNITS = "m1 g / k (dimensionless height X = z k / (m1 g))"
@@ -399,49 +400,65 @@ def sweep(
     """Compute ``grid`` into the Zarr ``store``, resuming from any chunks already finished there.
 
     Chunks run on ``workers`` local processes (default: all cores), or on the Dask distributed
-    cluster at ``scheduler`` (an address such as tcp://127.0.0.1:8786). Every finished chunk is
-    written at once. A store written with other arguments is refused (ValueError).
+    cluster at ``scheduler`` (an address such as tcp://127.0.0.1:8786): the workers compute, this
+    process writes, so they need no shared disk. Every finished chunk is written at once. A store
+    written with other arguments, or an unreachable scheduler, raises ValueError.
     """
     from tqdm import tqdm
 
     store = Path(store)
     if workers is not None and (not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers must be an integer >= 1; got {workers!r}")
-    done = _open_or_create(grid, store)
-    todo = [index for index in grid.chunk_slices() if _chunk_key(grid, index) not in done]
-    finished_cases = grid.size - sum(_cases(index) for index in todo)
-    bar = tqdm(
-        total=grid.size,
-        initial=finished_cases,
-        unit="case",
-        unit_scale=True,
-        desc=f"sweep {store.name}",
-        file=sys.stderr,
-        disable=not progress,
-        smoothing=0.1,
-    )
-    with bar:
-        if not todo:
-            return store
-        if scheduler is None:
-            workers = workers or os.cpu_count() or 1
-            with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as pool:
-                futures = {pool.submit(compute_chunk, grid, index): index for index in todo}
-                for future in local_as_completed(futures):
-                    _write_chunk(grid, store, futures[future], future.result())
-                    bar.update(_cases(futures[future]))
-        else:
-            from distributed import Client
-            from distributed import as_completed as cluster_as_completed
+    if scheduler is not None and workers is not None:
+        raise ValueError("workers applies to local runs only, not with a scheduler")
+    client = None if scheduler is None else _connect(scheduler)
+    try:
+        done = _open_or_create(grid, store)
+        todo = [index for index in grid.chunk_slices() if _chunk_key(grid, index) not in done]
+        bar = tqdm(
+            total=grid.size,
+            initial=grid.size - sum(_cases(index) for index in todo),
+            unit="case",
+            unit_scale=True,
+            desc=f"sweep {store.name}",
+            file=sys.stderr,
+            disable=not progress,
+            smoothing=0.1,
+        )
+        with bar:
+            if client is not None:
+                from distributed import as_completed
 
-            with Client(scheduler, timeout="30s") as client:
                 futures = {
                     client.submit(compute_chunk, grid, index, pure=False): index for index in todo
                 }
-                for future in cluster_as_completed(list(futures)):
+                for future in as_completed(list(futures)):
                     _write_chunk(grid, store, futures[future], future.result())
                     bar.update(_cases(futures[future]))
+            elif todo:
+                processes = workers or os.cpu_count() or 1
+                with ProcessPoolExecutor(processes, mp_context=get_context("spawn")) as pool:
+                    futures = {pool.submit(compute_chunk, grid, index): index for index in todo}
+                    for future in local_as_completed(futures):
+                        _write_chunk(grid, store, futures[future], future.result())
+                        bar.update(_cases(futures[future]))
+    finally:
+        if client is not None:
+            client.close()
     return store
+
+
+def _connect(scheduler: str):
+    """A client of the Dask scheduler at ``scheduler``, or ValueError saying it is unreachable."""
+    from distributed import Client
+
+    try:
+        return Client(scheduler, timeout=SCHEDULER_TIMEOUT)
+    except (OSError, TimeoutError, ValueError, TypeError) as error:
+        raise ValueError(
+            f"scheduler: cannot reach a Dask scheduler at {scheduler!r} within "
+            f"{SCHEDULER_TIMEOUT} ({type(error).__name__}: {error})"
+        ) from None
 
 
 def _cases(index: tuple[slice, slice, slice]) -> int:
@@ -494,8 +511,6 @@ def _main(args: argparse.Namespace) -> int:
         chunks=chunks,
         dtype=args.dtype,
     )
-    if args.scheduler is not None and workers is not None:
-        raise ValueError("--workers applies to local runs only, not with --scheduler")
     store = sweep(
         grid, args.store, scheduler=args.scheduler, workers=workers, progress=not args.quiet
     )
