@@ -13,7 +13,14 @@ import json
 import sys
 
 # The modules that contribute subcommands, in the order --help lists them.
-SUBCOMMAND_MODULES = ("twoball.cli", "twoball.bench", "twoball.sweep", "twoball.report")
+SUBCOMMAND_MODULES = (
+    "twoball.cli",
+    "twoball.bench",
+    "twoball.sweep",
+    "twoball.report",
+    "twoball.precision",
+    "twoball.stability",
+)
 
 
 class UsageError(Exception):

@@ -12,6 +12,7 @@ tolerances and writes ``DIR/work_precision.csv`` and ``DIR/work_precision.png``.
 
 from __future__ import annotations
 
+import argparse
 import csv
 import math
 import statistics
@@ -39,7 +40,7 @@ CASES = {
     "paper close-up": (0.9, 0.01, 0.01),
     "benign": (0.816, 0.05, 0.3),
     "stiff, small mu": (0.816, 1e-4, 0.1),
-    "overdamped": (0.1, 0.2, 0.5),
+    "overdamped": (0.12, 0.02, 1.0),
     "nearly elastic": (0.999, 0.05, 0.3),
 }
 
@@ -242,8 +243,9 @@ def work_precision_figure(rows: Sequence[dict], title: str | None = None) -> Fig
     axes[0].legend(fontsize=8, loc="lower left")
     figure.suptitle(
         title
-        or "Error against run time to the second apex (crosses at 10: failed or missed a bounce;"
-        f" errors below {ERROR_FLOOR:.0e} drawn at it)",
+        or "Error against run time to the second apex, H = 1e4; labels: rtol = atol of the first"
+        " and last point (crosses at 10: failed or missed a bounce; errors below"
+        f" {ERROR_FLOOR:.0e} drawn at it; exact solver: its error against a 40-digit reference)",
         fontsize=10,
     )
     return figure
@@ -257,3 +259,115 @@ def _finite_or(value: float) -> float:
 def plot_work_precision(rows: Sequence[dict], path: str | Path, title: str | None = None) -> None:
     """Write :func:`work_precision_figure` of the rows to ``path`` (PNG)."""
     work_precision_figure(rows, title).savefig(path, dpi=110)
+
+
+# The exact solver's own error on these cases is measured against :mod:`twoball.truth`.
+TRUTH_COLUMNS = (
+    "case",
+    "h1_truth",
+    "h2_truth",
+    "rel_err_h1",
+    "rel_err_h2",
+    "contacts_first",
+    "contacts_first_truth",
+    "truth_seconds",
+)
+
+
+def exact_against_truth(cases: dict[str, tuple[float, float, float]]) -> list[dict]:
+    """The exact solver's relative errors in h1 and h2 against the 40-digit reference."""
+    from twoball.truth import solve_truth
+
+    rows = []
+    for case, parameters in cases.items():
+        start = time.perf_counter()
+        truth = solve_truth(*parameters)
+        seconds = time.perf_counter() - start
+        result = simulate(*parameters)
+        rows.append(
+            {
+                "case": case,
+                "h1_truth": _digits(truth.h1),
+                "h2_truth": _digits(truth.h2),
+                "rel_err_h1": _truth_error(result.h1, truth.h1),
+                "rel_err_h2": _truth_error(result.h2, truth.h2),
+                "contacts_first": result.contacts_first,
+                "contacts_first_truth": truth.contacts_first,
+                "truth_seconds": seconds,
+            }
+        )
+    return rows
+
+
+def _digits(value) -> str:
+    import mpmath
+
+    return "" if value is None else mpmath.nstr(value, 25)
+
+
+def _truth_error(value: float | None, truth) -> float:
+    if truth is None:
+        return math.nan if value is None else math.inf
+    if value is None:
+        return math.inf
+    return float(abs(value - truth) / abs(truth))
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    """``twoball precision``: error against run time of every method on the documented cases."""
+    parser = subparsers.add_parser(
+        "precision", help="error against run time of every method (work-precision diagram)"
+    )
+    parser.add_argument("--out", required=True, help="directory for the CSV and PNG")
+    parser.add_argument("--repeats", type=int, default=3, help="timed repeats per run (median)")
+    parser.add_argument(
+        "--budget",
+        type=float,
+        default=20.0,
+        help="seconds: a method slower than this at one tolerance skips the tighter ones",
+    )
+    parser.add_argument(
+        "--no-truth", action="store_true", help="skip the 40-digit check of the exact solver"
+    )
+    parser.set_defaults(func=_main)
+
+
+def _main(args: argparse.Namespace) -> int:
+    if args.repeats < 1:
+        raise ValueError(f"--repeats must be at least 1; got {args.repeats!r}")
+    if not args.budget > 0:
+        raise ValueError(f"--budget must be a number of seconds > 0; got {args.budget!r}")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    truth_rows = [] if args.no_truth else exact_against_truth(CASES)
+    established = {row["case"]: row for row in truth_rows}
+    rows = []
+    for case, (eps, mu, tau_ratio) in CASES.items():
+        print(f"{case}: eps={eps:g}, mu={mu:g}, tau_ratio={tau_ratio:g}, H=1e4", flush=True)
+        case_rows = measure_case(
+            case,
+            eps,
+            mu,
+            tau_ratio,
+            tolerances=FULL_TOLERANCES,
+            repeats=args.repeats,
+            budget=args.budget,
+        )
+        for row in case_rows:  # the exact solver's own error, where it was established
+            if row["method"] == "exact" and case in established:
+                row["rel_err_h1"] = established[case]["rel_err_h1"]
+                row["rel_err_h2"] = established[case]["rel_err_h2"]
+        rows += case_rows
+    write_csv(rows, out / "work_precision.csv")
+    plot_work_precision(rows, out / "work_precision.png")
+    written = ["work_precision.csv", "work_precision.png"]
+    if truth_rows:
+        with open(out / "exact_vs_truth.csv", "w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=TRUTH_COLUMNS)
+            writer.writeheader()
+            writer.writerows(truth_rows)
+        written.append("exact_vs_truth.csv")
+        worst = max(max(r["rel_err_h1"], r["rel_err_h2"]) for r in truth_rows)
+        print(f"exact solver against the 40-digit reference: largest relative error {worst:.1e}")
+    print(f"wrote {', '.join(str(out / name) for name in written)}")
+    return 0

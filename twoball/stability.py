@@ -1,0 +1,561 @@
+"""Stiff and extreme cases: does each method finish, in what time, and is it right (issue 3)?
+
+``twoball stability --out DIR`` runs the exact solver over a grid of extreme parameters (mu from
+1e-6 to 1e2, eps from 0.02 through exp(-2), the damping branch switch, to 0.999999 and exactly
+1, tau_d/tau_f from 0 to 10, H from 1 to 1e8) and the scipy methods over a subset of it, each run
+in a worker process killed after a time cap. It writes ``DIR/stability.csv`` and
+``DIR/stability.png``, and the convergence of the ratios as H grows (model.md, "H matters") to
+``DIR/h_convergence.csv`` and ``DIR/h_convergence.png``.
+
+What went wrong is detected, not assumed (:func:`diagnose`), from the run's own sampled
+trajectory and against the exact solver:
+
+- missed contact: fewer contact intervals than the exact solver before the same time, or a sample
+  where the clamped force (recomputed from the sampled state, model.md) pushes outside every
+  contact interval the method reported;
+- passed through: an overlap X2 - X1 deeper than the energy allows (:func:`max_compression`);
+- energy gained: the energy E of :func:`energy` rising along the trajectory (with the potential
+  1/2 min(eta, 0)^2 of each contact, E is a Lyapunov function of the clamped model, so any rise
+  beyond rounding is a numerical error);
+- step-size failure: the solver's own message; too slow: the cap was hit.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import multiprocessing
+import time
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from twoball.model import check_parameters
+from twoball.solve import METHODS, simulate
+
+EPS_BRANCH_SWITCH = math.exp(-2.0)
+GRID = {
+    "eps": (0.02, EPS_BRANCH_SWITCH, 0.5, 0.9, 0.999999, 1.0),
+    "mu": (1e-6, 1e-4, 1e-2, 1.0, 1e2),
+    "tau_ratio": (0.0, 1e-3, 0.3, 1.0, 10.0),
+    "height": (1.0, 1e2, 1e4, 1e8),
+}
+BASE = {"eps": 0.816, "mu": 0.05, "tau_ratio": 0.3, "height": 1e4}
+# Corners where several extremes meet (eps, mu, tau_ratio, height), and the paper's close-up.
+CORNERS = (
+    (1.0, 1e-6, 0.0, 1e4),
+    (0.02, 1e2, 10.0, 1.0),
+    (0.999999, 1e-4, 0.01, 1e8),
+    (EPS_BRANCH_SWITCH, 1e-2, 1e-3, 1e4),
+    (0.9, 1e-6, 1.0, 1e2),
+    (0.9, 0.01, 0.01, 1e4),
+)
+SCIPY_TOLERANCE = 1e-8
+EXACT_LIMIT_SECONDS = 1.0
+RIGHT_RELATIVE_ERROR = 1e-4  # a scipy result within this of the exact one counts as right
+ENERGY_RISE_EXACT = 1e-12  # relative to the energy scale: rounding for the exact solver
+ENERGY_RISE_SCIPY = 1e-6  # well beyond a tolerance of 1e-8: a real gain, not truncation noise
+COLUMNS = (
+    "eps",
+    "mu",
+    "tau_ratio",
+    "height",
+    "method",
+    "finished",
+    "seconds",
+    "verdict",
+    "problems",
+    "reason",
+    "h1",
+    "h2",
+    "rel_err_h1",
+    "rel_err_h2",
+    "ball_contacts",
+    "exact_ball_contacts",
+    "energy_rise",
+    "deepest_overlap",
+)
+
+
+def grid_cases() -> list[tuple[float, float, float, float]]:
+    """Every combination of the :data:`GRID` values: (eps, mu, tau_ratio, height)."""
+    return [
+        (eps, mu, tau_ratio, height)
+        for eps in GRID["eps"]
+        for mu in GRID["mu"]
+        for tau_ratio in GRID["tau_ratio"]
+        for height in GRID["height"]
+    ]
+
+
+def scipy_cases() -> list[tuple[float, float, float, float]]:
+    """The subset run with every method: each axis of :data:`GRID` swept through :data:`BASE`,
+    then the :data:`CORNERS`."""
+    cases = []
+    for axis, values in GRID.items():
+        for value in values:
+            case = {**BASE, axis: value}
+            cases.append((case["eps"], case["mu"], case["tau_ratio"], case["height"]))
+    return list(dict.fromkeys([*cases, *CORNERS]))
+
+
+def energy(x1, x2, v1, v2, mu: float):
+    """E = (v1^2 + mu v2^2)/2 + x1 + mu x2 + min(x1, 0)^2/2 + min(x2 - x1, 0)^2/2 (units of
+    k (m1 g / k)^2); never increases along an exact solution of the clamped model (model.md)."""
+    x1, x2, v1, v2 = (np.asarray(a, dtype=float) for a in (x1, x2, v1, v2))
+    floor = np.minimum(x1, 0.0)
+    ball = np.minimum(x2 - x1, 0.0)
+    return 0.5 * (v1 * v1 + mu * v2 * v2) + x1 + mu * x2 + 0.5 * (floor * floor + ball * ball)
+
+
+def max_compression(mu: float, x1_0: float, x2_0: float) -> float:
+    """The deepest ball overlap -eta12 that the energy at release allows.
+
+    E >= -(1 + mu)^2/2 + mu eta + eta^2/2 for an overlap eta < 0 (the least E over x1, at
+    x1 = -(1 + mu)), and E <= E(0) = x1_0 + mu x2_0, so -eta <= mu + sqrt(mu^2 + 2 E(0) +
+    (1 + mu)^2).
+    """
+    return mu + math.sqrt(mu * mu + 2.0 * (x1_0 + mu * x2_0) + (1.0 + mu) ** 2)
+
+
+def _energy_scale(mu: float, x1_0: float, x2_0: float) -> float:
+    return abs(x1_0) + mu * abs(x2_0) + (1.0 + mu) ** 2
+
+
+def _ball_contacts_before(result, end: float) -> int:
+    return sum(1 for c in result.contacts if c.contact == "ball" and c.start < end)
+
+
+def _unreported_pushes(result) -> list[str]:
+    """Contacts whose recomputed clamped force pushes at a sample outside every reported
+    interval of that contact."""
+    trajectory = result.trajectory
+    drop = result.drop
+    x1, x2, v1, v2 = trajectory.x1, trajectory.x2, trajectory.v1, trajectory.v2
+    slack = 1e-9 * (1.0 + np.abs(x1) + np.abs(x2) + np.abs(v1) + np.abs(v2))
+    missed = []
+    for name, eta, rate, zeta in (
+        ("floor", x1, v1, drop.zeta01),
+        ("ball", x2 - x1, v2 - v1, drop.zeta12),
+    ):
+        pushing = np.maximum(eta, eta + 2.0 * zeta * rate) < -slack
+        covered = np.zeros_like(pushing)
+        for c in result.contacts:
+            if c.contact == name:
+                width = 1e-9 * (1.0 + abs(c.end))
+                covered |= (trajectory.t >= c.start - width) & (trajectory.t <= c.end + width)
+        if np.any(pushing & ~covered):
+            missed.append(name)
+    return missed
+
+
+def diagnose(
+    eps: float, mu: float, tau_ratio: float, height: float, method: str, tolerance: float
+) -> dict:
+    """Run one method on one case with its trajectory sampled, and check it against the model.
+
+    Returns the run's figures and the problems found without the exact solver (the comparison
+    with it is :func:`judge`); never raises for a failing method.
+    """
+    drop = check_parameters(eps, mu, tau_ratio, height=height)
+    options = {} if method == "exact" else {"rtol": tolerance, "atol": tolerance}
+    row = {"eps": eps, "mu": mu, "tau_ratio": tau_ratio, "height": height, "method": method}
+    start = time.perf_counter()
+    try:
+        result = simulate(eps, mu, tau_ratio, height=height, method=method, dense=True, **options)
+    except (ValueError, ArithmeticError, RuntimeError, MemoryError) as error:
+        row.update(finished=False, seconds=time.perf_counter() - start)
+        row.update(reason=f"{type(error).__name__}: {error}", problems=["step-size failure"])
+        return row
+    row["seconds"] = time.perf_counter() - start
+    problems = []
+    reason = result.reason or ""
+    if "failed" in reason:
+        problems.append("step-size failure")
+    trajectory = result.trajectory
+    e = energy(trajectory.x1, trajectory.x2, trajectory.v1, trajectory.v2, mu)
+    scale = _energy_scale(mu, drop.x1_0, drop.x2_0)
+    rise = float(np.max(e - np.minimum.accumulate(e))) / scale if e.size else 0.0
+    if not np.all(np.isfinite(e)):
+        rise = math.inf
+    limit = ENERGY_RISE_EXACT if method == "exact" else ENERGY_RISE_SCIPY
+    if rise > limit:
+        problems.append("energy gained")
+    overlap = trajectory.x2 - trajectory.x1
+    deepest = float(-np.min(overlap)) / max_compression(mu, drop.x1_0, drop.x2_0)
+    if not math.isfinite(deepest) or deepest > 1.0:
+        problems.append("passed through")
+    problems += [f"missed {name} contact" for name in _unreported_pushes(result)]
+    values = [v for v in (result.h1, result.h2) if v is not None]
+    if not all(math.isfinite(v) for v in values):
+        problems.append("non-finite result")
+    row.update(
+        finished=True,
+        reason=reason,
+        problems=problems,
+        h1=result.h1,
+        h2=result.h2,
+        end_time=result.end_time,
+        contact_starts=[c.start for c in result.contacts if c.contact == "ball"],
+        energy_rise=rise,
+        deepest_overlap=deepest,
+    )
+    return row
+
+
+def judge(row: dict, exact_row: dict) -> dict:
+    """Complete a :func:`diagnose` row with the comparison against the exact solver's row."""
+    row = dict(row)
+    problems = list(row.get("problems", []))
+    if row["method"] == "exact":
+        if row.get("finished") and row["seconds"] > EXACT_LIMIT_SECONDS:
+            problems.append("too slow")
+    elif row.get("finished") and exact_row.get("finished"):
+        end = min(row["end_time"], exact_row["end_time"])
+        mine = sum(1 for s in row["contact_starts"] if s < end)
+        theirs = sum(1 for s in exact_row["contact_starts"] if s < end)
+        row["ball_contacts"], row["exact_ball_contacts"] = mine, theirs
+        if mine < theirs:
+            problems.append("missed ball contact")
+        elif mine > theirs:
+            problems.append("extra ball contact")
+        for name in ("h1", "h2"):
+            error = _relative(row[name], exact_row[name])
+            row[f"rel_err_{name}"] = error
+            if error > RIGHT_RELATIVE_ERROR:
+                problems.append(f"wrong {name}")
+    if row["method"] == "exact" and row.get("finished"):
+        row["ball_contacts"] = row["exact_ball_contacts"] = len(row["contact_starts"])
+    problems = list(dict.fromkeys(problems))
+    if not row.get("finished"):
+        verdict = "too slow" if problems == ["too slow"] else "failed"
+    else:
+        verdict = "right" if not problems else "wrong"
+    row.update(problems=problems, verdict=verdict)
+    return row
+
+
+def _relative(value: float | None, reference: float | None) -> float:
+    if value is None and reference is None:
+        return 0.0
+    if value is None or reference is None or not math.isfinite(value):
+        return math.inf
+    return abs(value - reference) / abs(reference)
+
+
+def _worker(connection) -> None:
+    simulate(0.8, 0.1, 0.5)  # load the compiled kernel before any timing
+    while True:
+        task = connection.recv()
+        if task is None:
+            return
+        connection.send(diagnose(*task))
+
+
+class _Workers:
+    """Worker processes that run :func:`diagnose`; a task over the cap kills its worker."""
+
+    def __init__(self, count: int, cap: float):
+        self.context = multiprocessing.get_context("fork")
+        self.cap = cap
+        self.slots = [self._start() for _ in range(count)]
+
+    def _start(self):
+        parent, child = self.context.Pipe()
+        process = self.context.Process(target=_worker, args=(child,), daemon=True)
+        process.start()
+        return process, parent
+
+    def run(self, tasks: Sequence[tuple], progress=None) -> list[dict]:
+        results: list[dict | None] = [None] * len(tasks)
+        pending = list(enumerate(tasks))
+        busy: dict[int, tuple[int, float]] = {}  # slot -> (task index, start time)
+        while pending or busy:
+            for slot in range(len(self.slots)):
+                if slot not in busy and pending:
+                    index, task = pending.pop(0)
+                    self.slots[slot][1].send(task)
+                    busy[slot] = (index, time.monotonic())
+            for slot, (index, started) in list(busy.items()):
+                process, connection = self.slots[slot]
+                if connection.poll(0.01):
+                    results[index] = connection.recv()
+                elif time.monotonic() - started > self.cap or not process.is_alive():
+                    process.kill()
+                    process.join()
+                    self.slots[slot] = self._start()
+                    eps, mu, tau_ratio, height, method, _ = tasks[index]
+                    results[index] = {
+                        "eps": eps,
+                        "mu": mu,
+                        "tau_ratio": tau_ratio,
+                        "height": height,
+                        "method": method,
+                        "finished": False,
+                        "seconds": time.monotonic() - started,
+                        "reason": f"killed after {self.cap:g} s",
+                        "problems": ["too slow"],
+                    }
+                else:
+                    continue
+                del busy[slot]
+                if progress is not None:
+                    progress(results[index])
+        return results  # type: ignore[return-value]
+
+    def close(self) -> None:
+        for process, connection in self.slots:
+            connection.send(None)
+            process.join(timeout=5)
+            if process.is_alive():
+                process.kill()
+
+
+def study(
+    exact_cases: Iterable[tuple],
+    scipy_subset: Iterable[tuple],
+    *,
+    methods: Sequence[str] = METHODS,
+    cap: float = 10.0,
+    workers: int = 2,
+    progress=None,
+) -> list[dict]:
+    """The stability study: the exact solver on ``exact_cases``, every other method on
+    ``scipy_subset`` (which must be among ``exact_cases``), each under a time cap."""
+    exact_cases = [tuple(float(v) for v in case) for case in exact_cases]
+    scipy_subset = [tuple(float(v) for v in case) for case in scipy_subset]
+    tasks = [(*case, "exact", 0.0) for case in exact_cases]
+    tasks += [
+        (*case, method, SCIPY_TOLERANCE)
+        for case in scipy_subset
+        for method in methods
+        if method != "exact"
+    ]
+    pool = _Workers(workers, cap)
+    try:
+        rows = pool.run(tasks, progress)
+    finally:
+        pool.close()
+    exact_rows = {
+        tuple(r[k] for k in ("eps", "mu", "tau_ratio", "height")): r
+        for r in rows[: len(exact_cases)]
+    }
+    judged = []
+    for row in rows:
+        key = tuple(row[k] for k in ("eps", "mu", "tau_ratio", "height"))
+        judged.append(judge(row, exact_rows.get(key, {})))
+    return judged
+
+
+def write_csv(rows: Sequence[dict], path: str | Path) -> None:
+    with open(path, "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=COLUMNS, extrasaction="ignore")
+        writer.writeheader()
+        for row in rows:
+            shown = {k: ("" if row.get(k) is None else row.get(k)) for k in COLUMNS}
+            shown["problems"] = "; ".join(row.get("problems", []))
+            writer.writerow(shown)
+
+
+VERDICT_COLOURS = {
+    "right": "#4caf50",
+    "wrong": "#e53935",
+    "failed": "#8e24aa",
+    "too slow": "#fb8c00",
+}
+
+
+def stability_figure(rows: Sequence[dict]) -> Figure:
+    """Left: verdict of every method on the scipy subset; right: the exact solver's run time
+    over the whole grid, against the 1 s limit."""
+    scipy_rows = [r for r in rows if r["method"] != "exact"]
+    subset = list(dict.fromkeys(_case_key(r) for r in scipy_rows))
+    methods = list(dict.fromkeys(r["method"] for r in rows))
+    by_key = {(_case_key(r), r["method"]): r for r in rows}
+    figure = Figure(figsize=(15, 0.32 * len(subset) + 2.5), layout="constrained")
+    left, right = figure.subplots(1, 2, width_ratios=(2.2, 1))
+    for i, case in enumerate(subset):
+        for j, method in enumerate(methods):
+            row = by_key.get((case, method))
+            if row is None:
+                continue
+            left.add_patch(_rectangle(j, i, VERDICT_COLOURS[row["verdict"]]))
+            text = _short(row)
+            left.text(j + 0.5, i + 0.5, text, ha="center", va="center", fontsize=6.5)
+    left.set_xlim(0, len(methods))
+    left.set_ylim(len(subset), 0)
+    left.set_xticks(np.arange(len(methods)) + 0.5, methods)
+    left.xaxis.tick_top()
+    left.set_yticks(
+        np.arange(len(subset)) + 0.5,
+        [f"eps={e:.6g} mu={m:g} tau={t:g} H={h:g}" for e, m, t, h in subset],
+        fontsize=7,
+    )
+    handles = [_rectangle(0, 0, colour) for colour in VERDICT_COLOURS.values()]
+    left.legend(
+        handles,
+        list(VERDICT_COLOURS),
+        loc="upper left",
+        bbox_to_anchor=(0, -0.01),
+        ncols=4,
+        fontsize=8,
+    )
+    left.set_title(
+        f"Each method on stiff and extreme cases (scipy rtol = atol = {SCIPY_TOLERANCE:g});"
+        " cell text: seconds and what went wrong",
+        fontsize=9,
+    )
+    exact_rows = [r for r in rows if r["method"] == "exact"]
+    seconds = np.array([r["seconds"] for r in exact_rows])
+    colours = [VERDICT_COLOURS[r["verdict"]] for r in exact_rows]
+    right.scatter(np.arange(len(exact_rows)), np.maximum(seconds, 1e-6), c=colours, s=8)
+    right.axhline(EXACT_LIMIT_SECONDS, color="k", linestyle="--", linewidth=0.8)
+    right.set_yscale("log")
+    right.set_xlabel("grid case (eps, mu, tau_d/tau_f, H; in CSV order)")
+    right.set_ylabel("run time to the second apex [s] (with trajectory sampling)")
+    bad = sum(1 for r in exact_rows if r["verdict"] != "right")
+    right.set_title(
+        f"Exact solver on all {len(exact_rows)} grid cases: {bad} not right; dashed: 1 s",
+        fontsize=9,
+    )
+    return figure
+
+
+def _case_key(row: dict) -> tuple:
+    return (row["eps"], row["mu"], row["tau_ratio"], row["height"])
+
+
+def _rectangle(x: float, y: float, colour: str):
+    from matplotlib.patches import Rectangle
+
+    return Rectangle((x, y), 1, 1, facecolor=colour, edgecolor="white", alpha=0.8)
+
+
+ABBREVIATIONS = {
+    "missed ball contact": "miss",
+    "missed floor contact": "miss floor",
+    "extra ball contact": "extra",
+    "passed through": "through",
+    "energy gained": "energy+",
+    "step-size failure": "step fail",
+    "too slow": "slow",
+    "non-finite result": "nonfinite",
+}
+
+
+def _short(row: dict) -> str:
+    seconds = f"{row['seconds']:.2g}s"
+    problems = [ABBREVIATIONS.get(p, p) for p in row.get("problems", [])]
+    return seconds if not problems else seconds + "\n" + ",".join(problems[:3])
+
+
+# H-convergence (model.md, "H matters"): the paper says the ratios depend on (eps, mu,
+# tau_d/tau_f) only; they do as H grows.
+H_VALUES = tuple(10.0**k for k in range(1, 9))
+H_POINTS = ((0.816, 0.05, 0.3), (0.9, 0.01, 0.01), (0.7, 0.1, 0.7), (0.816, 0.01, 0.05))
+H_COLUMNS = (
+    "eps",
+    "mu",
+    "tau_ratio",
+    "height",
+    "h1_over_icm",
+    "h2_over_h1",
+    "h1_over_drop",
+    "h2_over_drop",
+    "contacts_first",
+)
+
+
+def h_convergence(
+    points: Sequence[tuple[float, float, float]] = H_POINTS, heights: Sequence[float] = H_VALUES
+) -> list[dict]:
+    """The four ratios and the contact count at each point and height (exact solver)."""
+    rows = []
+    for eps, mu, tau_ratio in points:
+        for height in heights:
+            summary = simulate(eps, mu, tau_ratio, height=height).summary()
+            rows.append({key: summary[key] for key in H_COLUMNS})
+    return rows
+
+
+def h_convergence_figure(rows: Sequence[dict]) -> Figure:
+    """h1/h_ICM and h2/h1 against H, one line per parameter point."""
+    figure = Figure(figsize=(10, 4), layout="constrained")
+    axes = figure.subplots(1, 2)
+    points = list(dict.fromkeys((r["eps"], r["mu"], r["tau_ratio"]) for r in rows))
+    for index, point in enumerate(points):
+        mine = [r for r in rows if (r["eps"], r["mu"], r["tau_ratio"]) == point]
+        label = f"eps={point[0]:g}, mu={point[1]:g}, tau_d/tau_f={point[2]:g}"
+        for axis, key in zip(axes, ("h1_over_icm", "h2_over_h1"), strict=True):
+            values = [math.nan if r[key] is None else r[key] for r in mine]
+            axis.plot(
+                [r["height"] for r in mine], values, marker="o", color=f"C{index}", label=label
+            )
+    for axis, name in zip(axes, ("h1 / h_ICM", "h2 / h1"), strict=True):
+        axis.set_xscale("log")
+        axis.set_xlabel("dimensionless drop height H = h k / (m1 g)")
+        axis.set_ylabel(name)
+        axis.grid(True, alpha=0.3)
+    axes[0].legend(fontsize=7)
+    figure.suptitle(
+        "The ratios depend on H; they settle only as H grows (exact solver)", fontsize=10
+    )
+    return figure
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    """``twoball stability``: the study, its CSVs and pictures."""
+    parser = subparsers.add_parser(
+        "stability", help="every method on stiff and extreme cases, and the H-convergence"
+    )
+    parser.add_argument("--out", required=True, help="directory for the CSVs and PNGs")
+    parser.add_argument("--cap", type=float, default=10.0, help="seconds per run before 'too slow'")
+    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    parser.add_argument("--quick", action="store_true", help="base case sweeps only, no corners")
+    parser.set_defaults(func=_main)
+
+
+def _main(args: argparse.Namespace) -> int:
+    if not (math.isfinite(args.cap) and args.cap > 0):
+        raise ValueError(f"--cap must be a number of seconds > 0; got {args.cap!r}")
+    if args.workers < 1:
+        raise ValueError(f"--workers must be at least 1; got {args.workers!r}")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    subset = scipy_cases()
+    cases = grid_cases()
+    if args.quick:
+        subset = subset[: -len(CORNERS)]
+        cases = subset
+    else:
+        cases = list(dict.fromkeys([*cases, *subset]))
+    done = [0]
+    total = len(cases) + len(subset) * (len(METHODS) - 1)
+
+    def progress(row: dict) -> None:
+        done[0] += 1
+        if done[0] % 50 == 0 or done[0] == total:
+            print(f"  {done[0]}/{total} runs", flush=True)
+
+    started = time.perf_counter()
+    rows = study(cases, subset, cap=args.cap, workers=args.workers, progress=progress)
+    write_csv(rows, out / "stability.csv")
+    stability_figure(rows).savefig(out / "stability.png", dpi=110)
+    convergence = h_convergence()
+    with open(out / "h_convergence.csv", "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=H_COLUMNS)
+        writer.writeheader()
+        writer.writerows(convergence)
+    h_convergence_figure(convergence).savefig(out / "h_convergence.png", dpi=110)
+    print(
+        f"{len(rows)} runs in {time.perf_counter() - started:.0f} s; wrote {out}/stability.csv,"
+        " stability.png, h_convergence.csv, h_convergence.png"
+    )
+    for method in METHODS:
+        mine = [r for r in rows if r["method"] == method]
+        counts = {v: sum(1 for r in mine if r["verdict"] == v) for v in VERDICT_COLOURS}
+        print(f"  {method:7s} " + ", ".join(f"{k} {n}" for k, n in counts.items()))
+    return 0
