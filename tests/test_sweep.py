@@ -137,7 +137,15 @@ def test_shipped_cube_regenerates(name):
     )
     for variable in VARIABLES:
         stored = piece[variable].values
-        np.testing.assert_array_equal(stored, fresh[variable].astype(stored.dtype), variable)
+        again = fresh[variable].astype(stored.dtype)
+        if stored.dtype.kind != "f":
+            np.testing.assert_array_equal(stored, again, variable)
+            continue
+        # to the stored precision: float32 rounding may flip by one unit if the solver's last
+        # float64 bits move (the solver is exact to ~1e-13, float32 keeps ~6e-8)
+        np.testing.assert_array_equal(np.isnan(stored), np.isnan(again), variable)
+        finite = ~np.isnan(stored)
+        np.testing.assert_array_max_ulp(stored[finite], again[finite], maxulp=1)
 
 
 def test_map_cube_contract():
