@@ -1,11 +1,17 @@
-"""Scene 1, the drop: both balls from release to the second apex, and an animation of them."""
+"""Scene 1, the drop: both balls from release to the second apex, and an animation of them.
+
+Drawn with Bokeh directly: a slider move replaces the data of a few ColumnDataSources, which
+is what makes the update fast (HoloViews' DynamicMap update cost about 240 ms a move here,
+see benchmarks/app_latency.py). The run is asked for until the second apex only.
+"""
 
 from __future__ import annotations
 
-import holoviews as hv
 import numpy as np
 import panel as pn
 import param
+from bokeh.models import ColumnDataSource, LabelSet, Legend, LegendItem, Span
+from bokeh.plotting import figure
 
 import twoball
 
@@ -35,31 +41,114 @@ class DropScene(Scene):
             width=420,
         )
         self.player.link(self, value="frame")
-        self.summary = pn.pane.Markdown(
-            pn.bind(self._summary_text, self.param.revision), sizing_mode="stretch_width"
+        self.summary = pn.pane.Markdown(sizing_mode="stretch_width")
+        self.curves = ColumnDataSource({"t": [], "x1": [], "x2": []})
+        self.apexes = ColumnDataSource({"t": [], "h": [], "text": []})
+        self.balls = ColumnDataSource(
+            {"side": [-0.4, 0.4], "x": [0.0, 0.0], "size": [26, 12], "color": [LOWER, UPPER]}
         )
-        self.heights = (
-            hv.DynamicMap(pn.bind(self._heights, self.param.revision))
-            * hv.DynamicMap(pn.bind(self._cursor, self.param.frame, self.param.revision))
-        ).opts(
-            responsive=True,
+        self.drop_line = Span(dimension="width", line_color="gray", line_dash="dashed")
+        self.icm_line = Span(
+            dimension="width", line_color="green", line_dash="dotted", line_width=2
+        )
+        self.cursor = Span(dimension="height", location=0.0, line_color="black", line_width=1)
+        self.heights = self._heights_figure()
+        self.animation = self._animation_figure()
+        self.param.watch(self._show_frame, "frame")
+        self.param.watch(self._draw, "revision")
+
+    def _heights_figure(self):
+        fig = figure(
             height=400,
-            framewise=True,
+            sizing_mode="stretch_width",
             title="Heights from release to the second apex",
-            legend_position="right",
+            tools="pan,box_zoom,wheel_zoom,reset,save",
         )
-        self.balls = hv.DynamicMap(pn.bind(self._balls, self.param.frame, self.param.revision))
+        lower = fig.line("t", "x1", source=self.curves, color=LOWER, line_width=2)
+        upper = fig.line("t", "x2", source=self.curves, color=UPPER, line_width=2)
+        fig.scatter("t", "h", source=self.apexes, color=UPPER, size=8)
+        fig.add_layout(
+            LabelSet(
+                x="t",
+                y="h",
+                text="text",
+                source=self.apexes,
+                text_color=UPPER,
+                text_font_size="10pt",
+                x_offset=-50,
+                y_offset=6,
+            )
+        )
+        for span in (self.drop_line, self.icm_line, self.cursor):
+            fig.add_layout(span)
+        fig.add_layout(
+            Legend(
+                items=[
+                    LegendItem(label="lower ball", renderers=[lower]),
+                    LegendItem(label="upper ball", renderers=[upper]),
+                ],
+            ),
+            "right",
+        )
+        return fig
+
+    def _animation_figure(self):
+        fig = figure(
+            width=200, height=400, x_range=(-1, 1), tools="", toolbar_location=None, title="t = 0"
+        )
+        fig.scatter("side", "x", size="size", source=self.balls, color="color")
+        fig.xaxis.visible = False
+        return fig
 
     def update(self) -> None:
         s = self.state
         self.result = twoball.simulate(
             s.eps, s.mu, s.tau_ratio, eps12=s.eps12, height=s.height, until="second", dense=True
         )
+        self.summary.object = self._summary_text()
 
-    def _summary_text(self, revision: int) -> str:
+    def _draw(self, *events: param.parameterized.Event) -> None:
+        """Send the current drop to the figures (only while on screen)."""
         if not self.active:
-            return ""  # off screen: nothing is computed
+            return
         self.current()
+        r, units = self.result, units_named(self.state.units)
+        tr = r.trajectory
+        self.curves.data = {
+            "t": tr.t * units.time,
+            "x1": tr.x1 * units.length,
+            "x2": tr.x2 * units.length,
+        }
+        self.apexes.data = {
+            "t": np.array(r.apex_t) * units.time,
+            "h": np.array(r.apex_h) * units.length,
+            "text": [f"h{i + 1} = {units.height(h)}" for i, h in enumerate(r.apex_h)],
+        }
+        self.drop_line.location = r.x2_0 * units.length
+        self.icm_line.location = r.h_icm * units.length
+        top = max(r.x2_0, *r.apex_h, r.h_icm) * units.length
+        self.heights.y_range.update(start=-0.03 * top, end=1.12 * top)
+        self.animation.y_range.update(start=-0.03 * top, end=1.12 * top)
+        for fig in (self.heights, self.animation):
+            fig.yaxis.axis_label = units.length_label
+        self.heights.xaxis.axis_label = units.time_label
+        self._show_frame()
+
+    def _show_frame(self, *events: param.parameterized.Event) -> None:
+        if self.result is None:
+            return
+        units = units_named(self.state.units)
+        tr = self.result.trajectory
+        at = self.result.end_time * self.frame / (FRAMES - 1)
+        heights = [
+            np.interp(at, tr.t, tr.x1) * units.length,
+            np.interp(at, tr.t, tr.x2) * units.length,
+        ]
+        self.balls.patch({"x": [(slice(0, 2), heights)]})
+        self.cursor.location = at * units.time
+        self.animation.title.text = f"t = {at * units.time:.4g}"
+
+    def _summary_text(self) -> str:
         r, units = self.result, units_named(self.state.units)
         if r.h2 is None:
             second = f"no second bounce ({r.reason})"
@@ -74,84 +163,13 @@ class DropScene(Scene):
             f"{units.height(r.x2_0)}; ball contacts in the first bounce: {r.contacts_first}"
         )
 
-    def _frame_time(self, frame: int) -> float:
-        return self.result.end_time * frame / (FRAMES - 1)
-
-    def _heights(self, revision: int) -> hv.Overlay:
-        self.current()
-        units = units_named(self.state.units)
-        tr = self.result.trajectory
-        t, scale = tr.t * units.time, units.length
-        dims = dict(
-            kdims=[hv.Dimension("t", label=units.time_label)],
-            vdims=[hv.Dimension("X", label=units.length_label)],
-        )
-        apex_t = np.array(self.result.apex_t) * units.time
-        apex_h = np.array(self.result.apex_h) * scale
-        plane = [*dims["kdims"], *dims["vdims"]]
-        labels = [f"h{i + 1} = {units.height(h)}" for i, h in enumerate(self.result.apex_h)]
-        top = self._top() * scale
-        return (
-            hv.Curve((t, tr.x1 * scale), label="lower ball", **dims).opts(color=LOWER)
-            * hv.Curve((t, tr.x2 * scale), label="upper ball", **dims).opts(color=UPPER)
-            * hv.HLine(self.result.x2_0 * scale, label="drop height").opts(
-                color="gray", line_dash="dashed"
-            )
-            * hv.HLine(self.result.h_icm * scale, label="ICM").opts(
-                color="green", line_dash="dotted"
-            )
-            * hv.Points((apex_t, apex_h), kdims=plane).opts(color=UPPER, size=8)
-            * hv.Labels((apex_t, apex_h, labels), kdims=plane, vdims="text").opts(
-                text_font_size="10pt",
-                yoffset=0.04 * float(apex_h.max(initial=1.0)),
-                text_color=UPPER,
-            )
-            # invisible: keeps the apex labels and the ICM line inside the frame
-            * hv.Scatter([(0.0, -0.03 * top), (1.08 * t[-1], 1.15 * top)], **dims).opts(alpha=0.0)
-        )
-
-    def _top(self) -> float:
-        """The highest thing drawn: drop height, apexes or the ICM apex."""
-        return max(self.result.x2_0, *self.result.apex_h, self.result.h_icm)
-
-    def _cursor(self, frame: int, revision: int) -> hv.VLine:
-        self.current()
-        return hv.VLine(self._frame_time(frame) * units_named(self.state.units).time).opts(
-            color="black", line_width=1
-        )
-
-    def _balls(self, frame: int, revision: int) -> hv.Points:
-        self.current()
-        units = units_named(self.state.units)
-        tr = self.result.trajectory
-        at = self._frame_time(frame)
-        heights = np.array([np.interp(at, tr.t, tr.x1), np.interp(at, tr.t, tr.x2)]) * units.length
-        top = self._top() * units.length
-        return hv.Points(
-            {"side": [-0.4, 0.4], "X": heights, "ball": ["lower", "upper"], "size": [26, 12]},
-            kdims=["side", "X"],
-            vdims=["ball", "size"],
-        ).opts(
-            color="ball",
-            cmap={"lower": LOWER, "upper": UPPER},
-            size="size",
-            xlim=(-1, 1),
-            ylim=(-0.03 * top, 1.08 * top),
-            width=200,
-            height=380,
-            xaxis=None,
-            ylabel=units.length_label,
-            title=f"t = {at * units.time:.4g}",
-            framewise=True,
-            show_legend=False,
-        )
-
     def __panel__(self) -> pn.viewable.Viewable:
+        self._draw()
         return pn.Column(
             self.summary,
             pn.Row(
-                pn.pane.HoloViews(self.heights, sizing_mode="stretch_width", linked_axes=False),
-                pn.pane.HoloViews(self.balls, linked_axes=False),
+                pn.pane.Bokeh(self.heights, sizing_mode="stretch_width"),
+                pn.pane.Bokeh(self.animation),
                 sizing_mode="stretch_width",
             ),
             self.player,

@@ -67,7 +67,7 @@ class Explorer(pn.viewable.Viewer):
             location.search = "?" + urlencode(url_query(self.state))
 
         self.state.param.watch(write, [*MODEL_PARAMETERS, "scene"])
-        write()
+        pn.state.onload(write)  # once the browser has reported its own URL
 
     def __panel__(self) -> pn.viewable.Viewable:
         return pn.Row(

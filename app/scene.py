@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import holoviews as hv
 import panel as pn
 import param
 
 from .state import ExplorerState
+
+hv.renderer("bokeh")  # the plotting backend of every scene, also without ``panel serve``
 
 MODEL_PARAMETERS = ("eps", "eps12", "mu", "tau_ratio", "height")
 
