@@ -186,6 +186,27 @@ def _sweep_command(store: Path, grid: Grid) -> list[str]:
     return [sys.executable, "-m", "twoball", "sweep", *words, "--workers", "1"]
 
 
+def _children(pid: int) -> list[int]:
+    """Process ids whose parent is ``pid`` (Linux /proc)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            with contextlib.suppress(OSError):
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+                if int(fields[1]) == pid:
+                    found.append(int(entry.name))
+    return found
+
+
+def _alive(pid: int) -> bool:
+    """True while ``pid`` runs (a zombie waiting to be reaped counts as gone)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
 def test_resume_after_kill_9_finishes_without_recomputing(tmp_path):
     grid = _grid()
     store = tmp_path / "cube.zarr"
@@ -203,12 +224,19 @@ def test_resume_after_kill_9_finishes_without_recomputing(tmp_path):
             if progress.is_dir() and len(list(progress.glob("*.*.*"))) >= 3:
                 break
             time.sleep(0.01)
+        workers = _children(process.pid)
         os.kill(process.pid, signal.SIGKILL)
         process.wait(timeout=30)
+        # the orphaned worker processes notice and exit by themselves
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline and any(_alive(pid) for pid in workers):
+            time.sleep(0.1)
+        orphans = [pid for pid in workers if _alive(pid)]
     finally:
         with contextlib.suppress(ProcessLookupError):  # its workers, which we started too
             os.killpg(process.pid, signal.SIGKILL)
     assert process.returncode == -signal.SIGKILL
+    assert workers and not orphans
     finished = sorted(path.name for path in progress.glob("*.*.*"))
     assert 3 <= len(finished) < total, "the run must be killed part way"
     written = {key: (store / "h1" / "c" / key.replace(".", "/")).stat().st_mtime_ns

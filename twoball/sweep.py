@@ -19,6 +19,8 @@ import math
 import os
 import shutil
 import sys
+import threading
+import time
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures import as_completed as local_as_completed
 from dataclasses import asdict, dataclass, field
@@ -437,7 +439,12 @@ def sweep(
                     bar.update(_cases(futures[future]))
             elif todo:
                 processes = workers or os.cpu_count() or 1
-                with ProcessPoolExecutor(processes, mp_context=get_context("spawn")) as pool:
+                with ProcessPoolExecutor(
+                    processes,
+                    mp_context=get_context("spawn"),
+                    initializer=_exit_with_parent,
+                    initargs=(os.getpid(),),
+                ) as pool:
                     futures = {pool.submit(compute_chunk, grid, index): index for index in todo}
                     for future in local_as_completed(futures):
                         _write_chunk(grid, store, futures[future], future.result())
@@ -446,6 +453,18 @@ def sweep(
         if client is not None:
             client.close()
     return store
+
+
+def _exit_with_parent(parent: int) -> None:
+    """In a local worker: exit as soon as the sweep process is gone (even after kill -9, which
+    would otherwise leave the worker waiting for work for ever)."""
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, daemon=True).start()
 
 
 def _connect(scheduler: str):
