@@ -1,9 +1,10 @@
 """Sweeps: the bounces over a grid of (eps, mu, tau_ratio), stored as a resumable Zarr cube.
 
 The grid is cut into chunks; each chunk is computed by the exact solver (model.md, "What is
-measured") in one compiled loop that asks the kernel for apex heights and times and the contact
-count only (no contact intervals, no phases). Chunks run in parallel (local processes, or a Dask
-distributed cluster) and each is written to the store as soon as it finishes, then marked done.
+measured"), calling its compiled kernel case by case for the apex heights and times and the
+contact count only (no contact intervals, no phases are recorded). Chunks run in parallel
+(local processes, or a Dask distributed cluster) and each is written to the store as soon as it
+finishes, then marked done.
 
 Why Zarr (v3): every chunk is its own file, written independently; a reader takes one slice by
 reading only the chunks it touches, and a run that was killed restarts by skipping the chunks
