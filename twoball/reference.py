@@ -141,8 +141,8 @@ def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense):
             failure = f"{method} failed: {error}"
             break
         evaluations += sol.nfev
-        if dense is not False:
-            pieces.append(sol.sol)
+        if dense is not False and sol.sol is not None and sol.t.size > 1:
+            pieces.append(sol.sol)  # a call that stopped at once has no interpolant
         for contact in (0, 1):
             events[contact].extend(zip(sol.t_events[contact], sol.y_events[contact], strict=True))
         if not sol.success:
@@ -191,8 +191,9 @@ def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense):
 
 
 def _evaluate_pieces(pieces, times: np.ndarray) -> np.ndarray:
-    """Dense output of consecutive solve_ivp calls at the given times, shape (4, n)."""
-    states = np.empty((4, times.size))
+    """Dense output of consecutive solve_ivp calls at the given times, shape (4, n); NaN where
+    no call reached (after a failure)."""
+    states = np.full((4, times.size), np.nan)
     for piece in pieces:
         inside = (times >= piece.t_min) & (times <= piece.t_max)
         states[:, inside] = piece(times[inside])
