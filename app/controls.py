@@ -142,6 +142,8 @@ class Controls(pn.viewable.Viewer):
             value = getattr(s, name)
             shown = math.log10(value) if name in LOG_SLIDERS else value
             shown = min(max(shown, slider.start), slider.end)
+            if abs(shown - slider.value) < 1e-9:
+                continue  # already there (a round trip through log10 is not exact)
             with param.edit_constant(slider):
                 slider.param.update(value=shown, value_throttled=shown)
         si = s.units == "SI"

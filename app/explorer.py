@@ -22,6 +22,7 @@ TITLES = {
     "map": "Delayed-rebound map",
     "accuracy": "Accuracy",
 }
+URL_DELAY_MS = 300
 SCENE_CLASSES = {
     "drop": DropScene,
     "closeup": CloseUpScene,
@@ -61,12 +62,28 @@ class Explorer(pn.viewable.Viewer):
         self.tabs.active = SCENES.index(event.new)
 
     def follow_location(self, location: pn.io.location.Location) -> None:
-        """Keep the browser's URL equal to the state (bad values in it are replaced at once)."""
+        """Keep the browser's URL equal to the state (bad values in it are replaced at once).
 
-        def write(*events: param.parameterized.Event) -> None:
+        The URL is rewritten shortly after a change, once for a burst of changes: sent in the
+        same update as the plots it delayed them by about 65 ms (benchmarks/app_latency.py).
+        """
+        pending = False
+
+        def write() -> None:
+            nonlocal pending
+            pending = False
             location.search = "?" + urlencode(url_query(self.state))
 
-        self.state.param.watch(write, [*MODEL_PARAMETERS, "scene"])
+        def changed(*events: param.parameterized.Event) -> None:
+            nonlocal pending
+            document = pn.state.curdoc
+            if document is None or document.session_context is None:
+                write()
+            elif not pending:
+                pending = True
+                document.add_timeout_callback(write, URL_DELAY_MS)
+
+        self.state.param.watch(changed, [*MODEL_PARAMETERS, "scene"])
         pn.state.onload(write)  # once the browser has reported its own URL
 
     def __panel__(self) -> pn.viewable.Viewable:
