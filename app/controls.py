@@ -32,7 +32,7 @@ class Controls(pn.viewable.Viewer):
         )
         self.sliders = {
             "eps": pn.widgets.FloatSlider(
-                name="eps (restitution)",
+                label="eps (restitution)",
                 start=APP_RANGES["eps"][0],
                 end=1.0,
                 step=0.001,
@@ -46,17 +46,17 @@ class Controls(pn.viewable.Viewer):
                 lambda event, name=name: self._slider_moved(name, event.new), "value_throttled"
             )
         self.preset = pn.widgets.Select(
-            name="Preset",
+            label="Preset",
             options={"(custom)": ""} | {p.label: key for key, p in presets.PRESETS.items()},
         )
         self.preset.param.watch(self._apply_preset, "value")
         self.preset_source = pn.pane.Markdown("", styles={"font-size": "0.8em"})
         self.units = pn.widgets.RadioButtonGroup(
-            name="Units", options={"dimensionless": "dimensionless", "metres, seconds": "SI"}
+            label="Units", options={"dimensionless": "dimensionless", "metres, seconds": "SI"}
         )
         self.units.link(self.state, value="units", bidirectional=True)
-        self.height = pn.widgets.TextInput(name="", width=140)
-        self.eps12 = pn.widgets.TextInput(name="eps12 (ball-ball; empty: equal to eps)", width=140)
+        self.height = pn.widgets.TextInput(label="", width=140)
+        self.eps12 = pn.widgets.TextInput(label="eps12 (ball-ball; empty: equal to eps)", width=140)
         self.height.param.watch(self._height_typed, "value")
         self.eps12.param.watch(self._eps12_typed, "value")
         self._syncing = False  # True while the widgets follow the state
@@ -70,7 +70,7 @@ class Controls(pn.viewable.Viewer):
     def _log_slider(label: str, name: str) -> pn.widgets.FloatSlider:
         low, high = APP_RANGES[name]
         return pn.widgets.FloatSlider(
-            name=label, start=math.log10(low), end=math.log10(high), step=0.01, format=POWER_OF_TEN
+            label=label, start=math.log10(low), end=math.log10(high), step=0.01, format=POWER_OF_TEN
         )
 
     def show_messages(self, messages: list[str]) -> None:
@@ -147,7 +147,7 @@ class Controls(pn.viewable.Viewer):
             with param.edit_constant(slider):
                 slider.param.update(value=shown, value_throttled=shown)
         si = s.units == "SI"
-        self.height.name = "drop height [m]" if si else "H (dimensionless drop height)"
+        self.height.label = "drop height [m]" if si else "H (dimensionless drop height)"
         height = presets.metres_from_height(s.height) if si else s.height
         self.height.param.update(value=f"{height:.6g}")
         self.eps12.param.update(value="" if s.eps12 is None else f"{s.eps12:.6g}")

@@ -64,7 +64,7 @@ class MapScene(Scene):
         self.error: str | None = None
         # before the views below bind to it: a new variable makes the slice stale first
         self.param.watch(self._variable_chosen, "variable")
-        self.choice = pn.widgets.Select.from_param(self.param.variable, name="Colour by")
+        self.choice = pn.widgets.Select.from_param(self.param.variable, label="Colour by")
         self.note = pn.pane.Markdown(
             pn.bind(self._note, self.param.revision), sizing_mode="stretch_width"
         )

@@ -31,7 +31,7 @@ class DropScene(Scene):
         super().__init__(**params)
         self.result: twoball.Result | None = None
         self.player = pn.widgets.Player(
-            name="Animation",
+            label="Animation",
             start=0,
             end=FRAMES - 1,
             value=0,

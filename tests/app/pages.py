@@ -1,0 +1,98 @@
+"""Driving the served app in Chromium: what the browser tests and the benchmarks share."""
+
+from __future__ import annotations
+
+import time
+
+# A fingerprint of every ColumnDataSource in the page: changes when any plotted data changes.
+FINGERPRINT_JS = """() => {
+  const out = [];
+  for (const doc of (window.Bokeh ? Bokeh.documents : [])) {
+    for (const model of doc.all_models) {
+      if (model.constructor.__name__ !== "ColumnDataSource") continue;
+      const data = model.data;
+      const columns = data instanceof Map ? [...data.entries()] : Object.entries(data);
+      out.push(columns.map(([k, v]) => k + ":" + Array.from(v).slice(0, 40).join(",")).join("|"));
+    }
+  }
+  return out.sort().join("#");
+}"""
+
+# Press a key on a slider handle inside the page and resolve, in ms, when the plotted data has
+# changed and the next frame has been painted (or -1 after timeout ms).
+KEY_TO_PLOT_JS = """async ([index, key, timeout]) => {
+  const fingerprint = FINGERPRINT;
+  const handles = [];
+  const walk = (root) => {
+    for (const el of root.querySelectorAll("*")) {
+      if (el.classList && el.classList.contains("noUi-handle")) handles.push(el);
+      if (el.shadowRoot) walk(el.shadowRoot);
+    }
+  };
+  walk(document);
+  const before = fingerprint();
+  const start = performance.now();
+  handles[index].focus();
+  handles[index].dispatchEvent(new KeyboardEvent("keydown", {key: key, bubbles: true}));
+  while (performance.now() - start < timeout) {
+    await new Promise((resolve) => requestAnimationFrame(resolve));
+    if (fingerprint() !== before) {
+      await new Promise((resolve) => requestAnimationFrame(resolve));
+      return performance.now() - start;
+    }
+  }
+  return -1;
+}""".replace("FINGERPRINT", FINGERPRINT_JS)
+
+SLIDERS = {"eps": 0, "mu": 1, "tau_ratio": 2}
+
+
+def open_page(browser, url: str, *, viewport=(1400, 1000)):
+    """A new page at ``url`` with its console errors collected; returns (context, page, errors)."""
+    context = browser.new_context(viewport={"width": viewport[0], "height": viewport[1]})
+    page = context.new_page()
+    errors: list[str] = []
+    page.on(
+        "console", lambda message: errors.append(message.text) if message.type == "error" else None
+    )
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    page.goto(url)
+    wait_for_plots(page)
+    return context, page, errors
+
+
+def fingerprint(page) -> str:
+    return page.evaluate(FINGERPRINT_JS)
+
+
+def wait_for_plots(page, timeout: float = 60.0) -> str:
+    """Wait until the page has plotted data and is idle; returns the data's fingerprint."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        current = fingerprint(page)
+        if current and ":" in current:
+            page.wait_for_timeout(300)
+            if fingerprint(page) == current:
+                return current
+        page.wait_for_timeout(100)
+    raise AssertionError("the page showed no plotted data in time")
+
+
+def wait_for_change(page, before: str, timeout: float = 20.0) -> str:
+    """Wait until the plotted data differ from ``before``; returns the new fingerprint."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        current = fingerprint(page)
+        if current != before:
+            return current
+        page.wait_for_timeout(50)
+    raise AssertionError("the plotted data did not change")
+
+
+def press_slider(page, name: str, key: str = "ArrowRight", timeout_ms: float = 20000) -> float:
+    """Move a slider one step with the keyboard; ms until the plots changed (-1: they did not)."""
+    return page.evaluate(KEY_TO_PLOT_JS, [SLIDERS[name], key, timeout_ms])
+
+
+def slider_titles(page) -> list[str]:
+    return page.locator(".bk-slider-title").all_inner_texts()

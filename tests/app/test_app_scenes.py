@@ -1,0 +1,167 @@
+"""The scenes without a browser: what each computes, when, and that it is right.
+
+Values are checked against model.md's check values and against the exact solver called
+directly (for the map's cube slice), not against the app's own earlier output.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from bokeh.document import Document
+
+import twoball
+from app import presets
+from app.delayed_map import map_cube
+from app.explorer import Explorer
+
+PAPER = {"eps": "0.9", "mu": "0.01", "tau_ratio": "0.01"}
+
+
+def rendered(query: dict | None = None) -> Explorer:
+    explorer = Explorer(query or {})
+    explorer.__panel__().get_root(Document())
+    return explorer
+
+
+def computations(explorer: Explorer) -> dict[str, int]:
+    return {name: scene.computations for name, scene in explorer.scenes.items()}
+
+
+def test_only_the_scene_on_screen_computes():
+    explorer = rendered()
+    assert computations(explorer) == {"drop": 1, "closeup": 0, "map": 0, "accuracy": 0}
+    explorer.state.mu = 0.02
+    assert computations(explorer) == {"drop": 2, "closeup": 0, "map": 0, "accuracy": 0}
+    explorer.tabs.active = 1  # the first-collision tab
+    assert explorer.state.scene == "closeup"
+    assert computations(explorer) == {"drop": 2, "closeup": 1, "map": 0, "accuracy": 0}
+    explorer.state.eps = 0.7
+    explorer.state.tau_ratio = 0.2
+    assert computations(explorer) == {"drop": 2, "closeup": 3, "map": 0, "accuracy": 0}
+    explorer.tabs.active = 0  # back to the drop: recomputed once, for the latest state
+    assert computations(explorer) == {"drop": 3, "closeup": 3, "map": 0, "accuracy": 0}
+    assert explorer.scenes["drop"].result.drop.eps == 0.7
+
+
+def test_drop_scene_plots_the_check_values_of_model_md():
+    scene = rendered(PAPER).scenes["drop"]
+    apexes = scene.apexes.data["h"]
+    assert apexes[0] == pytest.approx(9256.04845, rel=1e-9)
+    assert apexes[1] == pytest.approx(50076.3922, rel=1e-9)
+    assert scene.result.contacts_first == 4
+    # the curve reaches the apexes and runs to the second one only
+    assert np.max(scene.curves.data["x2"]) == pytest.approx(50076.3922, rel=1e-6)
+    assert scene.curves.data["t"][-1] == pytest.approx(scene.result.t2, rel=1e-12)
+    assert scene.icm_line.location == pytest.approx(scene.result.h_icm)
+    assert "delayed rebound" in scene.summary.object
+
+
+def test_si_units_scale_heights_and_times():
+    explorer = rendered(PAPER)
+    scene = explorer.scenes["drop"]
+    t, x2 = np.array(scene.curves.data["t"]), np.array(scene.curves.data["x2"])
+    explorer.controls.units.value = "SI"
+    assert explorer.state.units == "SI"
+    assert np.allclose(scene.curves.data["t"], t * presets.time_scale(), rtol=1e-12)
+    assert np.allclose(scene.curves.data["x2"], x2 * presets.length_scale(), rtol=1e-12)
+    assert scene.heights.yaxis.axis_label == "height [m]"
+    # the drop height input now speaks metres: 1 m typed is H = 1 m k / (m1 g)
+    explorer.controls.height.value = "1"
+    assert explorer.state.height == pytest.approx(presets.height_from_metres(1.0))
+
+
+def test_closeup_shows_the_four_contacts_and_forces_only_inside_them():
+    explorer = rendered({**PAPER, "scene": "closeup"})
+    scene = explorer.scenes["closeup"]
+    result = scene.result
+    assert result.contacts_first == 4 and "**4 ball contacts**" in scene.table.object
+    ball = [c for c in result.contacts if c.contact == "ball"]
+    floor = [c for c in result.contacts if c.contact == "floor"]
+    tr = result.trajectory
+    # the window holds the whole collision and stops long before the first apex
+    assert tr.t[0] < min(c.start for c in result.contacts)
+    assert tr.t[-1] > max(c.end for c in result.contacts)
+    assert tr.t[-1] - tr.t[0] < 0.1 * result.t1
+    # forces (sampled from the phases) push exactly inside the contact intervals (found by the
+    # run's root finding): a consistency check between two parts of the solver
+    inside_ball = np.zeros(tr.t.shape, bool)
+    for c in ball:
+        inside_ball |= (tr.t > c.start + 1e-9) & (tr.t < c.end - 1e-9)
+    edges = np.zeros(tr.t.shape, bool)
+    for c in ball:
+        edges |= np.isclose(tr.t, c.start, atol=1e-9) | np.isclose(tr.t, c.end, atol=1e-9)
+    assert np.all(tr.f12[inside_ball] > 0)
+    assert np.all(tr.f12[~inside_ball & ~edges] == 0)
+    # all four ball contacts happen while the lower ball is on the floor (model.md)
+    assert all(floor[0].start < c.start and c.end < floor[0].end for c in ball)
+
+
+def test_map_shows_the_cube_slice_nearest_eps_as_the_solver_computes_it():
+    explorer = rendered({"eps": "0.83", "scene": "map"})
+    scene = explorer.scenes["map"]
+    cube_eps = map_cube()["eps"].values
+    nearest = cube_eps[np.abs(cube_eps - 0.83).argmin()]
+    assert scene.slice_eps == nearest
+    assert "eps" not in scene.slice.dims  # one slice was read, not the cube
+    values = scene.slice["h2_over_h1"]
+    for i, j in ((10, 20), (40, 60)):
+        mu, tau = float(values["mu"][i]), float(values["tau_ratio"][j])
+        direct = twoball.simulate(nearest, mu, tau, height=map_cube().attrs["height"])
+        assert float(values[i, j]) == pytest.approx(direct.h2_over_h1, rel=1e-5)
+    # moving mu only moves the marker: the slice is not read again
+    before = scene.computations
+    explorer.state.mu = 0.03
+    assert scene.computations == before
+
+
+def test_a_click_on_the_map_sets_mu_and_tau_ratio_and_moves_the_sliders():
+    explorer = rendered({"scene": "map"})
+    scene = explorer.scenes["map"]
+    scene.tap.event(x=0.02, y=0.15)
+    assert explorer.state.mu == pytest.approx(0.02)
+    assert explorer.state.tau_ratio == pytest.approx(0.15)
+    assert explorer.controls.sliders["mu"].value == pytest.approx(math.log10(0.02))
+    assert explorer.controls.sliders["tau_ratio"].value == pytest.approx(math.log10(0.15))
+
+
+def test_accuracy_computes_only_when_opened():
+    explorer = rendered({"eps": "0.816", "mu": "0.05", "tau_ratio": "0.3"})
+    scene = explorer.scenes["accuracy"]
+    explorer.state.mu = 0.06
+    assert scene.computations == 0 and scene.rows is None
+    explorer.state.scene = "accuracy"
+    assert scene.computations == 1
+    exact = [r for r in scene.rows if r["method"] == "exact"]
+    assert exact and exact[0]["rel_err_h1"] == 0.0
+    lsoda = {r["tolerance"]: r for r in scene.rows if r["method"] == "LSODA"}
+    # tighter tolerance, smaller error against the exact solver
+    assert lsoda[1e-9]["rel_err_h1"] < lsoda[1e-3]["rel_err_h1"]
+    assert "LSODA" in scene.table.object
+    assert scene.view.loading is False
+
+
+def test_bad_typed_values_show_a_message_and_keep_a_valid_state():
+    explorer = rendered()
+    controls = explorer.controls
+    controls.height.value = "-5"
+    assert explorer.state.height == 1e4
+    assert controls.message.visible and "height must be a finite number" in controls.message.object
+    controls.eps12.value = "2"
+    assert explorer.state.eps12 is None and "eps12" in controls.message.object
+    controls.eps12.value = "0.5"
+    assert explorer.state.eps12 == 0.5
+    assert explorer.scenes["drop"].result.drop.eps12 == 0.5
+
+
+def test_a_preset_sets_the_parameters_and_the_sliders():
+    explorer = rendered()
+    explorer.controls.preset.value = "ping-pong"
+    preset = presets.PRESETS["ping-pong"]
+    assert explorer.state.mu == preset.mu and explorer.state.eps12 == preset.eps12
+    assert explorer.controls.sliders["mu"].value == pytest.approx(math.log10(preset.mu))
+    assert explorer.state.height == pytest.approx(presets.height_from_metres(1.0))
+    assert "ITTF" in explorer.controls.preset_source.object
+    assert explorer.scenes["drop"].result.drop.mu == preset.mu

@@ -1,0 +1,96 @@
+"""The explorer's state, URL reading, presets and units: plain Python, no browser."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from app import presets
+from app.state import APP_RANGES, ExplorerState, read_query, url_query, validate
+from twoball.model import Parameters
+
+
+def test_validate_accepts_a_value_in_range():
+    assert validate("mu", "0.02", 0.05) == (0.02, None)
+
+
+@pytest.mark.parametrize(
+    ("name", "text", "words"),
+    [
+        ("eps", "abc", "eps must be a number in (0, 1]"),
+        ("eps", "1.5", "eps must be a finite number in (0, 1]"),
+        ("mu", "-1", "mu must be a finite number in (0, inf)"),
+        ("height", "nan", "height must be a finite number in (0, inf)"),
+        ("tau_ratio", "inf", "tau_ratio must be a finite number in [0, inf)"),
+    ],
+)
+def test_validate_falls_back_with_a_message_naming_the_parameter(name, text, words):
+    fallback = getattr(Parameters, name)
+    value, message = validate(name, text, fallback)
+    assert value == fallback
+    assert words in message and "Using" in message
+
+
+def test_validate_clamps_valid_values_the_sliders_cannot_show():
+    value, message = validate("mu", "100", 0.05)
+    assert value == APP_RANGES["mu"][1]
+    assert "outside the explorer's range" in message
+    value, message = validate("tau_ratio", "0", 0.3)  # valid for the model, not on a log slider
+    assert value == APP_RANGES["tau_ratio"][0] and message
+
+
+def test_empty_eps12_means_equal_to_eps():
+    assert validate("eps12", "", 0.7) == (None, None)
+    assert validate("eps12", "none", 0.7) == (None, None)
+
+
+def test_read_query_keeps_good_values_and_reports_each_bad_one():
+    defaults = ExplorerState()
+    values, messages = read_query(
+        {"eps": "0.7", "mu": "oops", "tau_ratio": "0.5", "H": "-3", "scene": "nowhere", "x": "1"},
+        defaults,
+    )
+    assert values == {"eps": 0.7, "mu": defaults.mu, "tau_ratio": 0.5, "height": defaults.height}
+    assert len(messages) == 3
+    assert any(m.startswith("URL mu:") for m in messages)
+    assert any(m.startswith("URL H:") for m in messages)
+    assert any(m.startswith("URL scene:") for m in messages)
+
+
+def test_url_query_round_trips_through_read_query():
+    state = ExplorerState(eps=0.7321, mu=0.0123456, tau_ratio=0.456, height=2.5e4, eps12=0.6)
+    state.scene = "map"
+    values, messages = read_query(url_query(state), ExplorerState())
+    assert messages == []
+    for name in ("eps", "mu", "tau_ratio", "height", "eps12"):
+        assert values[name] == pytest.approx(getattr(state, name), rel=1e-11)
+    assert values["scene"] == "map"
+    assert "eps12" not in url_query(ExplorerState())
+
+
+def test_units_agree_with_free_fall_in_si():
+    """Independent check of the scales: the lower ball falls h metres in sqrt(2 h / g) s, and in
+    the model it reaches the floor at tau = sqrt(2 H)."""
+    metres = 1.3
+    height = presets.height_from_metres(metres)
+    seconds = math.sqrt(2.0 * height) * presets.time_scale()
+    assert seconds == pytest.approx(math.sqrt(2.0 * metres / presets.GRAVITY), rel=1e-12)
+    assert presets.metres_from_height(height) == pytest.approx(metres, rel=1e-12)
+
+
+def test_presets_follow_their_cited_drop_tests_and_masses():
+    tennis, ping_pong = presets.PRESETS["tennis"], presets.PRESETS["ping-pong"]
+    # FIBA: rebound 1200-1400 mm from 1800 mm; ITF: 53-58 in from 100 in; ITTF: 240-260 from 305
+    assert math.sqrt(1200 / 1800) < tennis.eps < math.sqrt(1400 / 1800)
+    assert math.sqrt(53 / 100) < tennis.eps12 < math.sqrt(58 / 100)
+    assert math.sqrt(240 / 305) < ping_pong.eps12 < math.sqrt(260 / 305)
+    # ITF 56.0-59.4 g, ITTF 2.7 g, FIBA 567-650 g
+    assert 56.0 / 650 < tennis.mu < 59.4 / 567
+    assert 2.7 / 650 < ping_pong.mu < 2.7 / 567
+    for preset in (tennis, ping_pong):
+        for name in ("eps", "eps12", "mu", "tau_ratio"):
+            low, high = APP_RANGES[name]
+            assert low <= getattr(preset, name) <= high
+    # a 1 m drop of a basketball is of order H = 1e4 (model.md)
+    assert 3e3 < presets.height_from_metres(1.0) < 3e4
