@@ -7,6 +7,7 @@ import contextlib
 import json
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -343,3 +344,16 @@ def test_unreachable_scheduler_exits_2_with_one_line(tmp_path, capsys, monkeypat
     assert not store.exists()
     assert main([*argv, "--scheduler", "tcp://127.0.0.1:1", "--workers", "2"]) == 2
     assert "workers" in capsys.readouterr().err
+
+
+def test_sweep_returns_the_cube_and_shows_progress_with_time_left(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    grid = Grid(Axis("eps", 0.7, 0.9, 3), Axis("mu", 0.05, 0.05, 1), Axis("tau_ratio", 0.2, 0.4, 2))
+    cube = sweep(grid, Path("cube"), workers=1)  # a relative path without .zarr
+    err = capsys.readouterr().err
+    assert "100%" in err and re.search(r"6(\.00)?/6", err)
+    assert re.search(r"\[\d\d:\d\d<\d\d:\d\d", err)  # elapsed<time left
+    assert cube.h1.chunks is not None  # lazy
+    point = cube.isel(eps=1, mu=0, tau_ratio=1)
+    expected = twoball.simulate(float(point.eps), 0.05, 0.4).h1
+    assert float(point.eps) == pytest.approx(0.8, rel=1e-15) and float(point.h1) == expected

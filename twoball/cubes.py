@@ -24,11 +24,13 @@ def cube_path(name: str) -> Path:
 def load_cube(name: str | os.PathLike):
     """Open a sweep cube lazily as an ``xarray.Dataset`` (dims eps, mu, tau_ratio).
 
-    ``name`` is a shipped cube ("paper", "map", "contacts") or the path of any ``twoball sweep``
-    store. Nothing is read until a slice is asked for; one eps slice reads one chunk per variable.
+    ``name`` is a shipped cube ("paper", "map", "contacts"), or the path of any ``twoball sweep``
+    store (a ``Path``, or a string ending in .zarr or holding a directory separator). Nothing is
+    read until a slice is asked for; one eps slice reads one chunk per variable.
     """
     import xarray as xr
 
     text = os.fspath(name)
-    path = Path(text) if text.endswith(".zarr") or os.sep in text else cube_path(text)
+    is_path = isinstance(name, os.PathLike) or text.endswith(".zarr") or os.sep in text
+    path = Path(text) if is_path else cube_path(text)
     return xr.open_zarr(path, consolidated=False)

@@ -399,8 +399,9 @@ def sweep(
     scheduler: str | None = None,
     workers: int | None = None,
     progress: bool = True,
-) -> Path:
-    """Compute ``grid`` into the Zarr ``store``, resuming from any chunks already finished there.
+):
+    """Compute ``grid`` into the Zarr ``store``, resuming from any chunks already finished there,
+    and return the finished cube, opened lazily (an ``xarray.Dataset``).
 
     Chunks run on ``workers`` local processes (default: all cores), or on the Dask distributed
     cluster at ``scheduler`` (an address such as tcp://127.0.0.1:8786): the workers compute, this
@@ -453,7 +454,9 @@ def sweep(
     finally:
         if client is not None:
             client.close()
-    return store
+    from twoball.cubes import load_cube
+
+    return load_cube(store)
 
 
 def _exit_with_parent(parent: int) -> None:
@@ -531,8 +534,6 @@ def _main(args: argparse.Namespace) -> int:
         chunks=chunks,
         dtype=args.dtype,
     )
-    store = sweep(
-        grid, args.store, scheduler=args.scheduler, workers=workers, progress=not args.quiet
-    )
-    print(f"{store}: {grid.size} cases, {len(grid.chunk_slices())} chunks, complete")
+    sweep(grid, args.store, scheduler=args.scheduler, workers=workers, progress=not args.quiet)
+    print(f"{args.store}: {grid.size} cases, {len(grid.chunk_slices())} chunks, complete")
     return 0
