@@ -37,7 +37,7 @@ def _grid_words(cube) -> str:
 
 def sweep_rows(cube) -> list[Row]:
     """The rows computed from a cube over the paper's ranges (model.md, last section)."""
-    data = cube[["h1", "h2", "h1_over_icm", "delayed_rebound", "status"]].load()
+    data = cube[["h2", "h1_over_icm", "delayed_rebound"]].load()
     delayed = data.delayed_rebound.values
     below = data.h1_over_icm.values < 1.0
     missing = int(np.isnan(data.h2.values).sum())
