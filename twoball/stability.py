@@ -228,10 +228,12 @@ def diagnose(
     row["seconds"] = time.perf_counter() - start
     problems = []
     reason = "; ".join(text for text in (result.reason, note) if text)
-    if "failed" in reason:
+    failed = "failed" in reason
+    if failed:
         problems.append("step-size failure")
     rise = deepest = None
-    if result.trajectory is not None:
+    # a failed scipy run's trajectory is undefined past the failure: nothing to check there
+    if result.trajectory is not None and not failed:
         rise, deepest, found = _trajectory_problems(result, method)
         problems += found
     values = [v for v in (result.h1, result.h2) if v is not None]
