@@ -240,7 +240,7 @@ def diagnose(
     if not all(math.isfinite(v) for v in values):
         problems.append("non-finite result")
     row.update(
-        finished=True,
+        finished=not failed,
         reason=reason,
         problems=problems,
         h1=result.h1,
