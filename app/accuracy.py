@@ -72,16 +72,20 @@ class AccuracyScene(Scene):
         self._request += 1
         self.view.loading = True
         if pn.state.curdoc is not None and pn.state.curdoc.session_context is not None:
-            pn.state.execute(self._compute)
+            pn.state.execute(self._compute_in_thread)
         else:  # no server (a script or a test): compute now
-            asyncio.run(self._compute())
+            self._show(self._request, self._work())
 
-    async def _compute(self) -> None:
-        request, s = self._request, self.state
+    def _work(self) -> list[dict]:
+        s = self.state
         self.computations += 1
-        rows = await asyncio.to_thread(
-            work_precision, s.eps, s.mu, s.tau_ratio, eps12=s.eps12, height=s.height
-        )
+        return work_precision(s.eps, s.mu, s.tau_ratio, eps12=s.eps12, height=s.height)
+
+    async def _compute_in_thread(self) -> None:
+        request = self._request
+        self._show(request, await asyncio.to_thread(self._work))
+
+    def _show(self, request: int, rows: list[dict]) -> None:
         if request != self._request:
             return  # superseded by a newer drop
         self.rows = rows

@@ -16,7 +16,8 @@ from bokeh.models import CustomJSTickFormatter
 from . import presets
 from .state import APP_RANGES, ExplorerState, validate
 
-POWER_OF_TEN = CustomJSTickFormatter(code="return Number((10 ** tick).toPrecision(3)).toString()")
+# the slider holds log10 of the value and shows the value (a model per slider: one per session)
+POWER_OF_TEN = "return Number((10 ** tick).toPrecision(3)).toString()"
 LOG_SLIDERS = ("mu", "tau_ratio")
 
 
@@ -70,7 +71,11 @@ class Controls(pn.viewable.Viewer):
     def _log_slider(label: str, name: str) -> pn.widgets.FloatSlider:
         low, high = APP_RANGES[name]
         return pn.widgets.FloatSlider(
-            label=label, start=math.log10(low), end=math.log10(high), step=0.01, format=POWER_OF_TEN
+            label=label,
+            start=math.log10(low),
+            end=math.log10(high),
+            step=0.01,
+            format=CustomJSTickFormatter(code=POWER_OF_TEN),
         )
 
     def show_messages(self, messages: list[str]) -> None:

@@ -69,10 +69,17 @@ class MapScene(Scene):
             pn.bind(self._note, self.param.revision), sizing_mode="stretch_width"
         )
         self.image = hv.DynamicMap(pn.bind(self._image, self.param.revision, self.param.variable))
+        self.crosses = hv.DynamicMap(
+            pn.bind(self._crosses, self.param.revision, self.param.variable)
+        )
         self.marker = hv.DynamicMap(
             pn.bind(self._marker, self.state.param.mu, self.state.param.tau_ratio)
         )
+        # the stream before the overlay that shows the image: HoloViews links it at creation
         self.tap = hv.streams.Tap(source=self.image, x=None, y=None)
+        self.shown = (self.image * self.crosses * self.marker).opts(
+            logx=True, logy=True, responsive=True, height=520, framewise=True
+        )
         self.tap.param.watch(self._tapped, ["x", "y"])
 
     def _state_changed(self, *events: param.parameterized.Event) -> None:
@@ -112,7 +119,7 @@ class MapScene(Scene):
             )
         return "  \n".join(lines)
 
-    def _image(self, revision: int, variable: str) -> hv.Overlay:
+    def _image(self, revision: int, variable: str) -> hv.QuadMesh:
         self.current()
         label = next(k for k, v in VARIABLES.items() if v == variable)
         mu_dim = hv.Dimension("mu", label="mu = m2/m1")
@@ -128,17 +135,27 @@ class MapScene(Scene):
         )
         if variable in RATIO_CENTRES:
             finite = values.values[np.isfinite(values.values) & (values.values > 0)]
-            spread = float(np.abs(np.log10(finite)).max()) if finite.size else 1.0
+            # symmetric about 1 on a log scale; the 98th percentile, so outliers do not wash out
+            spread = float(np.percentile(np.abs(np.log10(finite)), 98)) if finite.size else 1.0
             spread = max(spread, 0.05)
             opts = dict(cmap="RdBu_r", logz=True, clim=(10**-spread, 10**spread))
         else:
             opts = dict(cmap="viridis", logz=False, clim=(np.nan, np.nan))
+        return mesh.opts(colorbar=True, tools=["hover", "tap"], **opts)
+
+    def _crosses(self, revision: int, variable: str) -> hv.Points:
+        """The delayed rebounds of the slice (h2 > h1), one cross per grid point."""
+        self.current()
+        dims = ["mu", "tau_ratio"]
+        if self.slice is None:
+            return hv.Points([], dims)
         delayed = self.slice["delayed_rebound"].transpose("tau_ratio", "mu").values
-        tau_grid, mu_grid = np.meshgrid(tau, mu, indexing="ij")
-        crosses = hv.Points((mu_grid[delayed], tau_grid[delayed]), [mu_dim, tau_dim]).opts(
+        tau_grid, mu_grid = np.meshgrid(
+            self.slice["tau_ratio"].values, self.slice["mu"].values, indexing="ij"
+        )
+        return hv.Points((mu_grid[delayed], tau_grid[delayed]), dims).opts(
             marker="x", color="black", size=4, alpha=0.6
         )
-        return mesh.opts(colorbar=True, tools=["hover", "tap"], **opts) * crosses
 
     def _marker(self, mu: float, tau_ratio: float) -> hv.Points:
         return hv.Points([(mu, tau_ratio)], ["mu", "tau_ratio"]).opts(
@@ -156,11 +173,6 @@ class MapScene(Scene):
         return pn.Column(
             pn.Row(self.choice),
             self.note,
-            pn.pane.HoloViews(
-                (self.image * self.marker).opts(
-                    logx=True, logy=True, responsive=True, height=520, framewise=True
-                ),
-                sizing_mode="stretch_width",
-            ),
+            pn.pane.HoloViews(self.shown, sizing_mode="stretch_width"),
             sizing_mode="stretch_width",
         )

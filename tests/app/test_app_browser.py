@@ -1,0 +1,139 @@
+"""The served app in Chromium (Playwright): load, sliders, map clicks, URL state, bad URLs.
+
+Each scene's screenshot is saved under test-artifacts/. The server is ``panel serve app`` from
+the repository root, as the README runs it.
+"""
+
+from __future__ import annotations
+
+from urllib.parse import parse_qs, urlparse
+
+import pytest
+from pages import fingerprint, open_page, press_slider, slider_titles, wait_for_change
+
+pytestmark = pytest.mark.browser
+
+PAPER = "eps=0.9&mu=0.01&tau_ratio=0.01"
+TAB_TITLES = {
+    "drop": "Drop",
+    "closeup": "First collision",
+    "map": "Delayed-rebound map",
+    "accuracy": "Accuracy",
+}
+
+
+def active_tab(page) -> str:
+    return page.locator(".bk-tab.bk-active").inner_text().strip()
+
+
+def url_query(page) -> dict[str, str]:
+    return {k: v[-1] for k, v in parse_qs(urlparse(page.url).query).items()}
+
+
+@pytest.mark.parametrize("scene", list(TAB_TITLES))
+def test_each_scene_loads_without_console_errors(browser, app_server, artifacts, scene):
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?{PAPER}&scene={scene}")
+    try:
+        assert active_tab(page) == TAB_TITLES[scene]
+        if scene == "accuracy":  # computed in the background after the page is up
+            page.get_by_text("DOP853").first.wait_for(timeout=120_000)
+        if scene == "closeup":
+            page.get_by_text("4 ball contacts").wait_for()
+        if scene == "map":
+            page.get_by_text("Slice of the shipped cube").wait_for()
+        page.wait_for_timeout(500)
+        page.screenshot(path=artifacts / f"scene_{scene}.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_each_slider_changes_the_plotted_data(browser, app_server):
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app")
+    try:
+        for index, name in enumerate(("eps", "mu", "tau_ratio")):
+            titles = slider_titles(page)
+            elapsed = press_slider(page, name)
+            assert elapsed > 0, f"moving {name} did not change the plotted data"
+            after = slider_titles(page)
+            assert after[index] != titles[index]
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_a_map_click_moves_the_sliders(browser, app_server, artifacts):
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?scene=map")
+    try:
+        page.get_by_text("Slice of the shipped cube").wait_for()
+        titles = slider_titles(page)
+        before = fingerprint(page)
+        canvas = max(
+            (c for c in page.locator("canvas").all() if c.bounding_box()),
+            key=lambda c: c.bounding_box()["width"] * c.bounding_box()["height"],
+        )
+        box = canvas.bounding_box()
+        page.mouse.click(box["x"] + 0.3 * box["width"], box["y"] + 0.6 * box["height"])
+        wait_for_change(page, before)  # the marker moved
+        page.wait_for_timeout(800)
+        after = slider_titles(page)
+        assert after[0] == titles[0]  # eps stays
+        assert after[1] != titles[1] and after[2] != titles[2]  # mu and tau_d/tau_f moved
+        query = url_query(page)
+        assert float(query["mu"]) != 0.05 and float(query["tau_ratio"]) != 0.3
+        page.screenshot(path=artifacts / "map_after_click.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_a_url_restores_its_state(browser, app_server):
+    base, _ = app_server
+    query = "eps=0.7&mu=0.02&tau_ratio=0.5&H=20000&eps12=0.6&scene=closeup"
+    context, page, errors = open_page(browser, f"{base}/app?{query}")
+    try:
+        assert active_tab(page) == "First collision"
+        titles = slider_titles(page)
+        assert titles[0].endswith(": 0.700")
+        assert titles[1].endswith(": 0.02")
+        assert titles[2].endswith(": 0.5")
+        page.wait_for_timeout(800)
+        restored = url_query(page)
+        assert restored == {
+            "eps": "0.7",
+            "mu": "0.02",
+            "tau_ratio": "0.5",
+            "H": "20000",
+            "eps12": "0.6",
+            "scene": "closeup",
+        }
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_a_bad_url_shows_the_message_and_still_works(browser, app_server, artifacts):
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?eps=abc&mu=-1&H=0&scene=nowhere")
+    try:
+        for words in ("URL eps: eps must be", "URL mu: mu must be", "URL H:", "URL scene:"):
+            assert page.get_by_text(words).is_visible()
+        assert active_tab(page) == "Drop"
+        assert slider_titles(page)[0].endswith(": 0.816")  # eps fell back to its default
+        page.screenshot(path=artifacts / "bad_url.png", full_page=True)
+        assert press_slider(page, "mu") > 0  # and the app still works
+        page.wait_for_timeout(800)
+        query = url_query(page)
+        assert query["eps"] == "0.816" and query["scene"] == "drop"
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_the_server_logged_no_error(app_server, browser):
+    _, log = app_server
+    text = log.read_text()
+    assert "Traceback" not in text and "ERROR" not in text, text[-3000:]
