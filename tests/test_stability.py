@@ -142,10 +142,13 @@ def test_a_run_over_the_cap_is_killed_and_reported_too_slow(monkeypatch):
 
 def test_study_runs_every_method_in_workers():
     case = (0.816, 0.05, 0.3, 1e4)
-    rows = stability.study([case], [case], methods=("exact", "LSODA", "DOP853"), workers=2)
-    assert [r["method"] for r in rows] == ["exact", "LSODA", "DOP853"]
+    rows = stability.study(
+        [case], [case], methods=("exact", "LSODA", "DOP853"), workers=2, check=("DOP853", 1e-10)
+    )
+    assert [r["method"] for r in rows] == ["exact", "LSODA", "DOP853", "DOP853 1e-10"]
     assert all(r["verdict"] == "right" for r in rows)
     assert rows[1]["rel_err_h1"] < 1e-5 and rows[1]["exact_ball_contacts"] == 2
+    assert rows[3]["ball_contacts"] == 2 and rows[3]["rel_err_h2"] < 1e-7
 
 
 def test_h_convergence_matches_model_md():
