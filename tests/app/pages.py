@@ -96,3 +96,17 @@ def press_slider(page, name: str, key: str = "ArrowRight", timeout_ms: float = 2
 
 def slider_titles(page) -> list[str]:
     return page.locator(".bk-slider-title").all_inner_texts()
+
+
+def start_slider_move(page, name: str, key: str = "ArrowRight", timeout_ms: float = 60000) -> None:
+    """Like :func:`press_slider`, without waiting: many pages can move at once."""
+    page.evaluate(
+        "([index, key, timeout]) => { window.__twoballMove = (" + KEY_TO_PLOT_JS + ")("
+        "[index, key, timeout]); }",
+        [SLIDERS[name], key, timeout_ms],
+    )
+
+
+def finish_slider_move(page) -> float:
+    """The ms a move started by :func:`start_slider_move` took (-1: the plots did not change)."""
+    return page.evaluate("() => window.__twoballMove")
