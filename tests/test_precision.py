@@ -67,6 +67,13 @@ def test_no_second_bounce_gives_nan_for_h2():
     assert rows[1]["rel_err_h1"] < 1e-5
 
 
+def test_relative_error_says_which_side_lacks_the_bounce():
+    assert precision.relative_error(3.3, 3.0) == pytest.approx(0.1)
+    assert precision.relative_error(None, 3.0) == math.inf  # missed
+    assert precision.relative_error(5.0, None) == math.inf  # invented
+    assert math.isnan(precision.relative_error(None, None))  # nobody has it
+
+
 def test_bad_input_names_the_parameter():
     with pytest.raises(ValueError, match="eps"):
         precision.work_precision(1.5, 0.05, 0.3)
