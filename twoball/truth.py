@@ -39,7 +39,7 @@ MAX_STEPS = 2_000_000
 
 @dataclass(frozen=True)
 class Truth:
-    """Apex heights and times and ball-contact intervals, as mpmath numbers."""
+    """Apex heights and times and contact intervals (floor and ball), as mpmath numbers."""
 
     apex_t: list
     apex_h: list
