@@ -6,6 +6,7 @@ the repository root, as the README runs it.
 
 from __future__ import annotations
 
+import re
 from urllib.parse import parse_qs, urlparse
 
 import pytest
@@ -128,6 +129,52 @@ def test_a_bad_url_shows_the_message_and_still_works(browser, app_server, artifa
         page.wait_for_timeout(800)
         query = url_query(page)
         assert query["eps"] == "0.816" and query["scene"] == "drop"
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_the_animation_plays_pauses_and_scrubs(browser, app_server, artifacts):
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?{PAPER}")
+    try:
+        start = fingerprint(page)
+        page.locator("button.play").click()
+        page.wait_for_timeout(1500)
+        page.locator("button.pause").click()
+        page.wait_for_timeout(600)
+        paused = fingerprint(page)
+        assert paused != start  # the balls (and the cursor) moved
+        page.wait_for_timeout(800)
+        assert fingerprint(page) == paused  # and stay still while paused
+        page.locator("button.last").click()  # scrub to the end: the second apex
+        wait_for_change(page, paused)
+        page.wait_for_timeout(300)
+        at_end = fingerprint(page)
+        assert ",50076.39" in at_end  # the upper ball is at h2, the end of the run
+        page.screenshot(path=artifacts / "animation_at_end.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_metres_and_seconds_and_a_preset(browser, app_server, artifacts):
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app")
+    try:
+        before = fingerprint(page)
+        page.get_by_role("button", name="metres, seconds").click()
+        after = wait_for_change(page, before)
+        page.get_by_text(re.compile(r"h1 = [\d.]+ m, h2 = [\d.]+ m")).wait_for()
+        page.get_by_text("advanced").click()
+        page.get_by_text("drop height [m]").wait_for()
+        page.locator("select").first.select_option(label="Tennis ball on a basketball")
+        wait_for_change(page, after)
+        page.get_by_text("ITF Rules of Tennis").wait_for()
+        page.wait_for_timeout(800)
+        query = url_query(page)
+        assert abs(float(query["mu"]) - 0.0577 / 0.6085) < 1e-9
+        page.screenshot(path=artifacts / "si_units_tennis_preset.png", full_page=True)
         assert errors == []
     finally:
         context.close()
