@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import panel as pn
 import param
-from bokeh.models import ColumnDataSource, LabelSet, Legend, LegendItem, Span
+from bokeh.models import ColumnDataSource, LabelSet, Legend, LegendItem, Range1d, Span
 from bokeh.plotting import figure
 
 import twoball
@@ -62,6 +62,7 @@ class DropScene(Scene):
             height=400,
             sizing_mode="stretch_width",
             title="Heights from release to the second apex",
+            y_range=Range1d(0.0, 1.0),  # set with every drop (auto-ranging ignores the lines)
             tools="pan,box_zoom,wheel_zoom,reset,save",
         )
         lower = fig.line("t", "x1", source=self.curves, color=LOWER, line_width=2)
@@ -94,7 +95,13 @@ class DropScene(Scene):
 
     def _animation_figure(self):
         fig = figure(
-            width=200, height=400, x_range=(-1, 1), tools="", toolbar_location=None, title="t = 0"
+            width=200,
+            height=400,
+            x_range=(-1, 1),
+            y_range=Range1d(0.0, 1.0),
+            tools="",
+            toolbar_location=None,
+            title="t = 0",
         )
         fig.scatter("side", "x", size="size", source=self.balls, color="color")
         fig.xaxis.visible = False
@@ -127,8 +134,9 @@ class DropScene(Scene):
         self.drop_line.location = r.x2_0 * units.length
         self.icm_line.location = r.h_icm * units.length
         top = max(r.x2_0, *r.apex_h, r.h_icm) * units.length
-        self.heights.y_range.update(start=-0.03 * top, end=1.12 * top)
-        self.animation.y_range.update(start=-0.03 * top, end=1.12 * top)
+        for fig in (self.heights, self.animation):
+            low, high = -0.03 * top, 1.12 * top
+            fig.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
         for fig in (self.heights, self.animation):
             fig.yaxis.axis_label = units.length_label
         self.heights.xaxis.axis_label = units.time_label

@@ -15,6 +15,8 @@ from pages import fingerprint, open_page, press_slider, slider_titles, wait_for_
 pytestmark = pytest.mark.browser
 
 PAPER = "eps=0.9&mu=0.01&tau_ratio=0.01"
+RANGE_ENDS_JS = """() => [...Bokeh.documents[0].all_models]
+  .filter((m) => m.constructor.__name__ === "Range1d").map((m) => m.end)"""
 TAB_TITLES = {
     "drop": "Drop",
     "closeup": "First collision",
@@ -166,6 +168,8 @@ def test_metres_and_seconds_and_a_preset(browser, app_server, artifacts):
         page.get_by_role("button", name="metres, seconds").click()
         after = wait_for_change(page, before)
         page.get_by_text(re.compile(r"h1 = [\d.]+ m, h2 = [\d.]+ m")).wait_for()
+        y_ends = page.evaluate(RANGE_ENDS_JS)
+        assert y_ends and max(y_ends) < 10  # the axes are in metres now
         page.get_by_text("advanced").click()
         page.get_by_text("drop height [m]").wait_for()
         page.locator("select").first.select_option(label="Tennis ball on a basketball")

@@ -68,6 +68,8 @@ def test_si_units_scale_heights_and_times():
     assert np.allclose(scene.curves.data["t"], t * presets.time_scale(), rtol=1e-12)
     assert np.allclose(scene.curves.data["x2"], x2 * presets.length_scale(), rtol=1e-12)
     assert scene.heights.yaxis.axis_label == "height [m]"
+    top = max(scene.result.apex_h + [scene.result.h_icm]) * presets.length_scale()
+    assert top < scene.heights.y_range.end < 1.2 * top  # the axis follows the units
     # the drop height input now speaks metres: 1 m typed is H = 1 m k / (m1 g)
     explorer.controls.height.value = "1"
     assert explorer.state.height == pytest.approx(presets.height_from_metres(1.0))
