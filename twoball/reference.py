@@ -104,9 +104,14 @@ def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense):
     def floor_switch(t, y):
         return max(y[0], y[0] + 2.0 * z01 * y[2])
 
+    # Released touching (tau_ratio = 0), the balls fall with eta exactly 0 until the floor
+    # acts: a switching function that is identically zero cannot be bracketed by solve_ivp's
+    # event location, so the ball's crossing is taken a hair below zero.
+    touching = 1e-12 * (1.0 + drop.x2_0)
+
     def ball_switch(t, y):
         eta = y[1] - y[0]
-        return max(eta, eta + 2.0 * z12 * (y[3] - y[2]))
+        return max(eta, eta + 2.0 * z12 * (y[3] - y[2])) + touching
 
     def upper_velocity(t, y):
         # zero at v2 = 1e-12 rather than 0, so that the release (v2 = 0, then falling) is not
@@ -196,7 +201,8 @@ def _evaluate_pieces(pieces, times: np.ndarray) -> np.ndarray:
     states = np.full((4, times.size), np.nan)
     for piece in pieces:
         inside = (times >= piece.t_min) & (times <= piece.t_max)
-        states[:, inside] = piece(times[inside])
+        if inside.any():
+            states[:, inside] = piece(times[inside])
     return states
 
 
