@@ -14,7 +14,7 @@ from twoball.model import damping_ratios, decay_ratio, restitution
 
 def _advance(kind, state, mu, z01, z12, horizon=np.inf):
     prepared = exact.prepare(mu, z01, z12)
-    return exact.advance_phase(kind, 0.0, *state, horizon, exact.EVENT_TIME, *prepared)
+    return exact.advance_phase(kind, 0.0, *state, horizon, exact.EVENT_TIME, prepared)
 
 
 @pytest.mark.parametrize("mu", [1e-5, 1e-3, 0.1, 1.0, 10.0, 1e3])

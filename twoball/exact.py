@@ -215,7 +215,7 @@ def _block_coefficient(row, block, companion, power):
 
 @numba.njit(cache=True)
 def prepare(mu, z01, z12):
-    """What the kernel needs for one drop (pass it on as ``*prepare(...)``).
+    """What the kernel needs for one drop, passed on whole to :func:`run` as ``prepared``.
 
     Returns (params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest): c0[kind, contact,
     part] + c1[...] sqrt(2 E_1) + c2[...] sqrt(2 E_2) bounds |F''| (part 0 is eta, part 1 is g);
@@ -438,31 +438,14 @@ def _at_rest(roots, params, rest, tol):
 
 
 @numba.njit(cache=True)
-def advance_phase(
-    kind,
-    t,
-    x1,
-    x2,
-    v1,
-    v2,
-    horizon,
-    horizon_event,
-    params,
-    c0,
-    c1,
-    c2,
-    rest,
-    x,
-    x_inv,
-    blocks,
-    companions,
-    y_rest,
-):
+def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
     """Advance one phase, started at time t, to its first event.
 
     Returns (event, tau, x1, x2, v1, v2) with tau the time into the phase. horizon is a known
-    event time (apex or end of the run) with its event code.
+    event time (apex or end of the run) with its event code; prepared is what :func:`prepare`
+    returned.
     """
+    params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest = prepared
     noise = params[P_NOISE] if kind == BOTH else 1.0
     size = 1.0 + abs(x1) + abs(x2)
     speed = abs(v1) + abs(v2)
@@ -530,24 +513,7 @@ def advance_phase(
 
 
 @numba.njit(cache=True)
-def run(
-    x1,
-    x2,
-    apexes_wanted,
-    t_end,
-    params,
-    c0,
-    c1,
-    c2,
-    rest,
-    x,
-    x_inv,
-    blocks,
-    companions,
-    y_rest,
-    record_contacts,
-    record_phases,
-):
+def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
     """Run from rest at heights (x1, x2) until the wanted apex, t_end, or rest.
 
     Returns (status, t, apex_t[apexes_wanted], apex_h[...], n_apex, ball_first, floor_first,
@@ -587,24 +553,7 @@ def run(
             horizon = v2  # the upper ball flies freely: its apex is exactly v2 away
             horizon_event = EVENT_APEX
         event, tau, x1, x2, v1, v2 = advance_phase(
-            kind,
-            t,
-            x1,
-            x2,
-            v1,
-            v2,
-            horizon,
-            horizon_event,
-            params,
-            c0,
-            c1,
-            c2,
-            rest,
-            x,
-            x_inv,
-            blocks,
-            companions,
-            y_rest,
+            kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared
         )
         t += tau
         if event in (EVENT_FLOOR, EVENT_BALL):
@@ -671,11 +620,12 @@ def run(
 
 
 @numba.njit(cache=True)
-def sample(phases, times, params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest):
+def sample(phases, times, prepared):
     """Exact state and forces at the given times from the recorded phases.
 
     Returns an array (len(times), 6): x1, x2, v1, v2, f01, f12.
     """
+    params, _, _, _, _, x, x_inv, blocks, _, y_rest = prepared
     z01, z12 = params[P_Z01], params[P_Z12]
     out = np.empty((times.size, 6))
     starts = phases[:, 0]
@@ -706,7 +656,7 @@ def sample(phases, times, params, c0, c1, c2, rest, x, x_inv, blocks, companions
 def _run_drop(mu, z01, z12, x1, x2, apexes_wanted, t_end, record_phases):
     """prepare and run in one compiled call (one dispatch instead of two, and no boxing of the
     prepared arrays); contacts are recorded."""
-    return run(x1, x2, apexes_wanted, t_end, *prepare(mu, z01, z12), True, record_phases)
+    return run(x1, x2, apexes_wanted, t_end, prepare(mu, z01, z12), True, record_phases)
 
 
 def solve(drop: Drop, apexes: int, t_end: float, *, dense: bool | np.ndarray = False):
@@ -730,7 +680,7 @@ def solve(drop: Drop, apexes: int, t_end: float, *, dense: bool | np.ndarray = F
     if record_phases:
         times = default_times(phases, end) if dense is True else np.asarray(dense, dtype=float)
         prepared = prepare(drop.mu, drop.zeta01, drop.zeta12)
-        samples = (times, sample(phases, times, *prepared))
+        samples = (times, sample(phases, times, prepared))
     return (
         apex_t[:n_apex].tolist(),
         apex_h[:n_apex].tolist(),

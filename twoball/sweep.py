@@ -233,7 +233,7 @@ def _bounce_block(mu, zeta01, zeta12, x2_0, height, apex_h, apex_t, contacts, st
         for j in range(mu.shape[0]):
             prepared = prepare(mu[j], zeta01[i], zeta12[i, j])
             for k in range(x2_0.shape[1]):
-                outcome = run(height, x2_0[i, k], 2, np.inf, *prepared, False, False)
+                outcome = run(height, x2_0[i, k], 2, np.inf, prepared, False, False)
                 n_apex = outcome[4]
                 apex_t[:n_apex, i, j, k] = outcome[2][:n_apex]
                 apex_h[:n_apex, i, j, k] = outcome[3][:n_apex]
