@@ -21,8 +21,15 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tests" / "app"))
 
-from conftest import CHROMIUM, CHROMIUM_ARGS, free_port, serve, wait_until_served  # noqa: E402
-from pages import open_page, press_slider  # noqa: E402
+from apphelpers import (  # noqa: E402
+    CHROMIUM,
+    CHROMIUM_ARGS,
+    free_port,
+    open_page,
+    press_slider,
+    serve,
+    wait_until_served,
+)
 
 BASELINE_APP = """
 import numpy as np

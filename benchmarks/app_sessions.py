@@ -22,8 +22,16 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tests" / "app"))
 
-from conftest import CHROMIUM, CHROMIUM_ARGS, free_port, serve, wait_until_served  # noqa: E402
-from pages import finish_slider_move, open_page, start_slider_move  # noqa: E402
+from apphelpers import (  # noqa: E402
+    CHROMIUM,
+    CHROMIUM_ARGS,
+    finish_slider_move,
+    free_port,
+    open_page,
+    serve,
+    start_slider_move,
+    wait_until_served,
+)
 
 TICKS = os.sysconf("SC_CLK_TCK")
 

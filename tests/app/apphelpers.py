@@ -1,8 +1,54 @@
-"""Driving the served app in Chromium: what the browser tests and the benchmarks share."""
+"""Serving the app and driving it in Chromium: what the app's tests and benchmarks share."""
 
 from __future__ import annotations
 
+import socket
+import subprocess
 import time
+from pathlib import Path
+
+import requests
+
+REPO = Path(__file__).resolve().parents[2]
+ARTIFACTS = REPO / "test-artifacts"
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMIUM_ARGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def wait_until_served(url: str, process: subprocess.Popen, timeout: float = 180.0) -> None:
+    """Poll ``url`` until it answers 200; fail if the server exits or the time runs out."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if process.poll() is not None:
+            raise RuntimeError(f"the server exited with status {process.returncode}")
+        try:
+            if requests.get(url, timeout=5).status_code == 200:
+                return
+        except requests.RequestException:
+            pass
+        time.sleep(0.5)
+    raise RuntimeError(f"{url} did not answer within {timeout:.0f} s")
+
+
+def serve(command: list[str], log: Path, cwd: Path = REPO, env: dict | None = None):
+    """Start ``command`` (a ``panel serve``), its output in ``log``; returns the process."""
+    handle = open(log, "w")  # noqa: SIM115 (closed with the process)
+    return subprocess.Popen(
+        command, cwd=cwd, stdout=handle, stderr=subprocess.STDOUT, env=env, start_new_session=True
+    )
+
 
 # A fingerprint of every ColumnDataSource in the page: changes when any plotted data changes.
 FINGERPRINT_JS = """() => {

@@ -8,56 +8,14 @@ fail. Screenshots go to test-artifacts/ (gitignored).
 from __future__ import annotations
 
 import os
-import socket
-import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
-import requests
+from apphelpers import ARTIFACTS, CHROMIUM, CHROMIUM_ARGS, REPO, free_port, serve, wait_until_served
 
-REPO = Path(__file__).resolve().parents[2]
-ARTIFACTS = REPO / "test-artifacts"
-CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
-
-
-def wait_until_served(url: str, process: subprocess.Popen, timeout: float = 180.0) -> None:
-    """Poll ``url`` until it answers 200; fail if the server exits or the time runs out."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if process.poll() is not None:
-            raise RuntimeError(f"the server exited with status {process.returncode}")
-        try:
-            if requests.get(url, timeout=5).status_code == 200:
-                return
-        except requests.RequestException:
-            pass
-        time.sleep(0.5)
-    raise RuntimeError(f"{url} did not answer within {timeout:.0f} s")
-
-
-def serve(command: list[str], log: Path, cwd: Path = REPO, env: dict | None = None):
-    """Start ``command`` (a ``panel serve``), its output in ``log``; returns the process."""
-    handle = open(log, "w")  # noqa: SIM115 (closed with the process)
-    return subprocess.Popen(
-        command, cwd=cwd, stdout=handle, stderr=subprocess.STDOUT, env=env, start_new_session=True
-    )
 
 
 @pytest.fixture(scope="session")

@@ -13,8 +13,7 @@ from pathlib import Path
 
 import pytest
 import requests
-from conftest import REPO, free_port, serve, wait_until_served
-from pages import open_page
+from apphelpers import REPO, free_port, open_page, serve, wait_until_served
 
 DOCKERFILE = (REPO / "Dockerfile").read_text()
 
