@@ -38,6 +38,12 @@ def test_dockerfile_is_slim_non_root_and_calls_the_tested_scripts():
     assert "--address 0.0.0.0" in (REPO / "app/start.sh").read_text()
 
 
+def image_environment() -> dict[str, str]:
+    """This environment without what the image does not have (an active venv, a numba cache
+    directory elsewhere)."""
+    return {k: v for k, v in os.environ.items() if k not in ("VIRTUAL_ENV", "NUMBA_CACHE_DIR")}
+
+
 def build_context(target: Path) -> Path:
     """Copy the repository as ``docker build`` would send it (.dockerignore applied)."""
     patterns = [
@@ -55,7 +61,7 @@ def image(tmp_path_factory):
     root = tmp_path_factory.mktemp("image")
     context = build_context(root / "twoball")
     venv = root / "venv"
-    env = {k: v for k, v in os.environ.items() if k != "VIRTUAL_ENV"}
+    env = image_environment()
     subprocess.run(
         ["sh", "app/install.sh", str(venv)], cwd=context, env=env, check=True, timeout=1200
     )
@@ -69,7 +75,8 @@ def test_the_install_ships_the_cubes_and_builds_the_numba_cache(image):
     assert list((context / "twoball" / "__pycache__").glob("*.nbi")), "no numba cache was built"
     # the installed package opens the shipped cube (editable install: precomputed/ beside it)
     out = subprocess.run(
-        [
+        env=image_environment(),
+        args=[
             str(venv / "bin" / "python"),
             "-c",
             "import twoball; print(twoball.load_cube('map').sizes['eps'])",
@@ -85,8 +92,7 @@ def test_the_install_ships_the_cubes_and_builds_the_numba_cache(image):
 def test_the_started_image_serves_the_app(image, browser, artifacts):
     context, venv = image
     port = free_port()
-    env = {**os.environ, "PORT": str(port), "ALLOWED_ORIGIN": f"127.0.0.1:{port}"}
-    env.pop("VIRTUAL_ENV", None)
+    env = {**image_environment(), "PORT": str(port), "ALLOWED_ORIGIN": f"127.0.0.1:{port}"}
     log = artifacts / "docker_start.log"
     process = serve(["sh", "app/start.sh", str(venv)], log, cwd=context, env=env)
     base = f"http://127.0.0.1:{port}"
