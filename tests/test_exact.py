@@ -1,6 +1,8 @@
 """The exact solver against closed forms, conservation laws, model.md's check values and scipy."""
 
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -238,3 +240,23 @@ def test_bad_solver_arguments(arguments, text):
     with pytest.raises(ValueError, match=None) as error:
         twoball.simulate(0.8, 0.1, 0.3, **arguments)
     assert text in str(error.value)
+
+
+def test_compiled_kernels_load_from_the_disk_cache_in_any_order():
+    # numba's disk cache once broke the boxing of returned arrays in a fresh process when a
+    # compiled caller of prepare() was loaded before prepare itself; run the public paths in a
+    # new process, in the order a sweep after a simulate uses them.
+    twoball.simulate(0.9, 0.01, 0.01, dense=True)  # make sure the cache is on disk
+    script = (
+        "import numpy as np, twoball\n"
+        "from twoball import exact\n"
+        "twoball.simulate(0.9, 0.01, 0.01)\n"
+        "prepared = exact.prepare(0.01, 0.05, 0.005)\n"
+        "exact.run(1e4, 1e4, 2, np.inf, prepared, False, False)\n"
+        "print(twoball.simulate(0.9, 0.01, 0.01, dense=True).h1)\n"
+    )
+    completed = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=300
+    )
+    assert completed.returncode == 0, completed.stderr
+    assert float(completed.stdout) == pytest.approx(9256.04845, rel=1e-8)

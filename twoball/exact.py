@@ -652,13 +652,6 @@ def sample(phases, times, prepared):
     return out
 
 
-@numba.njit(cache=True)
-def _run_drop(mu, z01, z12, x1, x2, apexes_wanted, t_end, record_phases):
-    """prepare and run in one compiled call (one dispatch instead of two, and no boxing of the
-    prepared arrays); contacts are recorded."""
-    return run(x1, x2, apexes_wanted, t_end, prepare(mu, z01, z12), True, record_phases)
-
-
 def solve(drop: Drop, apexes: int, t_end: float, *, dense: bool | np.ndarray = False):
     """Run the exact solver on a validated drop; see :func:`twoball.simulate`.
 
@@ -666,20 +659,13 @@ def solve(drop: Drop, apexes: int, t_end: float, *, dense: bool | np.ndarray = F
     the first apex, floor contacts before it, sampled rows or None).
     """
     record_phases = dense is not False
-    (status, end, apex_t, apex_h, n_apex, ball_first, floor_first, contacts, phases, _) = _run_drop(
-        drop.mu,
-        drop.zeta01,
-        drop.zeta12,
-        drop.x1_0,
-        drop.x2_0,
-        max(apexes, 1),
-        t_end,
-        record_phases,
+    prepared = prepare(drop.mu, drop.zeta01, drop.zeta12)
+    (status, end, apex_t, apex_h, n_apex, ball_first, floor_first, contacts, phases, _) = run(
+        drop.x1_0, drop.x2_0, max(apexes, 1), t_end, prepared, True, record_phases
     )
     samples = None
     if record_phases:
         times = default_times(phases, end) if dense is True else np.asarray(dense, dtype=float)
-        prepared = prepare(drop.mu, drop.zeta01, drop.zeta12)
         samples = (times, sample(phases, times, prepared))
     return (
         apex_t[:n_apex].tolist(),
