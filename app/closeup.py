@@ -37,7 +37,13 @@ class CloseUpScene(Scene):
         self.table = pn.pane.Markdown(
             pn.bind(self._contacts_text, self.param.revision), sizing_mode="stretch_width"
         )
-        self.positions = hv.DynamicMap(pn.bind(self._positions, self.param.revision))
+        self.positions = hv.DynamicMap(pn.bind(self._positions, self.param.revision)).opts(
+            responsive=True,
+            height=300,
+            framewise=True,  # on the DynamicMap: the axes follow a change of units too
+            title="First collision: positions (negative = compressed)",
+            legend_position="top_left",
+        )
         # f12 is of order mu times f01: each force gets its own axis
         self.floor_force = hv.DynamicMap(pn.bind(self._force, "f01", self.param.revision)).opts(
             responsive=True, height=200, framewise=True, title="Floor force f01", color="black"
@@ -90,16 +96,7 @@ class CloseUpScene(Scene):
             hv.Curve((tr.t * units.time, tr.x1 * units.length), t, x, label="X1 lower ball")
             * hv.Curve((tr.t * units.time, tr.x2 * units.length), t, x, label="X2 upper ball")
             * hv.HLine(0.0).opts(color="gray", line_width=1)
-        ).opts(
-            hv.opts.Curve(color=hv.Cycle([LOWER, UPPER])),
-            hv.opts.Overlay(
-                responsive=True,
-                height=300,
-                framewise=True,
-                title="First collision: positions (negative = compressed)",
-                legend_position="top_left",
-            ),
-        )
+        ).opts(hv.opts.Curve(color=hv.Cycle([LOWER, UPPER]), framewise=True))
 
     def _force(self, name: str, revision: int) -> hv.Curve:
         self.current()

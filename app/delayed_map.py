@@ -62,33 +62,35 @@ class MapScene(Scene):
         self.slice: xr.Dataset | None = None
         self.slice_eps = float("nan")
         self.error: str | None = None
-        # before the views below bind to it: a new variable makes the slice stale first
-        self.param.watch(self._variable_chosen, "variable")
         self.choice = pn.widgets.Select.from_param(self.param.variable, label="Colour by")
         self.note = pn.pane.Markdown(
             pn.bind(self._note, self.param.revision), sizing_mode="stretch_width"
         )
-        self.image = hv.DynamicMap(pn.bind(self._image, self.param.revision, self.param.variable))
-        self.crosses = hv.DynamicMap(
-            pn.bind(self._crosses, self.param.revision, self.param.variable)
+        self.tap: hv.streams.Tap | None = None
+        # a new figure per variable (its colour scale and label change); within one, the
+        # figure's DynamicMaps follow the state
+        self.figure = pn.pane.HoloViews(
+            pn.bind(self._figure, self.param.variable), sizing_mode="stretch_width"
         )
-        self.marker = hv.DynamicMap(
+
+    def _figure(self, variable: str) -> hv.DynamicMap:
+        image = hv.DynamicMap(pn.bind(self._image, self.param.revision, variable))
+        crosses = hv.DynamicMap(pn.bind(self._crosses, self.param.revision))
+        marker = hv.DynamicMap(
             pn.bind(self._marker, self.state.param.mu, self.state.param.tau_ratio)
         )
-        # the stream before the overlay that shows the image: HoloViews links it at creation
-        self.tap = hv.streams.Tap(source=self.image, x=None, y=None)
-        self.shown = (self.image * self.crosses * self.marker).opts(
+        # the stream before the overlay that shows the image: HoloViews links it at creation,
+        # and only to a DynamicMap of one element (not of an overlay)
+        self.tap = hv.streams.Tap(source=image, x=None, y=None)
+        self.tap.param.watch(self._tapped, ["x", "y"])
+        return (image * crosses * marker).opts(
             logx=True, logy=True, responsive=True, height=520, framewise=True
         )
-        self.tap.param.watch(self._tapped, ["x", "y"])
 
     def _state_changed(self, *events: param.parameterized.Event) -> None:
         if {e.name for e in events} <= {"mu", "tau_ratio"}:
             return  # only the marker moves, and it follows mu and tau_ratio itself
         super()._state_changed(*events)
-
-    def _variable_chosen(self, event: param.parameterized.Event) -> None:
-        self._stale = True
 
     def update(self) -> None:
         try:
@@ -120,6 +122,8 @@ class MapScene(Scene):
         return "  \n".join(lines)
 
     def _image(self, revision: int, variable: str) -> hv.QuadMesh:
+        if self.slice is not None and variable not in self.slice.data_vars:
+            self._stale = True  # a new variable: its slice is read now
         self.current()
         label = next(k for k, v in VARIABLES.items() if v == variable)
         mu_dim = hv.Dimension("mu", label="mu = m2/m1")
@@ -143,7 +147,7 @@ class MapScene(Scene):
             opts = dict(cmap="viridis", logz=False, clim=(np.nan, np.nan))
         return mesh.opts(colorbar=True, tools=["hover", "tap"], **opts)
 
-    def _crosses(self, revision: int, variable: str) -> hv.Points:
+    def _crosses(self, revision: int) -> hv.Points:
         """The delayed rebounds of the slice (h2 > h1), one cross per grid point."""
         self.current()
         dims = ["mu", "tau_ratio"]
@@ -163,16 +167,17 @@ class MapScene(Scene):
         )
 
     def _tapped(self, *events: param.parameterized.Event) -> None:
-        if self.tap.x is None or self.tap.y is None:
+        tap = events[0].obj
+        if tap.x is None or tap.y is None:
             return
-        mu, _ = validate("mu", self.tap.x, self.state.mu)
-        tau_ratio, _ = validate("tau_ratio", self.tap.y, self.state.tau_ratio)
+        mu, _ = validate("mu", tap.x, self.state.mu)
+        tau_ratio, _ = validate("tau_ratio", tap.y, self.state.tau_ratio)
         self.state.param.update(mu=mu, tau_ratio=tau_ratio)
 
     def __panel__(self) -> pn.viewable.Viewable:
         return pn.Column(
             pn.Row(self.choice),
             self.note,
-            pn.pane.HoloViews(self.shown, sizing_mode="stretch_width"),
+            self.figure,
             sizing_mode="stretch_width",
         )

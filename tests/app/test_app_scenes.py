@@ -167,3 +167,14 @@ def test_a_preset_sets_the_parameters_and_the_sliders():
     assert explorer.state.height == pytest.approx(presets.height_from_metres(1.0))
     assert "ITTF" in explorer.controls.preset_source.object
     assert explorer.scenes["drop"].result.drop.mu == preset.mu
+
+
+def test_choosing_contacts_reads_their_slice_and_matches_the_solver():
+    explorer = rendered({"eps": "0.816", "scene": "map"})
+    scene = explorer.scenes["map"]
+    scene.variable = "contacts_first"
+    counts = scene.slice["contacts_first"]
+    for i, j in ((5, 30), (20, 10)):
+        mu, tau = float(counts["mu"][i]), float(counts["tau_ratio"][j])
+        direct = twoball.simulate(scene.slice_eps, mu, tau, height=map_cube().attrs["height"])
+        assert int(counts[i, j]) == direct.contacts_first
