@@ -2,13 +2,17 @@
 close-up figure), the number of ball contacts and when each starts and ends.
 
 The run stops at the first apex, and the trajectory is sampled only over the collision.
+Drawn with Bokeh directly, like the drop scene: a move replaces one ColumnDataSource's data
+(through HoloViews' DynamicMaps a move took about 320 ms in the browser, see the README).
 """
 
 from __future__ import annotations
 
-import holoviews as hv
 import numpy as np
 import panel as pn
+import param
+from bokeh.models import ColumnDataSource, Span
+from bokeh.plotting import figure
 
 import twoball
 
@@ -37,20 +41,52 @@ class CloseUpScene(Scene):
         self.table = pn.pane.Markdown(
             pn.bind(self._contacts_text, self.param.revision), sizing_mode="stretch_width"
         )
-        self.positions = hv.DynamicMap(pn.bind(self._positions, self.param.revision)).opts(
-            responsive=True,
-            height=300,
-            framewise=True,  # on the DynamicMap: the axes follow a change of units too
-            title="First collision: positions (negative = compressed)",
-            legend_position="top_left",
+        self.samples = ColumnDataSource({"t": [], "x1": [], "x2": [], "f01": [], "f12": []})
+        self.positions = self._figure("First collision: positions (negative = compressed)", 300)
+        self.positions.line(
+            "t", "x1", source=self.samples, color=LOWER, line_width=2, legend_label="X1 lower ball"
         )
+        self.positions.line(
+            "t", "x2", source=self.samples, color=UPPER, line_width=2, legend_label="X2 upper ball"
+        )
+        self.positions.add_layout(Span(dimension="width", location=0.0, line_color="gray"))
+        self.positions.legend.location = "top_left"
         # f12 is of order mu times f01: each force gets its own axis
-        self.floor_force = hv.DynamicMap(pn.bind(self._force, "f01", self.param.revision)).opts(
-            responsive=True, height=200, framewise=True, title="Floor force f01", color="black"
+        self.floor_force = self._figure("Floor force f01", 200, x_range=self.positions.x_range)
+        self.floor_force.line("t", "f01", source=self.samples, color="black", line_width=2)
+        self.ball_force = self._figure("Ball-ball force f12", 200, x_range=self.positions.x_range)
+        self.ball_force.line("t", "f12", source=self.samples, color=UPPER, line_width=2)
+        self.param.watch(self._draw, "revision")
+
+    def _figure(self, title: str, height: int, **shared):
+        """A figure of the scene; ``x_range`` shares the time axis with the first one."""
+        return figure(
+            title=title,
+            height=height,
+            sizing_mode="stretch_width",
+            tools="pan,box_zoom,wheel_zoom,reset,save",
+            **shared,
         )
-        self.ball_force = hv.DynamicMap(pn.bind(self._force, "f12", self.param.revision)).opts(
-            responsive=True, height=200, framewise=True, title="Ball-ball force f12", color=UPPER
-        )
+
+    def _draw(self, *events: param.parameterized.Event) -> None:
+        """Send the current collision to the figures (only while on screen)."""
+        if not self.active:
+            return
+        self.current()
+        units = units_named(self.state.units)
+        tr = self.result.trajectory
+        self.samples.data = {
+            "t": tr.t * units.time,
+            "x1": tr.x1 * units.length,
+            "x2": tr.x2 * units.length,
+            "f01": tr.f01 * units.force,
+            "f12": tr.f12 * units.force,
+        }
+        for fig in (self.positions, self.floor_force, self.ball_force):
+            fig.xaxis.axis_label = units.time_label
+        self.positions.yaxis.axis_label = units.length_label
+        self.floor_force.yaxis.axis_label = f"f01 {units.force_label}"
+        self.ball_force.yaxis.axis_label = f"f12 {units.force_label}"
 
     def update(self) -> None:
         s = self.state
@@ -86,31 +122,12 @@ class CloseUpScene(Scene):
                 )
         return "\n".join(lines)
 
-    def _positions(self, revision: int) -> hv.Overlay:
-        self.current()
-        units = units_named(self.state.units)
-        tr = self.result.trajectory
-        t = hv.Dimension("t", label=units.time_label)
-        x = hv.Dimension("X", label=units.length_label)
-        return (
-            hv.Curve((tr.t * units.time, tr.x1 * units.length), t, x, label="X1 lower ball")
-            * hv.Curve((tr.t * units.time, tr.x2 * units.length), t, x, label="X2 upper ball")
-            * hv.HLine(0.0).opts(color="gray", line_width=1)
-        ).opts(hv.opts.Curve(color=hv.Cycle([LOWER, UPPER]), framewise=True))
-
-    def _force(self, name: str, revision: int) -> hv.Curve:
-        self.current()
-        units = units_named(self.state.units)
-        tr = self.result.trajectory
-        t = hv.Dimension("t", label=units.time_label)
-        f = hv.Dimension(name, label=f"{name} {units.force_label}")
-        return hv.Curve((tr.t * units.time, getattr(tr, name) * units.force), t, f)
-
     def __panel__(self) -> pn.viewable.Viewable:
+        self._draw()
         return pn.Column(
-            pn.pane.HoloViews(self.positions, sizing_mode="stretch_width"),
-            pn.pane.HoloViews(self.floor_force, sizing_mode="stretch_width"),
-            pn.pane.HoloViews(self.ball_force, sizing_mode="stretch_width"),
+            pn.pane.Bokeh(self.positions, sizing_mode="stretch_width"),
+            pn.pane.Bokeh(self.floor_force, sizing_mode="stretch_width"),
+            pn.pane.Bokeh(self.ball_force, sizing_mode="stretch_width"),
             self.table,
             sizing_mode="stretch_width",
         )
