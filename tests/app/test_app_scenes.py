@@ -122,7 +122,7 @@ def test_map_shows_the_cube_slice_nearest_eps_as_the_solver_computes_it():
 def test_a_click_on_the_map_sets_mu_and_tau_ratio_and_moves_the_sliders():
     explorer = rendered({"scene": "map"})
     scene = explorer.scenes["map"]
-    scene.tap.event(x=0.02, y=0.15)
+    scene.tap.event(x=math.log10(0.02), y=math.log10(0.15))  # the map is drawn in log10
     assert explorer.state.mu == pytest.approx(0.02)
     assert explorer.state.tau_ratio == pytest.approx(0.15)
     assert explorer.controls.sliders["mu"].value == pytest.approx(math.log10(0.02))
