@@ -26,6 +26,7 @@ from apphelpers import (  # noqa: E402
     CHROMIUM_ARGS,
     free_port,
     open_page,
+    panel_serve,
     press_slider,
     serve,
     wait_until_served,
@@ -85,7 +86,6 @@ def main() -> None:
     args = parser.parse_args()
     from playwright.sync_api import sync_playwright
 
-    panel = str(Path(sys.executable).parent / "panel")
     with tempfile.TemporaryDirectory() as tmp, sync_playwright() as playwright:
         baseline_file = Path(tmp) / "baseline.py"
         baseline_file.write_text(BASELINE_APP)
@@ -97,17 +97,7 @@ def main() -> None:
         ):
             port = free_port()
             process = served(
-                [
-                    panel,
-                    "serve",
-                    target,
-                    "--address",
-                    "127.0.0.1",
-                    "--port",
-                    str(port),
-                    "--allow-websocket-origin",
-                    f"127.0.0.1:{port}",
-                ],
+                panel_serve(target, port),
                 path,
                 port,
                 Path(tmp) / f"{path}.log",

@@ -28,6 +28,7 @@ from apphelpers import (  # noqa: E402
     finish_slider_move,
     free_port,
     open_page,
+    panel_serve,
     serve,
     start_slider_move,
     wait_until_served,
@@ -60,17 +61,7 @@ def main() -> None:
     port = free_port()
     with tempfile.TemporaryDirectory() as tmp, sync_playwright() as playwright:
         process = serve(
-            [
-                str(Path(sys.executable).parent / "panel"),
-                "serve",
-                "app",
-                "--address",
-                "127.0.0.1",
-                "--port",
-                str(port),
-                "--allow-websocket-origin",
-                f"127.0.0.1:{port}",
-            ],
+            panel_serve("app", port),
             Path(tmp) / "server.log",
         )
         try:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import socket
 import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -40,6 +41,15 @@ def wait_until_served(url: str, process: subprocess.Popen, timeout: float = 180.
             pass
         time.sleep(0.5)
     raise RuntimeError(f"{url} did not answer within {timeout:.0f} s")
+
+
+def panel_serve(target: str, port: int) -> list[str]:
+    """The command serving ``target`` (a directory or file app) on loopback at ``port``."""
+    panel = str(Path(sys.executable).parent / "panel")
+    return [
+        panel, "serve", target, "--address", "127.0.0.1", "--port", str(port),
+        "--allow-websocket-origin", f"127.0.0.1:{port}",
+    ]  # fmt: skip
 
 
 def serve(command: list[str], log: Path, cwd: Path = REPO, env: dict | None = None):

@@ -12,7 +12,16 @@ import sys
 from pathlib import Path
 
 import pytest
-from apphelpers import ARTIFACTS, CHROMIUM, CHROMIUM_ARGS, REPO, free_port, serve, wait_until_served
+from apphelpers import (
+    ARTIFACTS,
+    CHROMIUM,
+    CHROMIUM_ARGS,
+    REPO,
+    free_port,
+    panel_serve,
+    serve,
+    wait_until_served,
+)
 
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
@@ -30,17 +39,7 @@ def app_server(artifacts):
     port = free_port()
     log = artifacts / "app_server.log"
     process = serve(
-        [
-            str(Path(sys.executable).parent / "panel"),
-            "serve",
-            "app",
-            "--address",
-            "127.0.0.1",
-            "--port",
-            str(port),
-            "--allow-websocket-origin",
-            f"127.0.0.1:{port}",
-        ],
+        panel_serve("app", port),
         log,
     )
     base = f"http://127.0.0.1:{port}"
