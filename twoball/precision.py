@@ -172,15 +172,13 @@ def measure_case(
     return rows
 
 
-def write_csv(rows: Sequence[dict], path: str | Path) -> None:
-    """The rows as CSV with the columns :data:`COLUMNS` (empty tolerance for the exact solver)."""
+def write_csv(rows: Sequence[dict], path: str | Path, columns: Sequence[str] = COLUMNS) -> None:
+    """The rows as CSV with the given columns (default :data:`COLUMNS`); None is written empty
+    (the exact solver's tolerance), other keys are left out."""
     with open(path, "w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=COLUMNS, extrasaction="ignore")
+        writer = csv.DictWriter(handle, fieldnames=columns, extrasaction="ignore")
         writer.writeheader()
-        for row in rows:
-            writer.writerow(
-                {**row, "tolerance": "" if row["tolerance"] is None else row["tolerance"]}
-            )
+        writer.writerows(rows)
 
 
 # Errors below this are drawn on it (a relative error of 0 has no place on a log axis).

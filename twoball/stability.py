@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from twoball import precision
 from twoball.model import check_parameters
 from twoball.solve import METHODS, simulate
 
@@ -410,13 +411,9 @@ def study(
 
 
 def write_csv(rows: Sequence[dict], path: str | Path) -> None:
-    with open(path, "w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=COLUMNS, extrasaction="ignore")
-        writer.writeheader()
-        for row in rows:
-            shown = {k: ("" if row.get(k) is None else row.get(k)) for k in COLUMNS}
-            shown["problems"] = "; ".join(row.get("problems", []))
-            writer.writerow(shown)
+    """The judged rows as CSV with the columns :data:`COLUMNS`, problems joined by "; "."""
+    shown = [{**row, "problems": "; ".join(row.get("problems", []))} for row in rows]
+    precision.write_csv(shown, path, COLUMNS)
 
 
 VERDICT_COLOURS = {
