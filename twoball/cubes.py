@@ -1,11 +1,12 @@
-"""The precomputed sweep cubes shipped in ``precomputed/`` (each made by ``twoball sweep``)."""
+"""The precomputed sweep cubes, shipped as package data in ``twoball/precomputed/`` (each made
+by ``twoball sweep``), so that a plain wheel carries them."""
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
 
-PRECOMPUTED = Path(__file__).resolve().parent.parent / "precomputed"
+PRECOMPUTED = Path(__file__).resolve().parent / "precomputed"
 
 
 def cube_names() -> list[str]:
