@@ -23,6 +23,18 @@ SUBCOMMAND_MODULES = (
 )
 
 
+# The optional dependencies, by the extra that installs them (pyproject.toml).
+EXTRAS = {
+    "xarray": "sweep",
+    "zarr": "sweep",
+    "dask": "sweep",
+    "distributed": "sweep",
+    "tqdm": "sweep",
+    "matplotlib": "studies",
+    "mpmath": "studies",
+}
+
+
 class UsageError(Exception):
     """Bad input on the command line: reported in one line, exit status 2."""
 
@@ -95,4 +107,14 @@ def main(argv: list[str] | None = None) -> int:
         return args.func(args)
     except (UsageError, ValueError) as error:
         print(f"twoball: error: {error}", file=sys.stderr)
+        return 2
+    except ModuleNotFoundError as error:
+        extra = EXTRAS.get((error.name or "").partition(".")[0])
+        if extra is None:
+            raise
+        print(
+            f"twoball: error: this command needs the {extra!r} extra (no module named "
+            f"{error.name!r}): pip install 'twoball[{extra}]'",
+            file=sys.stderr,
+        )
         return 2

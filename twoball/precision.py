@@ -20,12 +20,14 @@ import textwrap
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-
-from matplotlib.figure import Figure
+from typing import TYPE_CHECKING
 
 from twoball import reference
 from twoball.model import DEFAULT_HEIGHT, check_parameters
 from twoball.solve import simulate
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 METHODS = ("exact", *reference.IVP_METHODS)
 # Cheap enough for the app (a few seconds on benign cases); the command line uses FULL_TOLERANCES.
@@ -197,6 +199,8 @@ def work_precision_figure(rows: Sequence[dict], title: str | None = None) -> Fig
     columns = min(len(cases), 3)
     lines = math.ceil(len(cases) / columns)
     width = max(5.2 * columns, 7.0)
+    from matplotlib.figure import Figure
+
     figure = Figure(figsize=(width, 4.2 * lines + 0.8), layout="constrained")
     axes = figure.subplots(lines, columns, squeeze=False).ravel()
     markers = dict(zip(METHODS, "*osD^v", strict=True))

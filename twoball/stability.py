@@ -29,13 +29,16 @@ import multiprocessing
 import time
 from collections.abc import Iterable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-from matplotlib.figure import Figure
 
 from twoball import precision
 from twoball.model import check_parameters
 from twoball.solve import METHODS, simulate
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 EPS_BRANCH_SWITCH = math.exp(-2.0)
 GRID = {
@@ -431,6 +434,8 @@ def stability_figure(rows: Sequence[dict]) -> Figure:
     subset = list(dict.fromkeys(_case_key(r) for r in scipy_rows))
     methods = list(dict.fromkeys(r["method"] for r in rows))
     by_key = {(_case_key(r), r["method"]): r for r in rows}
+    from matplotlib.figure import Figure
+
     figure = Figure(figsize=(15, 0.32 * len(subset) + 2.5), layout="constrained")
     left, right = figure.subplots(1, 2, width_ratios=(2.2, 1))
     for i, case in enumerate(subset):
@@ -541,6 +546,8 @@ def h_convergence(
 
 def h_convergence_figure(rows: Sequence[dict]) -> Figure:
     """h1/h_ICM and h2/h1 against H, one line per parameter point."""
+    from matplotlib.figure import Figure
+
     figure = Figure(figsize=(10, 4), layout="constrained")
     axes = figure.subplots(1, 2)
     points = list(dict.fromkeys((r["eps"], r["mu"], r["tau_ratio"]) for r in rows))
