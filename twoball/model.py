@@ -11,8 +11,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numba
 import param
+
+from twoball.jit import njit
 
 DEFAULT_HEIGHT = 1.0e4
 
@@ -146,7 +147,7 @@ def restitution(r: float) -> float:
     return math.exp(-r / math.sqrt(r * r - 1.0) * math.acosh(2.0 * r * r - 1.0))
 
 
-@numba.njit(cache=True)
+@njit
 def _log_restitution(r: float) -> float:
     """-log eps(r), smooth and increasing in r; equal to 2 at r = 1 from both sides."""
     if r < 1.0:
@@ -167,7 +168,7 @@ def decay_ratio(eps: float) -> float:
     return _decay_ratio(eps)
 
 
-@numba.njit(cache=True)
+@njit
 def _decay_ratio(eps: float) -> float:
     if eps == 1.0:
         return 0.0
