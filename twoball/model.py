@@ -17,28 +17,35 @@ from twoball.jit import njit
 
 DEFAULT_HEIGHT = 1.0e4
 
+# The domain double precision can carry (docs/model.md, "The domain double precision can carry").
+# Below this restitution an overdamped contact's two decay rates differ by more than 1e10.
+SMALLEST_RESTITUTION = 1e-10
+# Mass ratios tried and right (beyond them a ball contact is 1e6 times shorter than the flight).
+MASS_RATIO_RANGE = (1e-12, 1e12)
+# The largest rounding of the heights, relative to the contacts' overlap, that is accepted:
+# h1 and h2 then carry a relative error of about ten times this.
+RESOLUTION = 1e-6
+MACHINE_EPSILON = 2.220446049250313e-16
+
 
 class Parameters(param.Parameterized):
     """The inputs of one drop (model.md, "Bodies, coordinates, forces" and "Initial condition")."""
 
     eps = param.Number(
         0.816,
-        bounds=(0.0, 1.0),
-        inclusive_bounds=(False, True),
+        bounds=(SMALLEST_RESTITUTION, 1.0),
         doc="Coefficient of restitution of the floor contact (eps01); also of the ball contact "
         "unless eps12 is given.",
     )
     eps12 = param.Number(
         None,
         allow_None=True,
-        bounds=(0.0, 1.0),
-        inclusive_bounds=(False, True),
+        bounds=(SMALLEST_RESTITUTION, 1.0),
         doc="Coefficient of restitution of the ball-ball contact; None means equal to eps.",
     )
     mu = param.Number(
         0.05,
-        bounds=(0.0, None),
-        inclusive_bounds=(False, True),
+        bounds=MASS_RATIO_RANGE,
         doc="Mass ratio m2/m1 (upper over lower ball).",
     )
     tau_ratio = param.Number(
@@ -132,7 +139,49 @@ def check_parameters(
     zeta01, zeta12 = damping_ratios(eps, eps12, mu)
     tau_f = floor_contact_time(zeta01)
     x2_0 = initial_gap_height(height, tau_ratio * tau_f)
+    if rounding_ratio(height, mu, x2_0) > RESOLUTION:
+        raise ValueError(_outside_domain(mu, tau_ratio, height, tau_f))
     return Drop(eps, eps12, mu, tau_ratio, height, zeta01, zeta12, tau_f, height, x2_0)
+
+
+def rounding_ratio(height: float, mu: float, x2_0: float) -> float:
+    """Rounding of the heights relative to the contacts' overlap (docs/model.md, "The domain
+    double precision can carry"): machine epsilon times the largest height, over the smaller
+    of the two contacts' typical overlaps (impact or static compression)."""
+    floor_overlap = max(math.sqrt(2.0 * height), 1.0)
+    ball_overlap = max(math.sqrt(2.0 * height * mu / (1.0 + mu)), mu)
+    return MACHINE_EPSILON * max(x2_0, 1.0) / min(floor_overlap, ball_overlap)
+
+
+def _outside_domain(mu: float, tau_ratio: float, height: float, tau_f: float) -> str:
+    """The error for a drop beyond :data:`RESOLUTION`: the largest height, or gap, allowed."""
+    where = 'docs/model.md, "The domain double precision can carry"'
+    if rounding_ratio(height, mu, height) > RESOLUTION:
+        low, high = 0.0, 300.0  # log10 of the height: the ratio grows with it at tau_ratio = 0
+        for _ in range(60):
+            middle = 0.5 * (low + high)
+            if rounding_ratio(10.0**middle, mu, 10.0**middle) > RESOLUTION:
+                high = middle
+            else:
+                low = middle
+        return (
+            f"height must be at most {10.0**low:.3g} for mu = {mu:g} (got {height:g}): beyond "
+            f"it double precision cannot resolve the contacts ({where})"
+        )
+    floor_overlap = max(math.sqrt(2.0 * height), 1.0)
+    ball_overlap = max(math.sqrt(2.0 * height * mu / (1.0 + mu)), mu)
+    x2_max = RESOLUTION * min(floor_overlap, ball_overlap) / MACHINE_EPSILON
+    tau_max = math.sqrt(2.0) * (math.sqrt(x2_max) - math.sqrt(height)) / tau_f
+    return (
+        f"tau_ratio must be at most {tau_max:.3g} for height = {height:g} and mu = {mu:g} "
+        f"(got {tau_ratio:g}): beyond it double precision cannot resolve the contacts ({where})"
+    )
+
+
+def apex_bound(drop: Drop) -> float:
+    """The highest apex the energy at release allows the upper ball (docs/model.md, "The
+    domain double precision can carry"): X2(0) + (X1(0) + 1/2) / mu."""
+    return drop.x2_0 + (drop.x1_0 + 0.5) / drop.mu
 
 
 def restitution(r: float) -> float:
