@@ -47,6 +47,7 @@ import numpy as np
 
 from twoball.jit import njit
 from twoball.model import Drop
+from twoball.observables import REST
 
 # Phase kinds: bit 0 floor contact active, bit 1 ball contact active.
 FREE, FLOOR, BALL, BOTH = 0, 1, 2, 3
@@ -58,7 +59,7 @@ EVENT_FLOOR, EVENT_BALL, EVENT_APEX, EVENT_TIME, EVENT_REST, EVENT_STUCK = 0, 1,
 STATUS_DONE, STATUS_REST, STATUS_STUCK, STATUS_PHASES = 0, 1, 2, 3
 STATUS_TEXT = {
     STATUS_DONE: "",
-    STATUS_REST: "the upper ball came to rest on the lower one",
+    STATUS_REST: REST,
     STATUS_STUCK: "root finder made no progress (please report: this is a bug)",
     STATUS_PHASES: "phase limit reached",
 }

@@ -14,6 +14,8 @@ import numpy as np
 from twoball.model import Drop, icm_height
 
 FLOOR_CONTACT, BALL_CONTACT = 0, 1
+# The one early end that is an answer, not a failure (docs/model.md, "What is measured").
+REST = "the upper ball came to rest on the lower one"
 
 
 @dataclass(frozen=True)
@@ -59,6 +61,11 @@ class Result:
     rtol: float | None = None
     atol: float | None = None
     trajectory: Trajectory | None = field(default=None, repr=False)
+
+    @property
+    def success(self) -> bool:
+        """True when the run reached what was asked, or found the upper ball at rest."""
+        return self.reason in (None, REST)
 
     def _apex(self, values: list[float], index: int) -> float | None:
         return values[index] if len(values) > index else None

@@ -153,8 +153,9 @@ def measure_case(
                 if method == "exact":
                     return simulate(eps, mu, tau_ratio, **drop)
                 return simulate(
-                    eps, mu, tau_ratio, method=method, rtol=tol, atol=tol, until=until, **drop
-                )
+                    eps, mu, tau_ratio, method=method, rtol=tol, atol=tol, until=until,
+                    throw=False, **drop,
+                )  # fmt: skip
 
             start = time.perf_counter()
             try:

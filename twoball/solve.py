@@ -7,8 +7,8 @@ import math
 import numpy as np
 
 from twoball import exact, reference
-from twoball.model import DEFAULT_HEIGHT, check_parameters
-from twoball.observables import Result, Trajectory, contact_intervals
+from twoball.model import DEFAULT_HEIGHT, apex_bound, check_parameters
+from twoball.observables import REST, Result, Trajectory, contact_intervals
 
 METHODS = ("exact", *reference.METHODS)
 UNTIL = {"first": 1, "second": 2}
@@ -28,6 +28,7 @@ def simulate(
     rtol: float | None = None,
     atol: float | None = None,
     dense: bool | np.ndarray = False,
+    throw: bool = True,
 ) -> Result:
     """Drop the two balls and measure their bounces (model.md).
 
@@ -39,8 +40,13 @@ def simulate(
     "DOP853", "RK45" (solve_ivp with events), "odeint" (the paper's fixed grid); rtol and atol
     apply to these only (default 1e-8).
     dense: False (no trajectory is computed), True (a plotting grid), or an array of times.
+    throw: a run that fails (the root finder stuck, the phase limit, a scipy method's failure,
+    an apex that is not finite or above what the energy at release allows) raises
+    :class:`SolverError`; with ``throw=False`` (batch callers) it returns a Result whose
+    ``success`` is False and whose ``reason`` says what happened.
 
-    Raises ValueError naming the parameter and its allowed range.
+    Raises ValueError naming the parameter and its allowed range, also for a drop outside the
+    domain double precision can carry (docs/model.md, "The domain double precision can carry").
     """
     drop = check_parameters(eps, mu, tau_ratio, eps12=eps12, height=height)
     apexes, t_end = _stop_rule(until)
@@ -56,6 +62,9 @@ def simulate(
     else:
         outcome = reference.solve(drop, method, apexes, t_end, rtol, atol, dense)
     apex_t, apex_h, rows, end, reason, ball_first, floor_first, samples = outcome
+    reason = _failure(reason, apex_h, drop) or reason
+    if throw and reason not in (None, REST):
+        raise SolverError(f"{method} failed on {drop}: {reason}")
     trajectory = None
     if samples is not None:
         times, values = samples
@@ -74,6 +83,22 @@ def simulate(
         atol=None if method == "exact" else (atol or reference.DEFAULT_TOL),
         trajectory=trajectory,
     )
+
+
+class SolverError(RuntimeError):
+    """A run that did not reach a trustworthy result (see ``simulate``'s ``throw``)."""
+
+
+def _failure(reason: str | None, apex_h: list[float], drop) -> str | None:
+    """Why the apexes cannot be right (not finite, or above the energy bound), else None."""
+    bound = apex_bound(drop)
+    for number, height in enumerate(apex_h, start=1):
+        if not math.isfinite(height) or height > bound * (1.0 + 1e-9):
+            return (
+                f"apex {number} at {height:.6g} is impossible: the energy at release allows "
+                f"{bound:.6g} at most ({reason or 'no reason given by the solver'})"
+            )
+    return None
 
 
 def _stop_rule(until: str | float) -> tuple[int, float]:

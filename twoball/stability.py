@@ -219,14 +219,16 @@ def diagnose(
     try:
         try:
             result = simulate(
-                eps, mu, tau_ratio, height=height, method=method, dense=True, **options
+                eps, mu, tau_ratio, height=height, method=method, dense=True, throw=False, **options
             )
         except ValueError as error:
             # reference.py's dense output raises when a solve_ivp piece holds no sample time
             # (see docs/accuracy.md); the run itself is judged without its trajectory
             note = f"no trajectory (dense output raised: {error})"
             start = time.perf_counter()
-            result = simulate(eps, mu, tau_ratio, height=height, method=method, **options)
+            result = simulate(
+                eps, mu, tau_ratio, height=height, method=method, throw=False, **options
+            )
     except (ValueError, ArithmeticError, RuntimeError, MemoryError) as error:
         row.update(finished=False, seconds=time.perf_counter() - start)
         row.update(reason=f"{type(error).__name__}: {error}", problems=["crashed"])
