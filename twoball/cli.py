@@ -12,6 +12,8 @@ import importlib
 import json
 import sys
 
+from twoball.solve import SolverError
+
 # The modules that contribute subcommands, in the order --help lists them.
 SUBCOMMAND_MODULES = (
     "twoball.cli",
@@ -108,6 +110,14 @@ def main(argv: list[str] | None = None) -> int:
     except (UsageError, ValueError) as error:
         print(f"twoball: error: {error}", file=sys.stderr)
         return 2
+    except OSError as error:
+        if error.filename is None:  # not about a path: a real fault, keep its traceback
+            raise
+        print(f"twoball: error: {error.filename}: {error.strerror or error}", file=sys.stderr)
+        return 2
+    except SolverError as error:  # a known way for a run to fail: said in one line, status 1
+        print(f"twoball: solver failed: {error}", file=sys.stderr)
+        return 1
     except ModuleNotFoundError as error:
         extra = EXTRAS.get((error.name or "").partition(".")[0])
         if extra is None:

@@ -34,4 +34,7 @@ def load_cube(name: str | os.PathLike):
     text = os.fspath(name)
     is_path = isinstance(name, os.PathLike) or text.endswith(".zarr") or os.sep in text
     path = Path(text) if is_path else cube_path(text)
+    if not (path / "zarr.json").is_file():
+        what = "does not exist" if not path.exists() else "is not a Zarr store (no zarr.json)"
+        raise ValueError(f"cannot open the cube {path}: it {what}")
     return xr.open_zarr(path, consolidated=False)
