@@ -99,14 +99,14 @@ class Explorer(pn.viewable.Viewer):
         )
         return [pn.pane.Alert(text, alert_type="info", sizing_mode="stretch_width")]
 
+    def sidebar(self) -> pn.Column:
+        """The controls (and a note while the solver compiles), for the page's sidebar."""
+        return pn.Column(*self._compiling_notice(), self.controls, sizing_mode="stretch_width")
+
     def __panel__(self) -> pn.viewable.Viewable:
+        """The explorer without the page's template (main.py puts it in one)."""
         return pn.Row(
-            pn.Column(
-                pn.pane.Markdown("## Two-ball bounce explorer"),
-                *self._compiling_notice(),
-                self.controls,
-                width=340,
-            ),
+            pn.Column(pn.pane.Markdown("## Two-ball bounce explorer"), self.sidebar(), width=340),
             self.tabs,
             sizing_mode="stretch_width",
         )
