@@ -157,7 +157,7 @@ def test_a_sweep_states_what_it_undertakes_and_refuses_absurd_grids(tmp_path):
     assert status == 2 and "1,000,000,000,000,000 drops" in err and "--force" in err
     assert not (tmp_path / "huge.zarr").exists()
     status, out, err = run_cli("sweep", str(tmp_path / "small.zarr"), *AXES)
-    assert status == 0 and "27 drops (3 x 3 x 3)" in err and "MB stored" in err
+    assert status == 0 and "27 drops (3 x 3 x 3)" in out and "MB stored" in out
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # consolidated: plain xarray opens it without a warning
         import xarray

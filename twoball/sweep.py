@@ -605,7 +605,7 @@ def _main(args: argparse.Namespace) -> int:
     undertaking = plan(grid, workers or os.cpu_count() or 1)
     if grid.size > MAX_DROPS and not args.force:
         raise ValueError(f"refusing {undertaking}: more than {MAX_DROPS:,} drops needs --force")
-    print(f"sweep {args.store}: {undertaking}", file=sys.stderr)
+    print(f"sweep {args.store}: {undertaking}", flush=True)  # on stdout: --quiet keeps it
     sweep(grid, args.store, scheduler=args.scheduler, workers=workers, progress=not args.quiet)
     print(f"{args.store}: {grid.size} cases, {len(grid.chunk_slices())} chunks, complete")
     return 0
