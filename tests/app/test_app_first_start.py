@@ -1,6 +1,8 @@
 """The first start after an install, with nothing compiled: pages are served at once on the
 kernels' Python functions, saying that the solver is being compiled, and the machine code takes
-over when the compiler, in another process, is done (app/app_hooks.py, twoball/jit.py)."""
+over when the compiler, in another process, is done (app/app_hooks.py, twoball/jit.py).
+
+How long each step takes is measured by benchmarks/first_start.py, not asserted here."""
 
 from __future__ import annotations
 
@@ -12,54 +14,39 @@ from apphelpers import free_port, open_page, panel_serve, serve, wait_until_serv
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
-FIRST_PAGE_SECONDS = 10.0
-LATER_PAGE_SECONDS = 3.0
 NOTICE = "solver is still being compiled"
 
 
-def _page_seconds(browser, url: str) -> tuple[float, bool]:
-    """Seconds until a new page shows its plots, and whether it says the solver compiles."""
-    started = time.monotonic()
+def page_says_compiling(browser, url: str) -> bool:
+    """Open a page, wait for its plots; whether it says that the solver is being compiled."""
     context, page, errors = open_page(browser, url)
-    seconds = time.monotonic() - started
     compiling = page.get_by_text(NOTICE).filter(visible=True).count() > 0
     context.close()
     assert errors == []
-    return seconds, compiling
+    return compiling
 
 
 def test_first_start_serves_plots_while_the_solver_compiles(browser, artifacts, tmp_path):
     port = free_port()
     log = artifacts / "first_start_server.log"
-    environment = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "empty-numba-cache")}
-    started = time.monotonic()
-    process = serve(panel_serve("app", port), log, env=environment)
+    cache = tmp_path / "empty-numba-cache"
+    process = serve(
+        panel_serve("app", port), log, env={**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    )
     url = f"http://127.0.0.1:{port}/app"
     try:
-        wait_until_served(url, process, timeout=FIRST_PAGE_SECONDS)
+        wait_until_served(url, process)
+        # plots before the compiler is done: the page says it is compiling
         context, page, errors = open_page(browser, url)
-        first = time.monotonic() - started
         assert page.get_by_text(NOTICE).filter(visible=True).count() == 1
         page.screenshot(path=artifacts / "first_start.png")
         context.close()
         assert errors == []
-        print(f"first page with plots {first:.1f} s after panel serve started")
-        assert first < FIRST_PAGE_SECONDS
-
-        # later pages: quick while compiling, and without the notice once the compiler is done
-        deadline = time.monotonic() + 300
-        compiling = True
-        while compiling:
-            assert time.monotonic() < deadline, "the solver was not compiled within 300 s"
-            seconds, compiling = _page_seconds(browser, url)
-            print(f"a page {seconds:.1f} s ({'compiling' if compiling else 'compiled'})")
-            assert seconds < LATER_PAGE_SECONDS
+        deadline = time.monotonic() + 600
+        while page_says_compiling(browser, url):
+            assert time.monotonic() < deadline, "the solver was not compiled within 600 s"
             time.sleep(2)
-        compiled_after = time.monotonic() - started
-        seconds, _ = _page_seconds(browser, url)
-        print(f"compiled kernels in use after {compiled_after:.0f} s; a page then {seconds:.1f} s")
-        assert seconds < LATER_PAGE_SECONDS
-        assert any((tmp_path / "empty-numba-cache").rglob("*.nbi")), "no cache was written"
+        assert any(cache.rglob("*.nbi")), "the compiler wrote no cache"
     finally:
         process.terminate()
         process.wait(timeout=30)
