@@ -173,9 +173,12 @@ def test_image_serves_as_non_root_turns_healthy_and_stops(run, browser, artifact
     # the browser's own origin may open the websocket, any other is refused
     assert _websocket_status(container.base, container.base) == 101
     assert _websocket_status(container.base, "http://elsewhere.example:5006") == 403
+    # the server ends on docker stop's SIGTERM (exit 0 or 143), not by the SIGKILL that follows
+    # the grace period (137); how long it takes is printed (about 1 s on an idle machine)
     started = time.monotonic()
-    docker("stop", container.id, timeout=30)
-    assert time.monotonic() - started < 5
+    docker("stop", "--time", "30", container.id, timeout=60)
+    print(f"docker stop took {time.monotonic() - started:.1f} s")
+    assert docker("inspect", "--format", "{{.State.ExitCode}}", container.id) in ("0", "143")
 
 
 @pytest.mark.parametrize(
