@@ -1,4 +1,4 @@
-"""The exact solver against closed forms, conservation laws, model.md's check values and scipy."""
+"""The exact solver against closed forms, conservation laws, the check values of docs/model.md and scipy."""
 
 import math
 import subprocess
@@ -23,7 +23,7 @@ def _advance(kind, state, mu, z01, z12, horizon=np.inf):
 @pytest.mark.parametrize("eps", [0.05, math.exp(-2), 0.5, 0.9, 1.0])
 def test_isolated_ball_contact_returns_eps(mu, eps):
     # Both balls in the air: gravity drops out of the relative motion exactly, so the
-    # separation speed over the approach speed must be eps(r) of model.md.
+    # separation speed over the approach speed must be eps(r) of docs/model.md, "Restitution and damping".
     z01, z12 = damping_ratios(eps, eps, mu)
     approach = 100.0
     event, tau, *touching = _advance(
@@ -53,7 +53,7 @@ def test_isolated_floor_contact_returns_eps(eps):
 
 def _energy(trajectory, mu):
     """Kinetic + gravitational + spring energy; with the spring counted wherever the bodies
-    overlap, this is non-increasing along the clamped model (model.md)."""
+    overlap, this is non-increasing along the clamped model (docs/model.md, "Bodies, coordinates, forces")."""
     x1, x2, v1, v2 = trajectory.x1, trajectory.x2, trajectory.v1, trajectory.v2
     overlap = np.minimum(x2 - x1, 0.0)
     floor = np.minimum(x1, 0.0)

@@ -1,4 +1,4 @@
-"""Parameters, restitution and damping, initial condition, ICM (model.md)."""
+"""Parameters, restitution and damping, initial condition, ICM (docs/model.md)."""
 
 import math
 

@@ -1,4 +1,4 @@
-"""Stiff and extreme cases (twoball.stability), issue 3: a fast subset of the study."""
+"""Stiff and extreme cases (twoball.stability): a fast subset of the study."""
 
 from __future__ import annotations
 
@@ -35,7 +35,7 @@ def test_grid_spans_the_issue_ranges():
 
 
 def test_energy_is_conserved_without_damping():
-    # eps = 1: no dashpots, so the energy (model.md forces, spring potentials) is a constant
+    # eps = 1: no dashpots, so the energy (docs/model.md, "Bodies, coordinates, forces": spring potentials) is a constant
     result = twoball.simulate(1.0, 0.05, 0.3, dense=True)
     energy = _energy(result)
     drop = result.drop
@@ -152,7 +152,7 @@ def test_study_runs_every_method_in_workers():
 
 
 def test_h_convergence_matches_model_md():
-    # model.md, "H matters": eps = 0.816, mu = 0.05, tau_d/tau_f = 0.3
+    # docs/model.md, "Initial condition", on H: eps = 0.816, mu = 0.05, tau_d/tau_f = 0.3
     rows = stability.h_convergence([(0.816, 0.05, 0.3)], (1e2, 1e3, 1e4, 1e5, 1e6))
     ratios = [row["h2_over_h1"] for row in rows]
     assert ratios == pytest.approx([1.399, 0.868, 0.7347, 0.695, 0.683], abs=6e-4)

@@ -58,7 +58,7 @@ def test_block_check_values_of_model_md():
 
 
 def _restitution_minus(r: float, eps: float) -> float:
-    """eps(r) - eps for r < 1, written from model.md independently of the package."""
+    """eps(r) - eps for r < 1, written from docs/model.md, "Restitution and damping", independently of the package."""
     return math.exp(-r / math.sqrt(1 - r * r) * math.acos(2 * r * r - 1)) - eps
 
 
@@ -68,7 +68,7 @@ def test_block_icm_and_ratios_against_model_md_formulas():
     block = compute_block(eps, mu, tau_ratio, height=height)
     for i, j, k in np.ndindex(2, 2, 2):
         e, m = eps[i], mu[j]
-        # tau_f and X2(0) from model.md directly: r from eps(r) by brentq, not by the package
+        # tau_f and X2(0) from docs/model.md directly: r from eps(r) by brentq, not by the package
         r = brentq(_restitution_minus, 1e-12, 0.999, args=(e,))
         tau_f = math.acos(2 * r * r - 1) / math.sqrt(1 - r * r)
         x2_0 = (math.sqrt(height) + tau_ratio[k] * tau_f / math.sqrt(2)) ** 2

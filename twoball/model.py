@@ -1,4 +1,4 @@
-"""The two-ball model: parameters, restitution and damping, initial condition (model.md).
+"""The two-ball model: parameters, restitution and damping, initial condition (docs/model.md).
 
 Everything here is plain physics: no solver, no UI. Parameters are declared once, in
 :class:`Parameters`, with their bounds and documentation; :func:`check_parameters` validates plain
@@ -18,7 +18,7 @@ DEFAULT_HEIGHT = 1.0e4
 
 
 class Parameters(param.Parameterized):
-    """The inputs of one drop (model.md, "Bodies, coordinates, forces" and "Initial condition")."""
+    """The inputs of one drop (docs/model.md, "Bodies, coordinates, forces" and "Initial condition")."""
 
     eps = param.Number(
         0.816,
@@ -96,7 +96,7 @@ def check_value(name: str, value: object) -> float:
 
 @dataclass(frozen=True)
 class Drop:
-    """A validated drop: the parameters and everything derived from them (model.md).
+    """A validated drop: the parameters and everything derived from them (docs/model.md, "Restitution and damping" and "Initial condition").
 
     ``zeta01`` and ``zeta12`` are the damping ratios of the two contacts, ``tau_f`` the floor
     contact time, ``x1_0`` and ``x2_0`` the initial heights.
@@ -135,7 +135,7 @@ def check_parameters(
 
 
 def restitution(r: float) -> float:
-    """Coefficient of restitution of one clamped contact with decay ratio r = beta/w0 (model.md,
+    """Coefficient of restitution of one clamped contact with decay ratio r = beta/w0 (docs/model.md,
     "Restitution and damping"), on both branches; eps(1) = exp(-2)."""
     if r < 0.0 or not math.isfinite(r):
         raise ValueError(f"r must be a finite number in [0, inf); got {r!r}")
@@ -157,7 +157,7 @@ def _log_restitution(r: float) -> float:
 
 
 def decay_ratio(eps: float) -> float:
-    """The unique r = beta/w0 with restitution(r) = eps, for eps in (0, 1] (model.md).
+    """The unique r = beta/w0 with restitution(r) = eps, for eps in (0, 1] (docs/model.md, "Restitution and damping").
 
     Solved on -log eps, which is increasing in r, by bisection to the last bit; the two branches
     join continuously at r = 1, so bisection is safe across the switch.
@@ -189,7 +189,7 @@ def _decay_ratio(eps: float) -> float:
 
 
 def damping_ratios(eps01: float, eps12: float, mu: float) -> tuple[float, float]:
-    """zeta01 and zeta12 from the two restitutions (model.md, "Restitution and damping").
+    """zeta01 and zeta12 from the two restitutions (docs/model.md, "Restitution and damping").
 
     Floor: w0 = 1, so zeta01 = r(eps01). Ball pair: w0^2 = (1 + mu)/mu and beta = zeta12 w0^2,
     so zeta12 = r(eps12) sqrt(mu/(1 + mu)).
@@ -198,7 +198,7 @@ def damping_ratios(eps01: float, eps12: float, mu: float) -> tuple[float, float]
 
 
 def floor_contact_time(r: float) -> float:
-    """Duration tau_f of one floor contact with decay ratio r = zeta01 (model.md)."""
+    """Duration tau_f of one floor contact with decay ratio r = zeta01 (docs/model.md, "Restitution and damping")."""
     if r < 1.0:
         return math.acos(2.0 * r * r - 1.0) / math.sqrt(1.0 - r * r)
     if r == 1.0:
@@ -207,12 +207,12 @@ def floor_contact_time(r: float) -> float:
 
 
 def initial_gap_height(height: float, tau_d: float) -> float:
-    """X2(0) = (sqrt(H) + tau_d/sqrt(2))^2 (model.md, "Initial condition")."""
+    """X2(0) = (sqrt(H) + tau_d/sqrt(2))^2 (docs/model.md, "Initial condition")."""
     return (math.sqrt(height) + tau_d / math.sqrt(2.0)) ** 2
 
 
 def icm_height(height: float, gap: float, eps01: float, eps12: float, mu: float) -> float:
-    """Apex of the upper ball in the independent contact model (model.md, paper section II).
+    """Apex of the upper ball in the independent contact model (docs/model.md, "What is measured"; paper section II).
 
     The steps of the paper with eps01 at the floor and eps12 between the balls: the lower ball
     reaches the floor at v_i = sqrt(2H) and leaves at eps01 v_i; the balls meet at

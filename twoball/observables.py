@@ -1,4 +1,4 @@
-"""What a run measures (model.md, "What is measured"): apexes, contacts, ICM and ratios.
+"""What a run measures (docs/model.md, "What is measured"): apexes, contacts, ICM and ratios.
 
 Every solver returns a :class:`Result`; the observables are derived from the apexes and the
 contact intervals it found, the same way whatever the method.
@@ -42,7 +42,7 @@ class Trajectory:
 class Result:
     """The outcome of one drop.
 
-    ``apex_t`` and ``apex_h`` list the upper ball's apexes in free flight (model.md), in order.
+    ``apex_t`` and ``apex_h`` list the upper ball's apexes in free flight (docs/model.md, "What is measured"), in order.
     ``reason`` is None when the run reached what was asked, else why it stopped early.
     ``contacts`` lists every contact interval found; ``trajectory`` is set only when asked.
     """

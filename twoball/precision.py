@@ -1,7 +1,7 @@
-"""Error against run time: every integrator over a range of tolerances (issue 3).
+"""Error against run time: every integrator over a range of tolerances.
 
 :func:`work_precision` runs the exact solver and the scipy integrators of
-:mod:`twoball.reference` on one drop, to the second apex (model.md, "What is measured"), and
+:mod:`twoball.reference` on one drop, to the second apex (docs/model.md, "What is measured"), and
 returns one row per method and tolerance: the relative errors in h1 and h2 against the exact
 solver and the median run time. The exact solver's own error is established independently by
 :mod:`twoball.truth` (``twoball precision`` reports it beside the table).

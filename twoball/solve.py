@@ -29,7 +29,7 @@ def simulate(
     atol: float | None = None,
     dense: bool | np.ndarray = False,
 ) -> Result:
-    """Drop the two balls and measure their bounces (model.md).
+    """Drop the two balls and measure their bounces (docs/model.md, "What is measured").
 
     eps, eps12: restitution of the floor and the ball contact (eps12 defaults to eps), in (0, 1].
     mu: mass ratio m2/m1 > 0. tau_ratio: tau_d/tau_f >= 0. height: dimensionless H > 0.

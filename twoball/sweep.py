@@ -1,6 +1,6 @@
 """Sweeps: the bounces over a grid of (eps, mu, tau_ratio), stored as a resumable Zarr cube.
 
-The grid is cut into chunks; each chunk is computed by the exact solver (model.md, "What is
+The grid is cut into chunks; each chunk is computed by the exact solver (docs/model.md, "What is
 measured"), calling its compiled kernel case by case for the apex heights and times and the
 contact count only (no contact intervals, no phases are recorded). Chunks run in parallel
 (local processes, or a Dask distributed cluster) and each is written to the store as soon as it
@@ -220,7 +220,7 @@ class Grid:
 
 
 def _bounce_block(mu, zeta01, zeta12, x2_0, height, apex_h, apex_t, contacts, status) -> None:
-    """Run every case of a block to its second apex (model.md, "What is measured").
+    """Run every case of a block to its second apex (docs/model.md, "What is measured").
 
     mu (nm), zeta01 (ne), zeta12 (ne, nm), x2_0 (ne, nt); outputs (ne, nm, nt), apex arrays with
     a leading axis of 2, pre-filled with NaN. Nothing but apexes and counts is recorded.
@@ -250,7 +250,7 @@ def compute_block(
     eps12: float | None = None,
 ) -> dict[str, np.ndarray]:
     """Every cube variable (float64, bool for delayed_rebound, int8 for status) on the outer
-    grid of the three 1-d arrays, with the per-drop setup of model.md ("Restitution and damping",
+    grid of the three 1-d arrays, with the per-drop setup of docs/model.md ("Restitution and damping",
     "Initial condition") done exactly as :func:`twoball.check_parameters` does it."""
     eps, mu, tau_ratio = (np.asarray(a, dtype=float) for a in (eps, mu, tau_ratio))
     zeta01 = np.array([decay_ratio(e) for e in eps])
@@ -327,7 +327,7 @@ def _template(grid: Grid, command: str):
         "height": grid.height,
         "eps12": "equal to eps" if grid.eps12 is None else grid.eps12,
         "grid": json.dumps({a.name: asdict(a) for a in grid.axes}),
-        "solver": SOLVER + " (closed-form phase-by-phase solver, model.md)",
+        "solver": SOLVER + " (closed-form phase-by-phase solver, docs/model.md)",
         "twoball_version": __version__,
         "precision": f"{grid.dtype} floats, computed in float64",
         "sweep_command": command,
