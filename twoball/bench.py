@@ -17,6 +17,7 @@ import time
 
 import numpy as np
 
+from twoball.errors import ParameterError
 from twoball.solve import simulate
 from twoball.truth import solve_truth
 
@@ -111,7 +112,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def _main(args: argparse.Namespace) -> int:
     if args.cases < 1 or args.repeats < 1:
-        raise ValueError("--cases and --repeats must be at least 1")
+        raise ParameterError("--cases and --repeats must be at least 1")
     figures = benchmark(args.cases, args.seed, args.repeats)
     print(f"{args.cases} random cases of the paper's cube, H = 1e4, to the second apex")
     print(f"exact solver      median {figures['exact_median_s'] * 1e3:9.3f} ms per case")

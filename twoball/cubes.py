@@ -5,6 +5,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from twoball.errors import ParameterError
+
 PRECOMPUTED = Path(__file__).resolve().parent.parent / "precomputed"
 
 
@@ -17,7 +19,7 @@ def cube_path(name: str) -> Path:
     """The store of a shipped cube; ValueError naming the cubes that exist."""
     path = PRECOMPUTED / f"{name}.zarr"
     if not (path / "zarr.json").is_file():
-        raise ValueError(f"no cube named {name!r}; shipped cubes: {', '.join(cube_names())}")
+        raise ParameterError(f"no cube named {name!r}; shipped cubes: {', '.join(cube_names())}")
     return path
 
 

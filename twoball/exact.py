@@ -1,4 +1,5 @@
-"""The exact solver: the model advanced phase by phase in closed form (docs/model.md, "Bodies, coordinates, forces").
+"""The exact solver: the model advanced phase by phase in closed form (docs/model.md, "Bodies,
+coordinates, forces").
 
 Between switches the equations are linear with constant coefficients, so each phase has a
 closed-form solution:
@@ -16,7 +17,8 @@ defective (eps near exp(-2)) cost no accuracy. The two eigenvalue pairs of the b
 phase are grouped so that the two closest eigenvalues share a block.
 
 Switching times (a contact switching on or off, an apex of the upper ball) are the first roots of
-the switching functions F(t) of docs/model.md, "Bodies, coordinates, forces": for an inactive contact
+the switching functions F(t) of docs/model.md, "Bodies, coordinates, forces": for an inactive
+contact
 F = max(eta, g), which must become negative for the contact to push; for an active contact
 F = -g, which reaches zero when the force does.
 
@@ -239,7 +241,8 @@ def prepare(mu, z01, z12):
     c1[BALL, 0, 1] = _oscillator_bound(-nu2, -2 * z01 * nu2, b12, om12)
     c1[BALL, 1, 0] = _oscillator_bound(1.0, 0.0, b12, om12)
     c1[BALL, 1, 1] = _oscillator_bound(1.0, 2 * z12, b12, om12)
-    # both contacts: y' = A (y - y_rest), A from M q'' = -C q' - K q (docs/model.md, "Bodies, coordinates, forces")
+    # both contacts: y' = A (y - y_rest), A from M q'' = -C q' - K q (docs/model.md, "Bodies,
+    # coordinates, forces")
     a = np.zeros((4, 4))
     a[0, 2] = a[1, 3] = 1.0
     a[2, 0], a[2, 1], a[2, 2], a[2, 3] = -2.0, 1.0, -2.0 * (z01 + z12), 2.0 * z12

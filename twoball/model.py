@@ -14,11 +14,14 @@ from dataclasses import dataclass
 import numba
 import param
 
+from twoball.errors import ParameterError
+
 DEFAULT_HEIGHT = 1.0e4
 
 
 class Parameters(param.Parameterized):
-    """The inputs of one drop (docs/model.md, "Bodies, coordinates, forces" and "Initial condition")."""
+    """The inputs of one drop (docs/model.md, "Bodies, coordinates, forces" and "Initial
+    condition")."""
 
     eps = param.Number(
         0.816,
@@ -80,7 +83,7 @@ def check_value(name: str, value: object) -> float:
     try:
         number = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
-        raise ValueError(
+        raise ParameterError(
             f"{name} must be a number in {_allowed_range(name)}; got {value!r}"
         ) from None
     low, high, low_closed, high_closed = _BOUNDS[name]
@@ -90,13 +93,16 @@ def check_value(name: str, value: object) -> float:
     if ok and high is not None:
         ok = number <= high if high_closed else number < high
     if not ok:
-        raise ValueError(f"{name} must be a finite number in {_allowed_range(name)}; got {value!r}")
+        raise ParameterError(
+            f"{name} must be a finite number in {_allowed_range(name)}; got {value!r}"
+        )
     return number
 
 
 @dataclass(frozen=True)
 class Drop:
-    """A validated drop: the parameters and everything derived from them (docs/model.md, "Restitution and damping" and "Initial condition").
+    """A validated drop: the parameters and everything derived from them (docs/model.md,
+    "Restitution and damping" and "Initial condition").
 
     ``zeta01`` and ``zeta12`` are the damping ratios of the two contacts, ``tau_f`` the floor
     contact time, ``x1_0`` and ``x2_0`` the initial heights.
@@ -135,10 +141,11 @@ def check_parameters(
 
 
 def restitution(r: float) -> float:
-    """Coefficient of restitution of one clamped contact with decay ratio r = beta/w0 (docs/model.md,
+    """Coefficient of restitution of one clamped contact with decay ratio r = beta/w0
+    (docs/model.md,
     "Restitution and damping"), on both branches; eps(1) = exp(-2)."""
     if r < 0.0 or not math.isfinite(r):
-        raise ValueError(f"r must be a finite number in [0, inf); got {r!r}")
+        raise ParameterError(f"r must be a finite number in [0, inf); got {r!r}")
     if r < 1.0:
         return math.exp(-r / math.sqrt(1.0 - r * r) * math.acos(2.0 * r * r - 1.0))
     if r == 1.0:
@@ -157,13 +164,14 @@ def _log_restitution(r: float) -> float:
 
 
 def decay_ratio(eps: float) -> float:
-    """The unique r = beta/w0 with restitution(r) = eps, for eps in (0, 1] (docs/model.md, "Restitution and damping").
+    """The unique r = beta/w0 with restitution(r) = eps, for eps in (0, 1] (docs/model.md,
+    "Restitution and damping").
 
     Solved on -log eps, which is increasing in r, by bisection to the last bit; the two branches
     join continuously at r = 1, so bisection is safe across the switch.
     """
     if not 0.0 < eps <= 1.0:
-        raise ValueError(f"a restitution must be a number in (0, 1]; got {eps!r}")
+        raise ParameterError(f"a restitution must be a number in (0, 1]; got {eps!r}")
     return _decay_ratio(eps)
 
 
@@ -198,7 +206,8 @@ def damping_ratios(eps01: float, eps12: float, mu: float) -> tuple[float, float]
 
 
 def floor_contact_time(r: float) -> float:
-    """Duration tau_f of one floor contact with decay ratio r = zeta01 (docs/model.md, "Restitution and damping")."""
+    """Duration tau_f of one floor contact with decay ratio r = zeta01 (docs/model.md, "Restitution
+    and damping")."""
     if r < 1.0:
         return math.acos(2.0 * r * r - 1.0) / math.sqrt(1.0 - r * r)
     if r == 1.0:
@@ -212,7 +221,8 @@ def initial_gap_height(height: float, tau_d: float) -> float:
 
 
 def icm_height(height: float, gap: float, eps01: float, eps12: float, mu: float) -> float:
-    """Apex of the upper ball in the independent contact model (docs/model.md, "What is measured"; paper section II).
+    """Apex of the upper ball in the independent contact model (docs/model.md, "What is measured";
+    paper section II).
 
     The steps of the paper with eps01 at the floor and eps12 between the balls: the lower ball
     reaches the floor at v_i = sqrt(2H) and leaves at eps01 v_i; the balls meet at

@@ -42,7 +42,8 @@ class Trajectory:
 class Result:
     """The outcome of one drop.
 
-    ``apex_t`` and ``apex_h`` list the upper ball's apexes in free flight (docs/model.md, "What is measured"), in order.
+    ``apex_t`` and ``apex_h`` list the upper ball's apexes in free flight (docs/model.md, "What is
+    measured"), in order.
     ``reason`` is None when the run reached what was asked, else why it stopped early.
     ``contacts`` lists every contact interval found; ``trajectory`` is set only when asked.
     """

@@ -24,6 +24,7 @@ from pathlib import Path
 from matplotlib.figure import Figure
 
 from twoball import reference
+from twoball.errors import ParameterError
 from twoball.model import DEFAULT_HEIGHT, check_parameters
 from twoball.solve import simulate
 
@@ -125,13 +126,13 @@ def measure_case(
     methods = METHODS if methods is None else tuple(methods)
     unknown = [m for m in methods if m not in METHODS]
     if unknown:
-        raise ValueError(f"methods must be among {', '.join(METHODS)}; got {unknown!r}")
+        raise ParameterError(f"methods must be among {', '.join(METHODS)}; got {unknown!r}")
     tolerances = APP_TOLERANCES if tolerances is None else tuple(float(t) for t in tolerances)
     for tol in tolerances:
         if not (math.isfinite(tol) and 0.0 < tol < 1.0):
-            raise ValueError(f"tolerances must be finite numbers in (0, 1); got {tol!r}")
+            raise ParameterError(f"tolerances must be finite numbers in (0, 1); got {tol!r}")
     if repeats < 1:
-        raise ValueError(f"repeats must be at least 1; got {repeats!r}")
+        raise ParameterError(f"repeats must be at least 1; got {repeats!r}")
     drop = {"eps12": eps12, "height": height}
     truth = simulate(eps, mu, tau_ratio, **drop)  # also loads the compiled kernel
     # scipy cannot tell that the upper ball came to rest and would integrate to its time limit:
@@ -368,9 +369,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def _main(args: argparse.Namespace) -> int:
     if args.repeats < 1:
-        raise ValueError(f"--repeats must be at least 1; got {args.repeats!r}")
+        raise ParameterError(f"--repeats must be at least 1; got {args.repeats!r}")
     if not args.budget > 0:
-        raise ValueError(f"--budget must be a number of seconds > 0; got {args.budget!r}")
+        raise ParameterError(f"--budget must be a number of seconds > 0; got {args.budget!r}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     truth_rows = [] if args.no_truth else exact_against_truth(CASES)

@@ -1,4 +1,5 @@
-"""Reference integrators: the same equations (docs/model.md, "Bodies, coordinates, forces") through scipy, for comparison only.
+"""Reference integrators: the same equations (docs/model.md, "Bodies, coordinates, forces") through
+scipy, for comparison only.
 
 These exist to be compared with the exact solver, not to be trusted over it: an adaptive method
 with event location can step over a brief contact and silently let the balls pass through each
@@ -29,7 +30,8 @@ ODEINT_WINDOW = 50.0
 
 
 def forces(state: np.ndarray, zeta01: float, zeta12: float) -> tuple[np.ndarray, np.ndarray]:
-    """Clamped contact forces f01 and f12 (docs/model.md, "Bodies, coordinates, forces"): active when eta < 0 and g < 0."""
+    """Clamped contact forces f01 and f12 (docs/model.md, "Bodies, coordinates, forces"): active
+    when eta < 0 and g < 0."""
     x1, x2, v1, v2 = state
     eta12 = x2 - x1
     g01 = x1 + 2.0 * zeta01 * v1
@@ -128,7 +130,8 @@ def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense):
     evaluations = 0
     failure = None
     # One solve_ivp call per flight: it stops at a fall of v2 through zero, which is an apex
-    # only if the balls do not push then (docs/model.md, "Bodies, coordinates, forces"); otherwise it goes on from there.
+    # only if the balls do not push then (docs/model.md, "Bodies, coordinates, forces"); otherwise
+    # it goes on from there.
     while len(apex_t) < apexes and t0 < horizon:
         try:
             sol = solve_ivp(

@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from twoball import exact, reference
+from twoball.errors import ParameterError
 from twoball.model import DEFAULT_HEIGHT, check_parameters
 from twoball.observables import Result, Trajectory, contact_intervals
 
@@ -45,13 +46,13 @@ def simulate(
     drop = check_parameters(eps, mu, tau_ratio, eps12=eps12, height=height)
     apexes, t_end = _stop_rule(until)
     if method not in METHODS:
-        raise ValueError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
+        raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     for name, tol in (("rtol", rtol), ("atol", atol)):
         if tol is not None and not (math.isfinite(tol) and 0.0 < tol < 1.0):
-            raise ValueError(f"{name} must be a finite number in (0, 1); got {tol!r}")
+            raise ParameterError(f"{name} must be a finite number in (0, 1); got {tol!r}")
     if method == "exact":
         if rtol is not None or atol is not None:
-            raise ValueError("rtol and atol apply to the scipy methods only, not to 'exact'")
+            raise ParameterError("rtol and atol apply to the scipy methods only, not to 'exact'")
         outcome = exact.solve(drop, apexes, t_end, dense=dense)
     else:
         outcome = reference.solve(drop, method, apexes, t_end, rtol, atol, dense)
@@ -80,12 +81,14 @@ def _stop_rule(until: str | float) -> tuple[int, float]:
     """(apexes wanted, end time) for an ``until`` argument."""
     if isinstance(until, str):
         if until not in UNTIL:
-            raise ValueError(f"until must be 'first', 'second' or a time > 0; got {until!r}")
+            raise ParameterError(f"until must be 'first', 'second' or a time > 0; got {until!r}")
         return UNTIL[until], math.inf
     try:
         t_end = float(until)
     except (TypeError, ValueError):
-        raise ValueError(f"until must be 'first', 'second' or a time > 0; got {until!r}") from None
+        raise ParameterError(
+            f"until must be 'first', 'second' or a time > 0; got {until!r}"
+        ) from None
     if not (math.isfinite(t_end) and t_end > 0.0):
-        raise ValueError(f"until must be 'first', 'second' or a finite time > 0; got {until!r}")
+        raise ParameterError(f"until must be 'first', 'second' or a finite time > 0; got {until!r}")
     return MAX_APEXES, t_end

@@ -4,14 +4,16 @@
 1e-6 to 1e2, eps from 0.02 through exp(-2), the damping branch switch, to 0.999999 and exactly
 1, tau_d/tau_f from 0 to 10, H from 1 to 1e8) and the scipy methods over a subset of it, each run
 in a worker process killed after a time cap. It writes ``DIR/stability.csv`` and
-``DIR/stability.png``, and the convergence of the ratios as H grows (docs/model.md, "Initial condition", on H) to
+``DIR/stability.png``, and the convergence of the ratios as H grows (docs/model.md, "Initial
+condition", on H) to
 ``DIR/h_convergence.csv`` and ``DIR/h_convergence.png``.
 
 What went wrong is detected, not assumed (:func:`diagnose`), from the run's own sampled
 trajectory and against the exact solver:
 
 - missed contact: fewer contact intervals than the exact solver before the same time, or a sample
-  where the clamped force (recomputed from the sampled state, docs/model.md, "Bodies, coordinates, forces") pushes outside every
+  where the clamped force (recomputed from the sampled state, docs/model.md, "Bodies, coordinates,
+  forces") pushes outside every
   contact interval the method reported;
 - passed through: an overlap X2 - X1 deeper than the energy allows (:func:`max_compression`);
 - energy gained: the energy E of :func:`energy` rising along the trajectory (with the potential
@@ -34,6 +36,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from twoball import precision
+from twoball.errors import ParameterError
 from twoball.model import check_parameters
 from twoball.solve import METHODS, simulate
 
@@ -107,7 +110,8 @@ def scipy_cases() -> list[tuple[float, float, float, float]]:
 
 def energy(x1, x2, v1, v2, mu: float):
     """E = (v1^2 + mu v2^2)/2 + x1 + mu x2 + min(x1, 0)^2/2 + min(x2 - x1, 0)^2/2 (units of
-    k (m1 g / k)^2); never increases along an exact solution of the clamped model (docs/model.md, "Bodies, coordinates, forces")."""
+    k (m1 g / k)^2); never increases along an exact solution of the clamped model (docs/model.md,
+    "Bodies, coordinates, forces")."""
     x1, x2, v1, v2 = (np.asarray(a, dtype=float) for a in (x1, x2, v1, v2))
     floor = np.minimum(x1, 0.0)
     ball = np.minimum(x2 - x1, 0.0)
@@ -510,7 +514,8 @@ def _short(row: dict) -> str:
     return seconds if not problems else seconds + "\n" + ",".join(problems[:3])
 
 
-# H-convergence (docs/model.md, "Initial condition", on H): the paper says the ratios depend on (eps, mu,
+# H-convergence (docs/model.md, "Initial condition", on H): the paper says the ratios depend on
+# (eps, mu,
 # tau_d/tau_f) only; they do as H grows.
 H_VALUES = tuple(10.0**k for k in range(1, 9))
 H_POINTS = ((0.816, 0.05, 0.3), (0.9, 0.01, 0.01), (0.7, 0.1, 0.7), (0.816, 0.01, 0.05))
@@ -578,9 +583,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def _main(args: argparse.Namespace) -> int:
     if not (math.isfinite(args.cap) and args.cap > 0):
-        raise ValueError(f"--cap must be a number of seconds > 0; got {args.cap!r}")
+        raise ParameterError(f"--cap must be a number of seconds > 0; got {args.cap!r}")
     if args.workers < 1:
-        raise ValueError(f"--workers must be at least 1; got {args.workers!r}")
+        raise ParameterError(f"--workers must be at least 1; got {args.workers!r}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     subset = scipy_cases()

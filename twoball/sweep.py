@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from twoball.errors import ParameterError
 from twoball.exact import STATUS_DONE, STATUS_PHASES, STATUS_REST, STATUS_STUCK, prepare, run
 from twoball.model import (
     DEFAULT_HEIGHT,
@@ -95,19 +96,21 @@ class Axis:
 
     def __post_init__(self) -> None:
         if self.name not in DIMS:
-            raise ValueError(f"axis must be one of {', '.join(DIMS)}; got {self.name!r}")
+            raise ParameterError(f"axis must be one of {', '.join(DIMS)}; got {self.name!r}")
         check_value(self.name, self.start)
         check_value(self.name, self.stop)
         if not isinstance(self.count, int) or self.count < 1:
-            raise ValueError(f"{self.name}: count must be an integer >= 1; got {self.count!r}")
+            raise ParameterError(f"{self.name}: count must be an integer >= 1; got {self.count!r}")
         if self.spacing not in SPACINGS:
-            raise ValueError(f"{self.name}: spacing must be linear or log; got {self.spacing!r}")
+            raise ParameterError(
+                f"{self.name}: spacing must be linear or log; got {self.spacing!r}"
+            )
         if self.spacing == "log" and self.start <= 0.0:
-            raise ValueError(f"{self.name}: a log axis needs start > 0; got {self.start!r}")
+            raise ParameterError(f"{self.name}: a log axis needs start > 0; got {self.start!r}")
         if self.count == 1 and self.stop != self.start:
-            raise ValueError(f"{self.name}: one value needs start == stop")
+            raise ParameterError(f"{self.name}: one value needs start == stop")
         if self.count > 1 and not self.stop > self.start:
-            raise ValueError(f"{self.name}: stop must be greater than start")
+            raise ParameterError(f"{self.name}: stop must be greater than start")
 
     def values(self) -> np.ndarray:
         """The grid values, end points exactly as given."""
@@ -129,21 +132,25 @@ def parse_axis(name: str, text: str) -> Axis:
         value = _parse_number(name, parts[0])
         return Axis(name, value, value, 1)
     if len(parts) not in (3, 4):
-        raise ValueError(f"{name} must be VALUE or START:STOP:COUNT[:linear|log]; got {text!r}")
+        raise ParameterError(f"{name} must be VALUE or START:STOP:COUNT[:linear|log]; got {text!r}")
     try:
         count = int(parts[2])
     except ValueError:
-        raise ValueError(f"{name}: COUNT must be an integer; got {parts[2]!r}") from None
+        raise ParameterError(f"{name}: COUNT must be an integer; got {parts[2]!r}") from None
     spacing = parts[3] if len(parts) == 4 else "linear"
     start, stop = _parse_number(name, parts[0]), _parse_number(name, parts[1])
     return Axis(name, start, stop, count, spacing)
+
+
+def _height_argument(text: str) -> float:
+    return _parse_number("height", text)
 
 
 def _parse_number(name: str, text: str) -> float:
     try:
         return float(Fraction(text.strip())) if "/" in text else float(text)
     except (ValueError, ZeroDivisionError):
-        raise ValueError(f"{name}: not a number: {text!r}") from None
+        raise ParameterError(f"{name}: not a number: {text!r}") from None
 
 
 @dataclass(frozen=True)
@@ -164,17 +171,17 @@ class Grid:
         object.__setattr__(self, "axes", (self.eps, self.mu, self.tau_ratio))
         for axis, dim in zip(self.axes, DIMS, strict=True):
             if axis.name != dim:
-                raise ValueError(f"the {dim} axis is named {axis.name!r}")
+                raise ParameterError(f"the {dim} axis is named {axis.name!r}")
         check_value("height", self.height)
         if self.eps12 is not None:
             check_value("eps12", self.eps12)
         if self.dtype not in DTYPES:
-            raise ValueError(f"dtype must be float64 or float32; got {self.dtype!r}")
+            raise ParameterError(f"dtype must be float64 or float32; got {self.dtype!r}")
         if self.chunks is None:
             object.__setattr__(self, "chunks", (1, self.mu.count, self.tau_ratio.count))
         chunks = tuple(self.chunks)
         if len(chunks) != 3 or not all(isinstance(c, int) and c >= 1 for c in chunks):
-            raise ValueError(f"chunks must be three integers >= 1; got {self.chunks!r}")
+            raise ParameterError(f"chunks must be three integers >= 1; got {self.chunks!r}")
         object.__setattr__(self, "chunks", chunks)
 
     @property
@@ -250,7 +257,8 @@ def compute_block(
     eps12: float | None = None,
 ) -> dict[str, np.ndarray]:
     """Every cube variable (float64, bool for delayed_rebound, int8 for status) on the outer
-    grid of the three 1-d arrays, with the per-drop setup of docs/model.md ("Restitution and damping",
+    grid of the three 1-d arrays, with the per-drop setup of docs/model.md ("Restitution and
+    damping",
     "Initial condition") done exactly as :func:`twoball.check_parameters` does it."""
     eps, mu, tau_ratio = (np.asarray(a, dtype=float) for a in (eps, mu, tau_ratio))
     zeta01 = np.array([decay_ratio(e) for e in eps])
@@ -349,12 +357,12 @@ def _open_or_create(grid: Grid, store: Path) -> set[str]:
             attrs = json.loads((store / "zarr.json").read_text())["attributes"]
             found = json.loads(attrs["sweep_arguments"])
         except (OSError, KeyError, ValueError):
-            raise ValueError(
+            raise ParameterError(
                 f"{store} exists and is not a twoball sweep store: refusing to overwrite it"
             ) from None
         if found != wanted:
             differences = sorted(k for k in wanted if wanted[k] != found.get(k))
-            raise ValueError(
+            raise ParameterError(
                 f"{store} was written by a sweep with other arguments (differing: "
                 f"{', '.join(differences)}; it was made by: {attrs.get('sweep_command')}); "
                 "refusing to overwrite it: choose another store or delete it"
@@ -412,9 +420,9 @@ def sweep(
 
     store = Path(store)
     if workers is not None and (not isinstance(workers, int) or workers < 1):
-        raise ValueError(f"workers must be an integer >= 1; got {workers!r}")
+        raise ParameterError(f"workers must be an integer >= 1; got {workers!r}")
     if scheduler is not None and workers is not None:
-        raise ValueError("workers applies to local runs only, not with a scheduler")
+        raise ParameterError("workers applies to local runs only, not with a scheduler")
     client = None if scheduler is None else _connect(scheduler)
     try:
         done = _open_or_create(grid, store)
@@ -478,7 +486,7 @@ def _connect(scheduler: str):
     try:
         return Client(scheduler, timeout=SCHEDULER_TIMEOUT)
     except (OSError, TimeoutError, ValueError, TypeError) as error:
-        raise ValueError(
+        raise ParameterError(
             f"scheduler: cannot reach a Dask scheduler at {scheduler!r} within "
             f"{SCHEDULER_TIMEOUT} ({type(error).__name__}: {error})"
         ) from None
@@ -503,11 +511,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         parser.add_argument(
             f"--{name.replace('_', '-')}", required=True, help=axis_help.format(doc)
         )
-    parser.add_argument("--height", default=repr(DEFAULT_HEIGHT), help="drop height H (1e4)")
+    parser.add_argument(
+        "--height", type=_height_argument, default=DEFAULT_HEIGHT, help="drop height H (1e4)"
+    )
     parser.add_argument("--eps12", default=None, help="ball-ball restitution (default: eps)")
     parser.add_argument("--chunks", default=None, help="chunk sizes E,M,T (default 1,all,all)")
     parser.add_argument("--dtype", default="float64", help="stored floats: float64 or float32")
-    parser.add_argument("--workers", default=None, help="local processes (default: all cores)")
+    parser.add_argument(
+        "--workers", type=int, default=None, help="local processes (default: all cores)"
+    )
     parser.add_argument("--scheduler", default=None, help="Dask distributed scheduler address")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=_main)
@@ -520,20 +532,16 @@ def _main(args: argparse.Namespace) -> int:
         try:
             chunks = tuple(int(part) for part in args.chunks.split(","))
         except ValueError:
-            raise ValueError(f"chunks must be three integers E,M,T; got {args.chunks!r}") from None
-    workers = None
-    if args.workers is not None:
-        try:
-            workers = int(args.workers)
-        except ValueError:
-            raise ValueError(f"workers must be an integer >= 1; got {args.workers!r}") from None
+            raise ParameterError(
+                f"chunks must be three integers E,M,T; got {args.chunks!r}"
+            ) from None
     grid = Grid(
         *axes,
-        height=_parse_number("height", args.height),
+        height=args.height,
         eps12=None if args.eps12 is None else _parse_number("eps12", args.eps12),
         chunks=chunks,
         dtype=args.dtype,
     )
-    sweep(grid, args.store, scheduler=args.scheduler, workers=workers, progress=not args.quiet)
+    sweep(grid, args.store, scheduler=args.scheduler, workers=args.workers, progress=not args.quiet)
     print(f"{args.store}: {grid.size} cases, {len(grid.chunk_slices())} chunks, complete")
     return 0

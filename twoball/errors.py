@@ -1,0 +1,62 @@
+"""What can go wrong in a run, by name: bad input, and how a run ended.
+
+``ParameterError`` is the one exception for bad input (a ``ValueError``, so existing callers that
+catch ``ValueError`` keep working); the command line reports it in one line with exit status 2,
+and anything else keeps its traceback. ``Status`` is how a run ended, with the message a user
+reads, in the manner of scipy's ``OdeResult.status``/``message``.
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+
+class ParameterError(ValueError):
+    """Bad input: the message names the parameter and its allowed range."""
+
+
+class Status(IntEnum):
+    """How a run ended. ``DONE`` and ``REST`` are successes; the others are failures.
+
+    The integer values are those the exact kernel returns and the sweep stores.
+    """
+
+    DONE = 0
+    REST = 1
+    STUCK = 2
+    PHASE_LIMIT = 3
+    FAILED = 4
+
+    @property
+    def message(self) -> str:
+        """What happened, in words (empty for ``DONE``)."""
+        return _MESSAGES[self]
+
+    @property
+    def success(self) -> bool:
+        """True when the run reached what was asked or ended at rest, as the model says."""
+        return self in (Status.DONE, Status.REST)
+
+
+_MESSAGES = {
+    Status.DONE: "",
+    Status.REST: "the upper ball came to rest on the lower one",
+    Status.STUCK: "root finder made no progress (please report: this is a bug)",
+    Status.PHASE_LIMIT: "phase limit reached",
+    Status.FAILED: "integrator failed",
+}
+
+
+class SolverError(RuntimeError):
+    """A run that did not succeed (stuck root finder, phase limit, failed integrator).
+
+    Raised by :func:`twoball.simulate` unless ``throw=False``; ``result`` holds what was found.
+    """
+
+    def __init__(self, result) -> None:
+        super().__init__(f"{result.method}: {result.status.message}")
+        self.result = result
+
+
+class SolverWarning(RuntimeWarning):
+    """The warning :func:`twoball.simulate` gives for a failed run when ``throw=False``."""
