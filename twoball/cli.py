@@ -81,7 +81,10 @@ def _simulate(args: argparse.Namespace) -> int:
 
 def until_argument(text: str) -> str | float:
     """``--until``: "first", "second" or a number (argparse reports anything else)."""
-    return text if text in ("first", "second") else float(text)
+    try:
+        return text if text in ("first", "second") else float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"first, second or a number; got {text!r}") from None
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -143,7 +143,10 @@ def parse_axis(name: str, text: str) -> Axis:
 
 
 def _height_argument(text: str) -> float:
-    return _parse_number("height", text)
+    try:
+        return _parse_number("height", text)
+    except ParameterError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def _parse_number(name: str, text: str) -> float:
