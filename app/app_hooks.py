@@ -14,7 +14,7 @@ log = logging.getLogger(__name__)
 
 def on_server_loaded(server_context) -> None:
     """Run every compiled path once (dense sampling included) and open the map cube."""
-    twoball.simulate(0.9, 0.01, 0.01, until="second", dense=True)
+    twoball.simulate(0.9, 0.01, 0.01, until="second", dense_output=True)
     try:
         map_cube()
     except (OSError, ValueError) as error:  # the map scene shows this too

@@ -110,7 +110,13 @@ class DropScene(Scene):
     def update(self) -> None:
         s = self.state
         self.result = twoball.simulate(
-            s.eps, s.mu, s.tau_ratio, eps12=s.eps12, height=s.height, until="second", dense=True
+            s.eps,
+            s.mu,
+            s.tau_ratio,
+            eps12=s.eps12,
+            height=s.height,
+            until="second",
+            dense_output=True,
         )
         self.summary.object = self._summary_text()
 

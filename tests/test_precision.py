@@ -33,7 +33,8 @@ def test_rows_follow_the_contract(benign_rows):
 
 
 def test_errors_are_against_the_model_values_and_shrink_with_the_tolerance(benign_rows):
-    # the check values of docs/model.md, "What is measured", independent of the exact solver: at 1e-9 every scipy method
+    # the check values of docs/model.md, "What is measured", independent of the exact solver: at
+    # 1e-9 every scipy method
     # agrees with them to 1e-6, and its error is far below its error at 1e-3
     for method in precision.METHODS[1:]:
         loose, tight = (r for r in benign_rows if r["method"] == method)

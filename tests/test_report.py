@@ -76,7 +76,7 @@ def test_close_up_row_against_sampled_forces():
     assert row.ours == "4 contacts, 4 of them during floor contact"
     # independently: on a dense sample, the ball force never acts without the floor force
     end = twoball.simulate(0.9, 0.01, 0.01, until="first").end_time
-    result = twoball.simulate(0.9, 0.01, 0.01, until="first", dense=np.linspace(0, end, 300001))
+    result = twoball.simulate(0.9, 0.01, 0.01, until="first", t_eval=np.linspace(0, end, 300001))
     force = result.trajectory
     pushing = force.f12 > 0
     assert pushing.any() and (force.f01[pushing] > 0).all()

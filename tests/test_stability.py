@@ -35,8 +35,9 @@ def test_grid_spans_the_issue_ranges():
 
 
 def test_energy_is_conserved_without_damping():
-    # eps = 1: no dashpots, so the energy (docs/model.md, "Bodies, coordinates, forces": spring potentials) is a constant
-    result = twoball.simulate(1.0, 0.05, 0.3, dense=True)
+    # eps = 1: no dashpots, so the energy (docs/model.md, "Bodies, coordinates, forces": spring
+    # potentials) is a constant
+    result = twoball.simulate(1.0, 0.05, 0.3, dense_output=True)
     energy = _energy(result)
     drop = result.drop
     assert energy[0] == pytest.approx(drop.x1_0 + drop.mu * drop.x2_0, rel=1e-15)
@@ -44,7 +45,7 @@ def test_energy_is_conserved_without_damping():
 
 
 def test_energy_never_rises_and_is_dissipated_with_damping():
-    result = twoball.simulate(0.816, 0.05, 0.3, dense=True)
+    result = twoball.simulate(0.816, 0.05, 0.3, dense_output=True)
     energy = _energy(result)
     t = result.trajectory
     rounding = stability.energy_rounding(t.x1, t.x2, t.v1, t.v2, 0.05, 2 * len(result.contacts) + 3)
@@ -55,7 +56,7 @@ def test_energy_never_rises_and_is_dissipated_with_damping():
 def test_compression_bound_holds_and_is_reached_with_equal_elastic_balls():
     # equal masses, no damping: at the balls' collision the centre of mass is nearly at rest, so
     # nearly all the energy sits in the ball spring and the overlap nearly reaches the bound
-    result = twoball.simulate(1.0, 1.0, 1.0, height=1e8, dense=True)
+    result = twoball.simulate(1.0, 1.0, 1.0, height=1e8, dense_output=True)
     t = result.trajectory
     bound = stability.max_compression(1.0, result.drop.x1_0, result.drop.x2_0)
     deepest = -np.min(t.x2 - t.x1)
@@ -132,10 +133,16 @@ def _slow_diagnose(*task):
     time.sleep(60)
 
 
-def test_a_run_over_the_cap_is_killed_and_reported_too_slow(monkeypatch):
-    monkeypatch.setattr(stability, "diagnose", _slow_diagnose)  # inherited by the forked worker
+def test_a_run_over_the_cap_is_killed_and_reported_too_slow():
     started = time.monotonic()
-    rows = stability.study([], [(0.816, 0.05, 0.3, 1e4)], methods=("LSODA",), cap=1.0, workers=1)
+    rows = stability.study(
+        [],
+        [(0.816, 0.05, 0.3, 1e4)],
+        methods=("LSODA",),
+        cap=1.0,
+        workers=1,
+        diagnose_one=_slow_diagnose,  # imported by name in the spawned worker
+    )
     assert time.monotonic() - started < 30
     assert rows[0]["verdict"] == "too slow" and rows[0]["method"] == "LSODA"
 

@@ -58,7 +58,8 @@ def test_block_check_values_of_model_md():
 
 
 def _restitution_minus(r: float, eps: float) -> float:
-    """eps(r) - eps for r < 1, written from docs/model.md, "Restitution and damping", independently of the package."""
+    """eps(r) - eps for r < 1, written from docs/model.md, "Restitution and damping", independently
+    of the package."""
     return math.exp(-r / math.sqrt(1 - r * r) * math.acos(2 * r * r - 1)) - eps
 
 
@@ -208,6 +209,7 @@ def _alive(pid: int) -> bool:
     return state != "Z"
 
 
+@pytest.mark.slow
 def test_resume_after_kill_9_finishes_without_recomputing(tmp_path):
     grid = _grid()
     store = tmp_path / "cube.zarr"
@@ -286,6 +288,7 @@ def test_leftover_of_a_run_killed_while_creating_is_cleared(tmp_path):
     assert cube.h1.values[0, 1, 0] == twoball.simulate(0.8, 0.2, 0.1).h1
 
 
+@pytest.mark.slow
 def test_dask_local_cluster(tmp_path):
     from distributed import LocalCluster
 

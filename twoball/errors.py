@@ -16,9 +16,12 @@ class ParameterError(ValueError):
 
 
 class Status(IntEnum):
-    """How a run ended. ``DONE`` and ``REST`` are successes; the others are failures.
+    """How a run ended. ``DONE`` and ``REST`` are successes; the others are not.
 
-    The integer values are those the exact kernel returns and the sweep stores.
+    ``STUCK`` and ``PHASE_LIMIT`` come from the exact solver (a bug or an input outside what
+    double precision carries); ``FAILED`` and ``NO_APEX`` from the scipy references (an
+    integrator error; no apex before the horizon, e.g. a ball at rest that the integrator cannot
+    tell). The integer values are those the exact kernel returns and the sweep stores.
     """
 
     DONE = 0
@@ -26,6 +29,7 @@ class Status(IntEnum):
     STUCK = 2
     PHASE_LIMIT = 3
     FAILED = 4
+    NO_APEX = 5
 
     @property
     def message(self) -> str:
@@ -44,6 +48,7 @@ _MESSAGES = {
     Status.STUCK: "root finder made no progress (please report: this is a bug)",
     Status.PHASE_LIMIT: "phase limit reached",
     Status.FAILED: "integrator failed",
+    Status.NO_APEX: "no further apex before the integration horizon",
 }
 
 

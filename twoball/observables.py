@@ -7,10 +7,13 @@ contact intervals it found, the same way whatever the method.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
+from twoball.errors import Status
 from twoball.model import Drop, icm_height
 
 FLOOR_CONTACT, BALL_CONTACT = 0, 1
@@ -23,6 +26,22 @@ class ContactInterval:
     contact: str
     start: float
     end: float
+
+
+class Outcome(NamedTuple):
+    """What a solver (:func:`twoball.exact.solve`, :func:`twoball.reference.solve`) returns."""
+
+    apex_t: list[float]
+    apex_h: list[float]
+    contacts: np.ndarray  # rows (contact, start, end)
+    end_time: float
+    status: Status
+    message: str | None  # None on success without remark, else what happened in words
+    contacts_first: int  # ball contacts that start before the first apex
+    floor_contacts_first: int
+    # state at any times -> array (n, 6): x1, x2, v1, v2, f01, f12; None unless asked for
+    evaluate: Callable[[np.ndarray], np.ndarray] | None
+    plot_times: np.ndarray | None  # times that show every contact; None unless asked for
 
 
 @dataclass(frozen=True)
@@ -44,8 +63,10 @@ class Result:
 
     ``apex_t`` and ``apex_h`` list the upper ball's apexes in free flight (docs/model.md, "What is
     measured"), in order.
-    ``reason`` is None when the run reached what was asked, else why it stopped early.
-    ``contacts`` lists every contact interval found; ``trajectory`` is set only when asked.
+    ``status`` says how the run ended (``success`` is True for a run that reached what was asked
+    or ended at rest); ``reason`` is None when the run reached what was asked, else why it
+    stopped early, in words. ``contacts`` lists every contact interval found; ``trajectory`` is
+    set only when asked (``t_eval`` or ``dense_output``); :meth:`evaluate` needs ``dense_output``.
     """
 
     drop: Drop
@@ -60,6 +81,25 @@ class Result:
     rtol: float | None = None
     atol: float | None = None
     trajectory: Trajectory | None = field(default=None, repr=False)
+    status: Status = Status.DONE
+    dense: Callable[[np.ndarray], np.ndarray] | None = field(
+        default=None, repr=False, compare=False
+    )
+
+    @property
+    def success(self) -> bool:
+        """True when the run reached what was asked or the upper ball came to rest."""
+        return self.status.success
+
+    def evaluate(self, t: np.ndarray | float) -> Trajectory:
+        """The state and forces at times ``t`` (exact at every t for the exact method).
+
+        Needs ``simulate(..., dense_output=True)``.
+        """
+        if self.dense is None:
+            raise ValueError("evaluate needs a run with dense_output=True")
+        times = np.atleast_1d(np.asarray(t, dtype=float))
+        return trajectory_of(times, self.dense(times))
 
     def _apex(self, values: list[float], index: int) -> float | None:
         return values[index] if len(values) > index else None
@@ -150,6 +190,11 @@ class Result:
             "delayed_rebound": self.delayed_rebound,
             "reason": self.reason,
         }
+
+
+def trajectory_of(times: np.ndarray, values: np.ndarray) -> Trajectory:
+    """A :class:`Trajectory` from times and rows (x1, x2, v1, v2, f01, f12)."""
+    return Trajectory(times, *(np.ascontiguousarray(values[:, i]) for i in range(6)))
 
 
 def contact_intervals(rows: np.ndarray) -> list[ContactInterval]:

@@ -24,7 +24,7 @@ from pathlib import Path
 from matplotlib.figure import Figure
 
 from twoball import reference
-from twoball.errors import ParameterError
+from twoball.errors import ParameterError, Status
 from twoball.model import DEFAULT_HEIGHT, check_parameters
 from twoball.solve import simulate
 
@@ -137,7 +137,7 @@ def measure_case(
     truth = simulate(eps, mu, tau_ratio, **drop)  # also loads the compiled kernel
     # scipy cannot tell that the upper ball came to rest and would integrate to its time limit:
     # where the exact solver stopped at rest, run it to a little past that time instead
-    until = "second" if truth.reason is None else REST_MARGIN * truth.end_time
+    until = "second" if truth.status == Status.DONE else REST_MARGIN * truth.end_time
     rows = []
     for method in methods:
         over_budget = False

@@ -29,14 +29,15 @@ import csv
 import math
 import multiprocessing
 import time
-from collections.abc import Iterable, Sequence
+import warnings
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from twoball import precision
-from twoball.errors import ParameterError
+from twoball.errors import ParameterError, SolverWarning, Status
 from twoball.model import check_parameters
 from twoball.solve import METHODS, simulate
 
@@ -216,26 +217,27 @@ def diagnose(
     options = {} if method == "exact" else {"rtol": tolerance, "atol": tolerance}
     row = {"eps": eps, "mu": mu, "tau_ratio": tau_ratio, "height": height, "method": method}
     start = time.perf_counter()
-    note = ""
     try:
-        try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", SolverWarning)  # the row records the status
             result = simulate(
-                eps, mu, tau_ratio, height=height, method=method, dense=True, **options
+                eps,
+                mu,
+                tau_ratio,
+                height=height,
+                method=method,
+                dense_output=True,
+                throw=False,
+                **options,
             )
-        except ValueError as error:
-            # reference.py's dense output raises when a solve_ivp piece holds no sample time
-            # (see docs/accuracy.md); the run itself is judged without its trajectory
-            note = f"no trajectory (dense output raised: {error})"
-            start = time.perf_counter()
-            result = simulate(eps, mu, tau_ratio, height=height, method=method, **options)
     except (ValueError, ArithmeticError, RuntimeError, MemoryError) as error:
         row.update(finished=False, seconds=time.perf_counter() - start)
         row.update(reason=f"{type(error).__name__}: {error}", problems=["crashed"])
         return row
     row["seconds"] = time.perf_counter() - start
     problems = []
-    reason = "; ".join(text for text in (result.reason, note) if text)
-    failed = "failed" in reason
+    reason = result.reason or ""
+    failed = result.status == Status.FAILED
     if failed:
         problems.append("step-size failure")
     rise = deepest = None
@@ -300,26 +302,29 @@ def _relative(value: float | None, reference: float | None) -> float:
     return abs(value - reference) / abs(reference)
 
 
-def _worker(connection) -> None:
+def _worker(connection, function: Callable[..., dict]) -> None:
     simulate(0.8, 0.1, 0.5)  # load the compiled kernel before any timing
     while True:
         task = connection.recv()
         if task is None:
             return
-        connection.send(diagnose(*task))
+        connection.send(function(*task))
 
 
 class _Workers:
-    """Worker processes that run :func:`diagnose`; a task over the cap kills its worker."""
+    """Worker processes that run ``function`` (:func:`diagnose`); a task over the cap kills its
+    worker. Started with "spawn", as the sweep's are: no state is inherited, so ``function``
+    must be importable by name."""
 
-    def __init__(self, count: int, cap: float):
-        self.context = multiprocessing.get_context("fork")
+    def __init__(self, count: int, cap: float, function: Callable[..., dict]):
+        self.context = multiprocessing.get_context("spawn")
         self.cap = cap
+        self.function = function
         self.slots = [self._start() for _ in range(count)]
 
     def _start(self):
         parent, child = self.context.Pipe()
-        process = self.context.Process(target=_worker, args=(child,), daemon=True)
+        process = self.context.Process(target=_worker, args=(child, self.function), daemon=True)
         process.start()
         return process, parent
 
@@ -377,12 +382,14 @@ def study(
     workers: int = 2,
     check: tuple[str, float] | None = None,
     progress=None,
+    diagnose_one: Callable[..., dict] | None = None,
 ) -> list[dict]:
     """The stability study: the exact solver on ``exact_cases``, every other method on
     ``scipy_subset`` (which must be among ``exact_cases``), each under a time cap.
 
     ``check``, a (method, tolerance) such as :data:`CONTACT_CHECK`, adds a tight run of that
     method on the subset, named "method tolerance", as an independent count of the contacts.
+    ``diagnose_one`` replaces :func:`diagnose` in the workers (a module-level function).
     """
     exact_cases = [tuple(float(v) for v in case) for case in exact_cases]
     scipy_subset = [tuple(float(v) for v in case) for case in scipy_subset]
@@ -396,7 +403,7 @@ def study(
     checked = len(tasks)
     if check is not None:
         tasks += [(*case, *check) for case in scipy_subset]
-    pool = _Workers(workers, cap)
+    pool = _Workers(workers, cap, diagnose if diagnose_one is None else diagnose_one)
     try:
         rows = pool.run(tasks, progress)
     finally:

@@ -244,11 +244,11 @@ def _bounce_block(mu, zeta01, zeta12, x2_0, height, apex_h, apex_t, contacts, st
             prepared = prepare(mu[j], zeta01[i], zeta12[i, j])
             for k in range(x2_0.shape[1]):
                 outcome = run(height, x2_0[i, k], 2, np.inf, prepared, False, False)
-                n_apex = outcome[4]
-                apex_t[:n_apex, i, j, k] = outcome[2][:n_apex]
-                apex_h[:n_apex, i, j, k] = outcome[3][:n_apex]
-                contacts[i, j, k] = outcome[5] if n_apex > 0 else np.nan
-                status[i, j, k] = outcome[0]
+                n_apex = outcome.apex_t.size
+                apex_t[:n_apex, i, j, k] = outcome.apex_t
+                apex_h[:n_apex, i, j, k] = outcome.apex_h
+                contacts[i, j, k] = outcome.ball_contacts_first if n_apex > 0 else np.nan
+                status[i, j, k] = outcome.status
 
 
 def compute_block(

@@ -15,6 +15,8 @@ import pytest
 import requests
 from apphelpers import REPO, free_port, open_page, serve, wait_until_served
 
+pytestmark = pytest.mark.docker
+
 DOCKERFILE = (REPO / "Dockerfile").read_text()
 
 

@@ -1,0 +1,70 @@
+"""The contract of simulate: status and success, t_eval against dense_output, loud failures."""
+
+import re
+import warnings
+
+import numpy as np
+import pytest
+
+import twoball
+from twoball import exact
+from twoball.errors import ParameterError, SolverError, SolverWarning, Status
+
+
+def test_status_of_a_completed_run_and_of_a_run_that_ends_at_rest():
+    done = twoball.simulate(0.9, 0.01, 0.01)
+    assert done.status is Status.DONE and done.success and done.reason is None
+    rest = twoball.simulate(0.02, 0.3, 0.0, height=100.0)
+    assert rest.status is Status.REST and rest.success
+    assert rest.reason == Status.REST.message and rest.h2 is None
+
+
+def test_evaluate_is_the_same_solution_as_t_eval_and_hits_the_apexes():
+    times = np.linspace(0.0, 250.0, 57)
+    sampled = twoball.simulate(0.816, 0.05, 0.3, t_eval=times).trajectory
+    result = twoball.simulate(0.816, 0.05, 0.3, dense_output=True)
+    evaluated = result.evaluate(times)
+    for name in ("x1", "x2", "v1", "v2", "f01", "f12"):
+        np.testing.assert_array_equal(getattr(sampled, name), getattr(evaluated, name))
+    # at an apex time the upper ball's velocity is zero and its height the apex height
+    at_apex = result.evaluate(result.apex_t)
+    np.testing.assert_allclose(at_apex.x2, result.apex_h, rtol=1e-13)
+    np.testing.assert_allclose(at_apex.v2, 0.0, atol=1e-9)
+
+
+def test_evaluate_needs_dense_output():
+    with pytest.raises(ValueError, match="dense_output"):
+        twoball.simulate(0.9, 0.01, 0.01).evaluate(1.0)
+
+
+def test_until_a_time_allocates_only_the_apexes_found():
+    prepared = exact.prepare(0.05, 0.0674788868542, 0.01)
+    out = exact.run(1e4, 1.1e4, 2**62, 500.0, prepared, False, False)
+    assert out.status == Status.DONE and out.end_time == 500.0
+    assert out.apex_t.size == out.apex_h.size < 10
+
+
+def test_bad_input_is_a_parameter_error_and_a_value_error():
+    with pytest.raises(ParameterError, match="mu"):
+        twoball.simulate(0.9, -1.0, 0.01)
+    assert issubclass(ParameterError, ValueError)
+    with pytest.raises(ParameterError, match="t_eval"):
+        twoball.simulate(0.9, 0.01, 0.01, t_eval=[0.0, np.nan])
+
+
+@pytest.mark.parametrize("status", [Status.STUCK, Status.PHASE_LIMIT])
+def test_a_stuck_or_limited_run_raises_or_warns(monkeypatch, status):
+    real = exact.solve
+
+    def failing(*args, **kwargs):
+        return real(*args, **kwargs)._replace(status=status, message=status.message)
+
+    monkeypatch.setattr(exact, "solve", failing)
+    with pytest.raises(SolverError, match=re.escape(status.message)) as raised:
+        twoball.simulate(0.9, 0.01, 0.01)
+    assert raised.value.result.status is status and not raised.value.result.success
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = twoball.simulate(0.9, 0.01, 0.01, throw=False)
+    assert result.status is status and not result.success
+    assert [w.category for w in caught] == [SolverWarning]
