@@ -5,6 +5,7 @@ import warnings
 
 import numpy as np
 import pytest
+from cases import RESTITUTION
 
 import twoball
 from twoball import exact
@@ -38,7 +39,7 @@ def test_evaluate_needs_dense_output():
 
 
 def test_until_a_time_allocates_only_the_apexes_found():
-    prepared = exact.prepare(0.05, 0.0674788868542, 0.01)
+    prepared = exact.prepare(0.05, RESTITUTION[0.816][0], 0.01)
     out = exact.run(1e4, 1.1e4, 2**62, 500.0, prepared, False, False)
     assert out.status == Status.DONE and out.end_time == 500.0
     assert out.apex_t.size == out.apex_h.size < 10

@@ -7,6 +7,7 @@ import sys
 
 import numpy as np
 import pytest
+from cases import BENIGN, CLOSE_UP
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
@@ -99,8 +100,8 @@ def test_balls_never_pass_through_each_other(eps, mu, tau_ratio, height):
 
 def test_close_up_case_of_model_md():
     result = twoball.simulate(0.9, 0.01, 0.01)
-    assert result.h1 == pytest.approx(9256.04845, rel=1e-8)
-    assert result.h2 == pytest.approx(50076.3922, rel=1e-8)
+    assert result.h1 == pytest.approx(CLOSE_UP.h1, rel=1e-8)
+    assert result.h2 == pytest.approx(CLOSE_UP.h2, rel=1e-8)
     assert result.contacts_first == 4
     assert result.delayed_rebound
     floor = [c for c in result.contacts if c.contact == "floor"][0]
@@ -111,8 +112,8 @@ def test_close_up_case_of_model_md():
 
 def test_second_check_value_of_model_md():
     result = twoball.simulate(0.816, 0.05, 0.3)
-    assert result.h1 == pytest.approx(26344.4166, rel=1e-8)
-    assert result.h2 == pytest.approx(19354.2754, rel=1e-8)
+    assert result.h1 == pytest.approx(BENIGN.h1, rel=1e-8)
+    assert result.h2 == pytest.approx(BENIGN.h2, rel=1e-8)
 
 
 @pytest.mark.parametrize(
@@ -262,4 +263,4 @@ def test_compiled_kernels_load_from_the_disk_cache_in_any_order():
         [sys.executable, "-c", script], capture_output=True, text=True, timeout=300
     )
     assert completed.returncode == 0, completed.stderr
-    assert float(completed.stdout) == pytest.approx(9256.04845, rel=1e-8)
+    assert float(completed.stdout) == pytest.approx(CLOSE_UP.h1, rel=1e-8)

@@ -304,6 +304,7 @@ def _relative(value: float | None, reference: float | None) -> float:
 
 def _worker(connection, function: Callable[..., dict]) -> None:
     simulate(0.8, 0.1, 0.5)  # load the compiled kernel before any timing
+    connection.send("ready")
     while True:
         task = connection.recv()
         if task is None:
@@ -326,6 +327,7 @@ class _Workers:
         parent, child = self.context.Pipe()
         process = self.context.Process(target=_worker, args=(child, self.function), daemon=True)
         process.start()
+        parent.recv()  # started and warmed up: the time cap counts from the first task
         return process, parent
 
     def run(self, tasks: Sequence[tuple], progress=None) -> list[dict]:
