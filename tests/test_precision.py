@@ -1,4 +1,4 @@
-"""Work-precision (twoball.precision) and the 40-digit reference (twoball.truth)."""
+"""Work-precision (twoball.studies.precision) and the 40-digit reference (twoball.studies.truth)."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ import pytest
 from cases import BENIGN
 
 import twoball
-from twoball import precision
 from twoball.cli import main
-from twoball.truth import solve_truth
+from twoball.studies import precision
+from twoball.studies.truth import solve_truth
 
 
 @pytest.fixture(scope="module")
@@ -129,7 +129,7 @@ def test_exact_solver_against_truth(benign_truth):
 
 def test_truth_does_not_depend_on_its_step(monkeypatch):
     # H = 100 keeps it quick; halving every step must not move the answer beyond 1e-25
-    from twoball import truth
+    from twoball.studies import truth
 
     first = truth.solve_truth(*BENIGN.drop, height=100.0)
     monkeypatch.setattr(truth, "STEP_FRACTION", 2 * truth.STEP_FRACTION)

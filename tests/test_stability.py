@@ -1,4 +1,4 @@
-"""Stiff and extreme cases (twoball.stability): a fast subset of the study."""
+"""Stiff and extreme cases (twoball.studies.stability): a fast subset of the study."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import twoball
-from twoball import stability
 from twoball.cli import main
+from twoball.studies import stability
 
 # A fast subset of the study's grid: its extreme values, all combinations (32 cases).
 EXTREMES = list(

@@ -19,11 +19,11 @@ from twoball.errors import ParameterError
 # The modules that contribute subcommands, in the order --help lists them.
 SUBCOMMAND_MODULES = (
     "twoball.cli",
-    "twoball.bench",
+    "twoball.studies.bench",
     "twoball.sweep",
-    "twoball.report",
-    "twoball.precision",
-    "twoball.stability",
+    "twoball.studies.report",
+    "twoball.studies.precision",
+    "twoball.studies.stability",
 )
 
 

@@ -36,10 +36,10 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from twoball import precision
 from twoball.errors import ParameterError, SolverWarning, Status
 from twoball.model import check_parameters
 from twoball.solve import METHODS, simulate
+from twoball.studies import precision
 
 EPS_BRANCH_SWITCH = math.exp(-2.0)
 GRID = {

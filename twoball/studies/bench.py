@@ -5,7 +5,8 @@ H = 1e4), each run to the second apex in one process: the exact solver, and LSOD
 ``odeint`` with rtol = atol = 1e-8 on a time grid (the paper's way). Each time is the median of
 repeats; the ratio is per case, then summarised by its median. Accuracy is checked against an
 independent method, DOP853 at rtol = atol = 1e-12 with restarts at every apex; the case where
-the two differ most is then solved by the 40-digit reference of ``twoball.truth`` to say which
+the two differ most is then solved by the 40-digit reference of ``twoball.studies.truth`` to say
+which
 of the two is off.
 """
 
@@ -19,7 +20,7 @@ import numpy as np
 
 from twoball.errors import ParameterError
 from twoball.solve import simulate
-from twoball.truth import solve_truth
+from twoball.studies.truth import solve_truth
 
 PAPER_CUBE = {"eps": (0.5, 1.0), "mu": (0.01, 1.0 / 3.0), "tau_ratio": (0.01, 1.0)}
 
@@ -135,7 +136,7 @@ def _main(args: argparse.Namespace) -> int:
     eps, mu, tau_ratio = figures["worst_case"]
     print(
         f"where exact and DOP853 differ most (eps {eps:.4g}, mu {mu:.4g}, tau_ratio "
-        f"{tau_ratio:.4g}), relative error against the 40-digit reference (twoball.truth): "
+        f"{tau_ratio:.4g}), relative error against the 40-digit reference (twoball.studies.truth): "
         f"exact {figures['worst_exact_vs_truth']:.1e}, "
         f"DOP853 {figures['worst_dop853_vs_truth']:.1e}"
     )

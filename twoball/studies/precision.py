@@ -4,7 +4,7 @@
 :mod:`twoball.reference` on one drop, to the second apex (docs/model.md, "What is measured"), and
 returns one row per method and tolerance: the relative errors in h1 and h2 against the exact
 solver and the median run time. The exact solver's own error is established independently by
-:mod:`twoball.truth` (``twoball precision`` reports it beside the table).
+:mod:`twoball.studies.truth` (``twoball precision`` reports it beside the table).
 
 ``twoball precision --out DIR`` does this on the documented :data:`CASES` over the full range of
 tolerances and writes ``DIR/work_precision.csv`` and ``DIR/work_precision.png``.
@@ -282,7 +282,7 @@ def plot_work_precision(rows: Sequence[dict], path: str | Path, title: str | Non
     work_precision_figure(rows, title).savefig(path, dpi=110)
 
 
-# The exact solver's own error on these cases is measured against :mod:`twoball.truth`.
+# The exact solver's own error on these cases is measured against :mod:`twoball.studies.truth`.
 TRUTH_COLUMNS = (
     "case",
     "h1_truth",
@@ -311,7 +311,7 @@ def _title(with_truth: bool, height: float | None = None) -> str:
 
 def exact_against_truth(cases: dict[str, tuple[float, float, float]]) -> list[dict]:
     """The exact solver's relative errors in h1 and h2 against the 40-digit reference."""
-    from twoball.truth import solve_truth
+    from twoball.studies.truth import solve_truth
 
     rows = []
     for case, parameters in cases.items():
