@@ -1,8 +1,7 @@
 """Scene 4, accuracy: error against run time of every integrator at the current drop.
 
 The work is :func:`twoball.studies.precision.work_precision` (a few seconds); it runs in a thread
-only
-while the scene is on screen, with a loading indicator, and a newer request supersedes an
+only while the scene is on screen, with a loading indicator, and a newer request supersedes an
 older one.
 """
 

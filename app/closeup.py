@@ -17,10 +17,10 @@ from bokeh.models import ColumnDataSource, Span
 from bokeh.plotting import figure
 
 import twoball
+from twoball.units import units_named
 
 from .drop import LOWER, UPPER
 from .scene import Scene
-from .units import units_named
 
 SAMPLES = 1500
 MARGIN = 0.08  # of the collision's duration, shown before and after it

@@ -14,9 +14,9 @@ from bokeh.models import ColumnDataSource, LabelSet, Legend, LegendItem, Range1d
 from bokeh.plotting import figure
 
 import twoball
+from twoball.units import units_named
 
 from .scene import Scene
-from .units import units_named
 
 FRAMES = 240
 LOWER, UPPER = "#1f77b4", "#d62728"
