@@ -11,6 +11,7 @@ from cases import BENIGN
 
 import twoball
 from twoball.cli import main
+from twoball.observables import relative_error
 from twoball.studies import precision
 from twoball.studies.truth import solve_truth
 
@@ -68,10 +69,10 @@ def test_no_second_bounce_gives_nan_for_h2():
 
 
 def test_relative_error_says_which_side_lacks_the_bounce():
-    assert precision.relative_error(3.3, 3.0) == pytest.approx(0.1)
-    assert precision.relative_error(None, 3.0) == math.inf  # missed
-    assert precision.relative_error(5.0, None) == math.inf  # invented
-    assert math.isnan(precision.relative_error(None, None))  # nobody has it
+    assert relative_error(3.3, 3.0) == pytest.approx(0.1)
+    assert relative_error(None, 3.0) == math.inf  # missed
+    assert relative_error(5.0, None) == math.inf  # invented
+    assert math.isnan(relative_error(None, None))  # nobody has it
 
 
 def test_bad_input_names_the_parameter():

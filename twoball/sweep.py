@@ -44,6 +44,7 @@ from twoball.model import (
     icm_height,
     initial_gap_height,
 )
+from twoball.observables import ratios
 
 DIMS = ("eps", "mu", "tau_ratio")
 SPACINGS = ("linear", "log")
@@ -289,10 +290,7 @@ def compute_block(
         "contacts_first": contacts,
         "h_icm": h_icm,
         "x2_0": np.array(x2_0),
-        "h1_over_icm": h1 / h_icm,
-        "h1_over_drop": h1 / x2_0,
-        "h2_over_drop": h2 / x2_0,
-        "h2_over_h1": h2 / h1,
+        **ratios(h1, h2, x2_0, h_icm),
         "delayed_rebound": h2 > h1,  # False where h2 is NaN
         "status": status,
     }

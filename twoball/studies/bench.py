@@ -19,6 +19,7 @@ import time
 import numpy as np
 
 from twoball.errors import ParameterError
+from twoball.observables import relative_error
 from twoball.solve import simulate
 from twoball.studies.truth import solve_truth
 
@@ -39,12 +40,6 @@ def _median_time(run, repeats: int) -> float:
         run()
         times.append(time.perf_counter() - start)
     return statistics.median(times)
-
-
-def _relative(value: float | None, truth: float | None) -> float:
-    if value is None or truth is None:
-        return float("nan") if value is truth else float("inf")
-    return abs(value - truth) / abs(truth)
 
 
 def benchmark(count: int = 50, seed: int = 0, repeats: int = 5, height: float = 1e4) -> dict:
@@ -70,9 +65,11 @@ def benchmark(count: int = 50, seed: int = 0, repeats: int = 5, height: float = 
                 "exact_s": _median_time(exact_run, repeats),
                 "lsoda_s": _median_time(lsoda_run, max(1, repeats // 2)),
                 "exact_vs_dop853": max(
-                    _relative(exact.h1, check.h1), _relative(exact.h2, check.h2)
+                    relative_error(exact.h1, check.h1), relative_error(exact.h2, check.h2)
                 ),
-                "lsoda_vs_exact": max(_relative(lsoda.h1, exact.h1), _relative(lsoda.h2, exact.h2)),
+                "lsoda_vs_exact": max(
+                    relative_error(lsoda.h1, exact.h1), relative_error(lsoda.h2, exact.h2)
+                ),
             }
         )
     ratios = [row["lsoda_s"] / row["exact_s"] for row in rows]
@@ -91,8 +88,12 @@ def benchmark(count: int = 50, seed: int = 0, repeats: int = 5, height: float = 
     truth_h1, truth_h2 = float(truth.h1), float(truth.h2)
     return {
         "worst_case": (worst["eps"], worst["mu"], worst["tau_ratio"]),
-        "worst_exact_vs_truth": max(_relative(exact.h1, truth_h1), _relative(exact.h2, truth_h2)),
-        "worst_dop853_vs_truth": max(_relative(check.h1, truth_h1), _relative(check.h2, truth_h2)),
+        "worst_exact_vs_truth": max(
+            relative_error(exact.h1, truth_h1), relative_error(exact.h2, truth_h2)
+        ),
+        "worst_dop853_vs_truth": max(
+            relative_error(check.h1, truth_h1), relative_error(check.h2, truth_h2)
+        ),
         "cases": rows,
         "exact_median_s": statistics.median(row["exact_s"] for row in rows),
         "lsoda_median_s": statistics.median(row["lsoda_s"] for row in rows),

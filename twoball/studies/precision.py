@@ -26,6 +26,7 @@ from matplotlib.figure import Figure
 from twoball import reference
 from twoball.errors import ParameterError, Status
 from twoball.model import DEFAULT_HEIGHT, check_parameters
+from twoball.observables import relative_error
 from twoball.solve import simulate
 
 METHODS = ("exact", *reference.IVP_METHODS)
@@ -46,16 +47,6 @@ CASES = {
     "overdamped": (0.12, 0.02, 1.0),
     "nearly elastic": (0.999, 0.05, 0.3),
 }
-
-
-def relative_error(value: float | None, reference_value: float | None) -> float:
-    """|value - reference| / |reference|; inf when only one of them has the value (a missed or
-    an invented bounce), NaN when neither has it (there is no such bounce to compare)."""
-    if reference_value is None:
-        return math.nan if value is None else math.inf
-    if value is None or not math.isfinite(value):
-        return math.inf
-    return abs(value - reference_value) / abs(reference_value)
 
 
 def _median_seconds(run: Callable[[], object], repeats: int) -> float:
@@ -324,8 +315,8 @@ def exact_against_truth(cases: dict[str, tuple[float, float, float]]) -> list[di
                 "case": case,
                 "h1_truth": _digits(truth.h1),
                 "h2_truth": _digits(truth.h2),
-                "rel_err_h1": _truth_error(result.h1, truth.h1),
-                "rel_err_h2": _truth_error(result.h2, truth.h2),
+                "rel_err_h1": relative_error(result.h1, truth.h1),
+                "rel_err_h2": relative_error(result.h2, truth.h2),
                 "contacts_first": result.contacts_first,
                 "contacts_first_truth": truth.contacts_first,
                 "truth_seconds": seconds,
@@ -338,14 +329,6 @@ def _digits(value) -> str:
     import mpmath
 
     return "" if value is None else mpmath.nstr(value, 25)
-
-
-def _truth_error(value: float | None, truth) -> float:
-    if truth is None:
-        return math.nan if value is None else math.inf
-    if value is None:
-        return math.inf
-    return float(abs(value - truth) / abs(truth))
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:

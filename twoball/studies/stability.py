@@ -38,6 +38,7 @@ from matplotlib.figure import Figure
 
 from twoball.errors import ParameterError, SolverWarning, Status
 from twoball.model import check_parameters
+from twoball.observables import relative_error
 from twoball.solve import METHODS, simulate
 from twoball.studies import precision
 
@@ -279,7 +280,7 @@ def judge(row: dict, exact_row: dict) -> dict:
         elif mine > theirs:
             problems.append("extra ball contact")
         for name in ("h1", "h2"):
-            error = _relative(row[name], exact_row[name])
+            error = relative_error(row[name], exact_row[name])
             row[f"rel_err_{name}"] = error
             if error > RIGHT_RELATIVE_ERROR:
                 problems.append(f"wrong {name}")
@@ -292,14 +293,6 @@ def judge(row: dict, exact_row: dict) -> dict:
         verdict = "right" if not problems else "wrong"
     row.update(problems=problems, verdict=verdict)
     return row
-
-
-def _relative(value: float | None, reference: float | None) -> float:
-    if value is None and reference is None:
-        return 0.0
-    if value is None or reference is None or not math.isfinite(value):
-        return math.inf
-    return abs(value - reference) / abs(reference)
 
 
 def _worker(connection, function: Callable[..., dict]) -> None:
