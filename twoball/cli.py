@@ -1,8 +1,9 @@
 """The ``twoball`` command line.
 
 Bad input never shows a traceback: a :class:`~twoball.errors.ParameterError` (or argparse's own
-complaint) prints one line on stderr and exits with status 2. Any other exception is a bug and
-keeps its traceback.
+complaint) prints one line on stderr and exits with status 2. A run that is no answer (a
+:class:`~twoball.errors.SolverError`: stuck root finder, phase limit) prints one line and exits
+with status 1. Any other exception is a bug and keeps its traceback.
 Each subcommand lives in the module of its idea, which adds its own parser with
 ``add_parser(subparsers)`` and sets ``func`` to a function of the parsed arguments.
 """
@@ -14,7 +15,7 @@ import importlib
 import json
 import sys
 
-from twoball.errors import ParameterError
+from twoball.errors import ParameterError, SolverError
 
 # The modules that contribute subcommands, in the order --help lists them.
 SUBCOMMAND_MODULES = (
@@ -103,3 +104,6 @@ def main(argv: list[str] | None = None) -> int:
     except ParameterError as error:
         print(f"twoball: error: {error}", file=sys.stderr)
         return 2
+    except SolverError as error:  # a run that is no answer: say so, and fail
+        print(f"twoball: run failed: {error}", file=sys.stderr)
+        return 1

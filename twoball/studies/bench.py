@@ -14,13 +14,13 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import time
 
 import numpy as np
 
 from twoball.errors import ParameterError
 from twoball.observables import relative_error
 from twoball.solve import simulate
+from twoball.studies.timing import median_seconds
 from twoball.studies.truth import solve_truth
 
 PAPER_CUBE = {"eps": (0.5, 1.0), "mu": (0.01, 1.0 / 3.0), "tau_ratio": (0.01, 1.0)}
@@ -31,15 +31,6 @@ def random_cases(count: int, seed: int) -> list[tuple[float, float, float]]:
     rng = np.random.default_rng(seed)
     columns = [rng.uniform(low, high, count) for low, high in PAPER_CUBE.values()]
     return [tuple(float(c[i]) for c in columns) for i in range(count)]
-
-
-def _median_time(run, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        run()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def benchmark(count: int = 50, seed: int = 0, repeats: int = 5, height: float = 1e4) -> dict:
@@ -62,8 +53,8 @@ def benchmark(count: int = 50, seed: int = 0, repeats: int = 5, height: float = 
                 "eps": eps,
                 "mu": mu,
                 "tau_ratio": tau_ratio,
-                "exact_s": _median_time(exact_run, repeats),
-                "lsoda_s": _median_time(lsoda_run, max(1, repeats // 2)),
+                "exact_s": median_seconds(exact_run, repeats),
+                "lsoda_s": median_seconds(lsoda_run, max(1, repeats // 2)),
                 "exact_vs_dop853": max(
                     relative_error(exact.h1, check.h1), relative_error(exact.h2, check.h2)
                 ),

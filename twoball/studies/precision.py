@@ -15,10 +15,9 @@ from __future__ import annotations
 import argparse
 import csv
 import math
-import statistics
 import textwrap
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 
 from matplotlib.figure import Figure
@@ -28,6 +27,7 @@ from twoball.errors import ParameterError, Status
 from twoball.model import DEFAULT_HEIGHT, check_parameters
 from twoball.observables import relative_error
 from twoball.solve import simulate
+from twoball.studies.timing import median_seconds
 
 METHODS = ("exact", *reference.IVP_METHODS)
 # Cheap enough for the app (a few seconds on benign cases); the command line uses FULL_TOLERANCES.
@@ -47,15 +47,6 @@ CASES = {
     "overdamped": (0.12, 0.02, 1.0),
     "nearly elastic": (0.999, 0.05, 0.3),
 }
-
-
-def _median_seconds(run: Callable[[], object], repeats: int) -> float:
-    times = []
-    for _ in range(max(repeats, 1)):
-        start = time.perf_counter()
-        run()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def case_label(eps: float, mu: float, tau_ratio: float, eps12: float | None, height: float) -> str:
@@ -155,7 +146,7 @@ def measure_case(
             else:
                 h1, h2 = result.h1, result.h2
                 first = time.perf_counter() - start
-                seconds = first if repeats == 1 else _median_seconds(run, repeats)
+                seconds = first if repeats == 1 else median_seconds(run, repeats)
             over_budget = seconds > budget
             row["rel_err_h1"] = relative_error(h1, truth.h1)
             row["rel_err_h2"] = relative_error(h2, truth.h2)

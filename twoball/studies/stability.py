@@ -37,6 +37,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from twoball.errors import ParameterError, SolverWarning, Status
+from twoball.exact import ROUNDING  # per phase, of the exact solver's state
 from twoball.model import check_parameters
 from twoball.observables import relative_error
 from twoball.solve import METHODS, simulate
@@ -64,7 +65,6 @@ SCIPY_TOLERANCE = 1e-8
 CONTACT_CHECK = ("DOP853", 1e-11)
 EXACT_LIMIT_SECONDS = 1.0
 RIGHT_RELATIVE_ERROR = 1e-4  # a scipy result within this of the exact one counts as right
-ROUNDING = 16.0 * np.finfo(float).eps  # per phase, of the exact solver's state
 ENERGY_RISE_SCIPY = 1e-6  # well beyond a tolerance of 1e-8: a real gain, not truncation noise
 COLUMNS = (
     "eps",
