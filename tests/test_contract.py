@@ -69,3 +69,19 @@ def test_a_stuck_or_limited_run_raises_or_warns(monkeypatch, status):
         result = twoball.simulate(0.9, 0.01, 0.01, throw=False)
     assert result.status is status and not result.success
     assert [w.category for w in caught] == [SolverWarning]
+
+
+def test_the_command_line_reports_a_failed_run_in_one_line_with_status_1(monkeypatch, capsys):
+    from twoball.cli import main
+
+    real = exact.solve
+
+    def limited(*args, **kwargs):
+        limit = Status.PHASE_LIMIT
+        return real(*args, **kwargs)._replace(status=limit, message=limit.message)
+
+    monkeypatch.setattr(exact, "solve", limited)
+    assert main(["simulate", "--eps", "0.9", "--mu", "0.01", "--tau-ratio", "0.01"]) == 1
+    captured = capsys.readouterr()
+    assert captured.err.strip().splitlines() == ["twoball: run failed: exact: phase limit reached"]
+    assert captured.out == ""
