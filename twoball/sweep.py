@@ -236,9 +236,9 @@ def _bounce_block(mu, zeta01, zeta12, x2_0, height, apex_h, apex_t, contacts, st
     mu (nm), zeta01 (ne), zeta12 (ne, nm), x2_0 (ne, nt); outputs (ne, nm, nt), apex arrays with
     a leading axis of 2, pre-filled with NaN. Nothing but apexes and counts is recorded.
 
-    The loop is Python around the compiled kernel (~40 us a case, the loop adds ~10 %): a cached
-    numba loop here would inline ``exact.run``, and numba's cache does not notice when another
-    module changes, so after a change to exact.py it ran stale machine code (a segfault).
+    The loop is Python around the compiled kernel: a cached numba loop here would inline
+    ``exact.run``, and numba's cache does not notice when another module changes (stale machine
+    code, a segfault); docs/performance.md has what the loop costs.
     """
     for i in range(x2_0.shape[0]):
         for j in range(mu.shape[0]):
