@@ -128,7 +128,42 @@ def check_parameters(
     eps12: float | None = None,
     height: float = DEFAULT_HEIGHT,
 ) -> Drop:
-    """Validate the inputs of one drop and derive damping, contact time and initial state."""
+    """Validate the inputs of one drop and derive damping, contact time and initial state.
+
+    Parameters
+    ----------
+    eps, eps12 : float
+        Restitution of the floor and of the ball contact, in (0, 1]; ``eps12`` defaults to eps.
+    mu : float
+        Mass ratio m2/m1 > 0.
+    tau_ratio : float
+        tau_d/tau_f >= 0.
+    height : float
+        Dimensionless drop height H > 0.
+
+    Returns
+    -------
+    Drop
+        The parameters with zeta01, zeta12 (docs/model.md, "Restitution and damping"), tau_f
+        and the initial heights (docs/model.md, "Initial condition").
+
+    Raises
+    ------
+    ParameterError
+        A ``ValueError`` naming the parameter and its allowed range.
+
+    Examples
+    --------
+    The check values of docs/model.md, "Restitution and damping":
+
+    >>> drop = check_parameters(0.816, 0.05, 0.3)
+    >>> round(drop.zeta01, 13), round(drop.tau_f, 11)
+    (0.0674788868542, 3.0134006872)
+    >>> check_parameters(1.5, 0.05, 0.3)
+    Traceback (most recent call last):
+    ...
+    twoball.errors.ParameterError: eps must be a finite number in (0, 1]; got 1.5
+    """
     eps = check_value("eps", eps)
     eps12 = eps if eps12 is None else check_value("eps12", eps12)
     mu = check_value("mu", mu)

@@ -95,6 +95,14 @@ class Result:
         """The state and forces at times ``t`` (exact at every t for the exact method).
 
         Needs ``simulate(..., dense_output=True)``.
+
+        Examples
+        --------
+        >>> import twoball
+        >>> r = twoball.simulate(0.816, 0.05, 0.3, dense_output=True)
+        >>> at = r.evaluate(r.t1)  # the first apex: the upper ball at rest, at height h1
+        >>> bool(abs(at.v2[0]) < 1e-9), bool(abs(at.x2[0] - r.h1) < 1e-9 * r.h1)
+        (True, True)
         """
         if self.dense is None:
             raise ValueError("evaluate needs a run with dense_output=True")
