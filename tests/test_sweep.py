@@ -12,6 +12,7 @@ import signal
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -361,3 +362,8 @@ def test_sweep_returns_the_cube_and_shows_progress_with_time_left(tmp_path, caps
     point = cube.isel(eps=1, mu=0, tau_ratio=1)
     expected = twoball.simulate(float(point.eps), 0.05, 0.4).h1
     assert float(point.eps) == pytest.approx(0.8, rel=1e-15) and float(point.h1) == expected
+    # the complete store has consolidated metadata: a plain open_zarr does not warn
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        reopened = xr.open_zarr(tmp_path / "cube")
+    assert float(reopened.h1.isel(eps=1, mu=0, tau_ratio=1)) == expected

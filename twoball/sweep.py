@@ -463,6 +463,16 @@ def sweep(
     finally:
         if client is not None:
             client.close()
+    # complete: one metadata document, so that xarray.open_zarr reads it without a warning
+    import warnings
+
+    import zarr
+
+    with warnings.catch_warnings():
+        # zarr notes that consolidation is not in the v3 spec (xarray relies on it), and that
+        # the done-markers in _progress/ are not zarr objects: both known and harmless here
+        warnings.simplefilter("ignore", UserWarning)
+        zarr.consolidate_metadata(str(store))
     from twoball.cubes import load_cube
 
     return load_cube(store)
