@@ -30,6 +30,7 @@ class Status(IntEnum):
     PHASE_LIMIT = 3
     FAILED = 4
     NO_APEX = 5
+    IMPOSSIBLE = 6
 
     @property
     def message(self) -> str:
@@ -49,6 +50,8 @@ _MESSAGES = {
     Status.PHASE_LIMIT: "phase limit reached",
     Status.FAILED: "integrator failed",
     Status.NO_APEX: "no further apex before the integration horizon",
+    Status.IMPOSSIBLE: "an apex that is not finite or above what the energy at release allows "
+    "(the input is beyond what double precision resolves)",
 }
 
 

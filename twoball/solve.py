@@ -19,7 +19,7 @@ UNTIL = {"first": 1, "second": 2}
 NO_APEX_LIMIT = 2**62
 # Outcomes that simulate reports loudly (raise, or warn with throw=False): a bug or an input
 # beyond what the solver can carry, never a physical answer.
-LOUD = (Status.STUCK, Status.PHASE_LIMIT)
+LOUD = (Status.STUCK, Status.PHASE_LIMIT, Status.IMPOSSIBLE)
 
 
 def simulate(
@@ -109,6 +109,8 @@ def simulate(
         outcome = exact.solve(drop, apexes, t_end, dense_output=keep)
     else:
         outcome = reference.solve(drop, method, apexes, t_end, rtol, atol, keep)
+    if not all(math.isfinite(h) and h <= apex_bound(drop) for h in outcome.apex_h):
+        outcome = outcome._replace(status=Status.IMPOSSIBLE, message=Status.IMPOSSIBLE.message)
     trajectory = None
     if keep:
         times = outcome.plot_times if times is None else times
@@ -134,6 +136,16 @@ def simulate(
             raise SolverError(result)
         warnings.warn(f"{method}: {result.status.message}", SolverWarning, stacklevel=2)
     return result
+
+
+def apex_bound(drop) -> float:
+    """The highest apex of the upper ball the energy at release allows, with rounding room.
+
+    The energy E = (v1^2 + mu v2^2)/2 + x1 + mu x2 + min(x1, 0)^2/2 + min(x2 - x1, 0)^2/2 never
+    increases (docs/model.md, "Bodies, coordinates, forces"), and x1 + min(x1, 0)^2/2 >= -1/2, so
+    at any apex mu h <= x1(0) + mu x2(0) + 1/2.
+    """
+    return (drop.x1_0 + drop.mu * drop.x2_0 + 0.5) / drop.mu * (1.0 + 1e-9)
 
 
 def _stop_rule(until: str | float) -> tuple[int, float]:
