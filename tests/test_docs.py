@@ -1,7 +1,14 @@
-"""Every citation of the specification names a section that exists in docs/model.md."""
+"""The docs: every citation of docs/model.md resolves, and the docstrings' examples run."""
 
+import doctest
+import importlib
+import pkgutil
 import re
 from pathlib import Path
+
+import pytest
+
+import twoball
 
 REPO = Path(__file__).resolve().parent.parent
 CITATION = re.compile(r'docs/model\.md,?\s*\(?"([^"]+)"')
@@ -41,3 +48,22 @@ def test_no_reference_to_a_folder_outside_the_repository():
         text = path.read_text()
         assert "shared/" not in text, path
         assert not re.search(r"\bissues? [0-9]+\b", text), path
+
+
+LIBRARY = sorted(
+    info.name
+    for info in pkgutil.walk_packages(twoball.__path__, "twoball.")
+    if info.name != "twoball.__main__"
+)
+
+
+@pytest.mark.parametrize("name", LIBRARY)
+def test_docstring_examples_run(name):
+    module = importlib.import_module(name)
+    failed, _ = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
+    assert failed == 0, name
+
+
+def test_the_public_functions_show_an_example():
+    for function in (twoball.simulate, twoball.check_parameters, twoball.Result.evaluate):
+        assert ">>>" in function.__doc__, function.__qualname__
