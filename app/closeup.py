@@ -92,7 +92,7 @@ class CloseUpScene(Scene):
 
     def update(self) -> None:
         s = self.state
-        drop = dict(eps12=s.eps12, height=s.height, until="first")
+        drop = dict(eps12=s.eps12, height=s.height, until="first", throw=False)
         first = twoball.simulate(s.eps, s.mu, s.tau_ratio, dense_output=True, **drop)
         start, stop = collision_window(first.contacts, first.end_time)
         times = np.union1d(

@@ -7,6 +7,7 @@ message and falls back, the app keeps running.
 
 from __future__ import annotations
 
+import html
 import math
 
 import panel as pn
@@ -29,8 +30,20 @@ class Controls(pn.viewable.Viewer):
 
     def __init__(self, messages: list[str] | None = None, **params):
         super().__init__(**params)
-        self.message = pn.pane.Alert(
-            "", alert_type="warning", visible=False, sizing_mode="stretch_width"
+        # plain text, escaped: a message quotes what was typed or put in the URL, which must
+        # never render as a link or an image (Alert would read it as Markdown)
+        self.message = pn.pane.HTML(
+            "",
+            visible=False,
+            sizing_mode="stretch_width",
+            styles={
+                "background": "#fff3cd",
+                "color": "#664d03",
+                "border": "1px solid #ffe69c",
+                "border-radius": "6px",
+                "padding": "0 12px",
+                "overflow-wrap": "anywhere",
+            },
         )
         self.sliders = {
             "eps": pn.widgets.FloatSlider(
@@ -81,7 +94,7 @@ class Controls(pn.viewable.Viewer):
 
     def show_messages(self, messages: list[str]) -> None:
         """Show the messages (or hide the box when there are none)."""
-        self.message.object = "\n\n".join(messages)
+        self.message.object = "".join(f"<p>{html.escape(text)}</p>" for text in messages)
         self.message.visible = bool(messages)
 
     def _slider_moved(self, name: str, value: float) -> None:
@@ -119,20 +132,37 @@ class Controls(pn.viewable.Viewer):
         if si and isinstance(typed, float) and math.isfinite(typed):
             typed = presets.height_from_metres(typed)
         value, message = validate("height", typed, self.state.height)
-        if message:
-            what = "drop height in metres" if si else "H"
-            self.show_messages([f"{what}: {message}"])
-        self.state.height = value
-        self._show_state()
+        if message and si:  # say it in the units the teacher typed
+            low, high = (presets.metres_from_height(h) for h in APP_RANGES["height"])
+            message = (
+                f"drop height must be a number of metres in [{low:.3g}, {high:.3g}]; got "
+                f"{event.new!r}. Using {presets.metres_from_height(value):.3g} m."
+            )
+        elif message:
+            message = f"H: {message}"
+        self._apply_typed("height", value, message)
 
     def _eps12_typed(self, event: param.parameterized.Event) -> None:
         if self._syncing:
             return
         value, message = validate("eps12", event.new, self.state.eps12)
-        if message:
-            self.show_messages([f"eps12: {message}"])
-        self.state.eps12 = value
-        self._show_state()
+        self._apply_typed("eps12", value, message and f"eps12: {message}")
+
+    def _apply_typed(self, name: str, value: float | None, message: str | None) -> None:
+        """Show the message (or clear an earlier one) and set the state on the document's next
+        tick: a text input's callback does not hold the document lock, and the scenes redraw
+        Bokeh models when the state changes (that raised "_pending_writes should be non-None")."""
+
+        def apply() -> None:
+            self.show_messages([message] if message else [])
+            self.state.param.update(**{name: value})
+            self._show_state()
+
+        document = pn.state.curdoc
+        if document is not None and document.session_context is not None:
+            document.add_next_tick_callback(apply)
+        else:
+            apply()
 
     def _show_state(self, *events: param.parameterized.Event) -> None:
         """Move the widgets to the state (after a preset, a map click or a URL)."""
@@ -169,5 +199,5 @@ class Controls(pn.viewable.Viewer):
             self.units,
             *self.sliders.values(),
             advanced,
-            width=320,
+            sizing_mode="stretch_width",
         )

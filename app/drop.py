@@ -38,7 +38,8 @@ class DropScene(Scene):
             interval=40,
             loop_policy="once",
             show_loop_controls=False,
-            width=420,
+            sizing_mode="stretch_width",
+            max_width=420,
         )
         self.player.link(self, value="frame")
         self.summary = pn.pane.Markdown(sizing_mode="stretch_width")
@@ -65,6 +66,7 @@ class DropScene(Scene):
             y_range=Range1d(0.0, 1.0),  # set with every drop (auto-ranging ignores the lines)
             tools="pan,box_zoom,wheel_zoom,reset,save",
         )
+        fig.toolbar.autohide = True
         lower = fig.line("t", "x1", source=self.curves, color=LOWER, line_width=2)
         upper = fig.line("t", "x2", source=self.curves, color=UPPER, line_width=2)
         fig.scatter("t", "h", source=self.apexes, color=UPPER, size=8)
@@ -88,14 +90,15 @@ class DropScene(Scene):
                     LegendItem(label="lower ball", renderers=[lower]),
                     LegendItem(label="upper ball", renderers=[upper]),
                 ],
+                location="top_left",  # inside: a phone has no width to spare
+                background_fill_alpha=0.7,
             ),
-            "right",
         )
         return fig
 
     def _animation_figure(self):
         fig = figure(
-            width=200,
+            width=160,
             height=400,
             x_range=(-1, 1),
             y_range=Range1d(0.0, 1.0),
@@ -110,14 +113,10 @@ class DropScene(Scene):
     def update(self) -> None:
         s = self.state
         self.result = twoball.simulate(
-            s.eps,
-            s.mu,
-            s.tau_ratio,
-            eps12=s.eps12,
-            height=s.height,
-            until="second",
+            s.eps, s.mu, s.tau_ratio, eps12=s.eps12, height=s.height, until="second",
             dense_output=True,
-        )
+            throw=False,  # a drop the solver cannot finish is shown as far as it got, with why
+        )  # fmt: skip
         self.summary.object = self._summary_text()
 
     def _draw(self, *events: param.parameterized.Event) -> None:
@@ -164,6 +163,11 @@ class DropScene(Scene):
 
     def _summary_text(self) -> str:
         r, units = self.result, units_named(self.state.units)
+        if not r.success:
+            return (
+                f"**The solver could not finish this drop** ({r.reason}); what it computed is "
+                "drawn. This is one of its known limits (docs/model.md): move a slider a little."
+            )
         if r.h2 is None:
             second = f"no second bounce ({r.reason})"
             verdict = ""

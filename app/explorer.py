@@ -8,6 +8,8 @@ from urllib.parse import urlencode
 import panel as pn
 import param
 
+from twoball import jit
+
 from .accuracy import AccuracyScene
 from .closeup import CloseUpScene
 from .controls import Controls
@@ -86,13 +88,25 @@ class Explorer(pn.viewable.Viewer):
         self.state.param.watch(changed, [*MODEL_PARAMETERS, "scene"])
         pn.state.onload(write)  # once the browser has reported its own URL
 
+    @staticmethod
+    def _compiling_notice() -> list[pn.pane.Alert]:
+        """A note on a page opened while the server's first start compiles the solver."""
+        if jit.state == "compiled":
+            return []
+        text = (
+            "First start on this machine: the solver is still being compiled (up to a minute). "
+            "Until then drops are computed in plain Python: the same results, a little slower."
+        )
+        return [pn.pane.Alert(text, alert_type="info", sizing_mode="stretch_width")]
+
+    def sidebar(self) -> pn.Column:
+        """The controls (and a note while the solver compiles), for the page's sidebar."""
+        return pn.Column(*self._compiling_notice(), self.controls, sizing_mode="stretch_width")
+
     def __panel__(self) -> pn.viewable.Viewable:
+        """The explorer without the page's template (main.py puts it in one)."""
         return pn.Row(
-            pn.Column(
-                pn.pane.Markdown("## Two-ball bounce explorer"),
-                self.controls,
-                width=340,
-            ),
+            pn.Column(pn.pane.Markdown("## Two-ball bounce explorer"), self.sidebar(), width=340),
             self.tabs,
             sizing_mode="stretch_width",
         )

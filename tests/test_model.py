@@ -103,17 +103,17 @@ def test_icm_with_separate_restitutions_follows_the_collision_steps():
 @pytest.mark.parametrize(
     ("name", "value", "text"),
     [
-        ("eps", 0.0, "eps must be a finite number in (0, 1]"),
-        ("eps", 1.5, "eps must be a finite number in (0, 1]"),
+        ("eps", 0.0, "eps must be a finite number in [0.01, 1]"),
+        ("eps", 1.5, "eps must be a finite number in [0.01, 1]"),
         ("eps", float("nan"), "eps"),
-        ("eps12", -0.1, "eps12 must be a finite number in (0, 1]"),
-        ("mu", 0.0, "mu must be a finite number in (0, inf)"),
-        ("mu", float("inf"), "mu must be a finite number in (0, inf)"),
+        ("eps12", -0.1, "eps12 must be a finite number in [0.01, 1]"),
+        ("mu", 0.0, "mu must be a finite number in [1e-09, 1e+06]"),
+        ("mu", float("inf"), "mu must be a finite number in [1e-09, 1e+06]"),
         ("tau_ratio", -1e-9, "tau_ratio must be a finite number in [0, inf)"),
         ("tau_ratio", float("nan"), "tau_ratio"),
         ("height", 0.0, "height must be a finite number in (0, inf)"),
         ("height", float("-inf"), "height"),
-        ("mu", "heavy", "mu must be a number in (0, inf)"),
+        ("mu", "heavy", "mu must be a number in [1e-09, 1e+06]"),
     ],
 )
 def test_bad_parameters_name_the_parameter_and_range(name, value, text):

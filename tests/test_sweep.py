@@ -129,7 +129,7 @@ def test_shipped_cube_regenerates(name):
     for key in ("height", "grid", "solver", "twoball_version", "sweep_command", "precision"):
         assert key in cube.attrs
     command = (Path(twoball.cubes.PRECOMPUTED) / f"{name}.cmd").read_text().split()
-    assert command[:3] == ["twoball", "sweep", f"precomputed/{name}.zarr"]
+    assert command[:3] == ["twoball", "sweep", f"twoball/precomputed/{name}.zarr"]
     piece = cube.isel(SHIPPED[name]).load()
     arguments = json.loads(cube.attrs["sweep_arguments"])
     fresh = compute_block(

@@ -5,7 +5,7 @@ from importlib.metadata import PackageNotFoundError, version
 from twoball.cubes import load_cube
 from twoball.model import Parameters, check_parameters
 from twoball.observables import ContactInterval, Result, Trajectory
-from twoball.solve import METHODS, simulate
+from twoball.solve import METHODS, SolverError, simulate
 
 try:
     __version__ = version("twoball")
@@ -17,6 +17,7 @@ __all__ = [
     "ContactInterval",
     "Parameters",
     "Result",
+    "SolverError",
     "Trajectory",
     "__version__",
     "check_parameters",

@@ -28,6 +28,18 @@ SUBCOMMAND_MODULES = (
 )
 
 
+# The optional dependencies, by the extra that installs them (pyproject.toml).
+EXTRAS = {
+    "xarray": "sweep",
+    "zarr": "sweep",
+    "dask": "sweep",
+    "distributed": "sweep",
+    "tqdm": "sweep",
+    "matplotlib": "studies",
+    "mpmath": "studies",
+}
+
+
 class UsageError(ParameterError):
     """Bad input on the command line: reported in one line, exit status 2."""
 
@@ -104,6 +116,21 @@ def main(argv: list[str] | None = None) -> int:
     except ParameterError as error:
         print(f"twoball: error: {error}", file=sys.stderr)
         return 2
-    except SolverError as error:  # a run that is no answer: say so, and fail
-        print(f"twoball: run failed: {error}", file=sys.stderr)
+    except OSError as error:
+        if error.filename is None:  # not about a path: a real fault, keep its traceback
+            raise
+        print(f"twoball: error: {error.filename}: {error.strerror or error}", file=sys.stderr)
+        return 2
+    except SolverError as error:  # a known way for a run to fail: said in one line, status 1
+        print(f"twoball: solver failed: {error}", file=sys.stderr)
         return 1
+    except ModuleNotFoundError as error:
+        extra = EXTRAS.get((error.name or "").partition(".")[0])
+        if extra is None:
+            raise
+        print(
+            f"twoball: error: this command needs the {extra!r} extra (no module named "
+            f"{error.name!r}): pip install 'twoball[{extra}]'",
+            file=sys.stderr,
+        )
+        return 2

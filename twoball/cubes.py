@@ -1,4 +1,5 @@
-"""The precomputed sweep cubes shipped in ``precomputed/`` (each made by ``twoball sweep``)."""
+"""The precomputed sweep cubes, shipped as package data in ``twoball/precomputed/`` (each made
+by ``twoball sweep``), so that a plain wheel carries them."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from pathlib import Path
 
 from twoball.errors import ParameterError
 
-PRECOMPUTED = Path(__file__).resolve().parent.parent / "precomputed"
+PRECOMPUTED = Path(__file__).resolve().parent / "precomputed"
 
 
 def cube_names() -> list[str]:
@@ -35,4 +36,7 @@ def load_cube(name: str | os.PathLike):
     text = os.fspath(name)
     is_path = isinstance(name, os.PathLike) or text.endswith(".zarr") or os.sep in text
     path = Path(text) if is_path else cube_path(text)
+    if not (path / "zarr.json").is_file():
+        what = "does not exist" if not path.exists() else "is not a Zarr store (no zarr.json)"
+        raise ParameterError(f"cannot open the cube {path}: it {what}")
     return xr.open_zarr(path, consolidated=False)

@@ -56,15 +56,9 @@ _MESSAGES = {
 
 
 class SolverError(RuntimeError):
-    """A run that did not succeed (stuck root finder, phase limit, failed integrator).
+    """A run that did not reach a trustworthy result (see ``simulate``'s ``throw``);
+    ``result`` holds what was found, its ``status`` and ``reason`` say what happened."""
 
-    Raised by :func:`twoball.simulate` unless ``throw=False``; ``result`` holds what was found.
-    """
-
-    def __init__(self, result) -> None:
-        super().__init__(f"{result.method}: {result.status.message}")
+    def __init__(self, message: str, result=None) -> None:
+        super().__init__(message)
         self.result = result
-
-
-class SolverWarning(RuntimeWarning):
-    """The warning :func:`twoball.simulate` gives for a failed run when ``throw=False``."""

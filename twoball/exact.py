@@ -46,10 +46,10 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-import numba
 import numpy as np
 
 from twoball.errors import Status
+from twoball.jit import njit
 from twoball.model import Drop
 from twoball.observables import Outcome
 
@@ -71,14 +71,14 @@ ROUNDING = 16.0 * 2.220446049250313e-16  # tolerance in units of relative roundi
 P_MU, P_Z01, P_Z12, P_W2, P_F1, P_F2, P_NOISE = range(7)
 
 
-@numba.njit(cache=True)
+@njit
 def _oscillator_bound(alpha, beta, b, omega):
     """c for s = alpha u + beta u' on u'' + 2 b u' + omega^2 u = 0: |s''| <= c sqrt(2 E_w),
     E_w the energy of w = u' (which obeys the same equation)."""
     return abs(alpha - 2.0 * b * beta) + omega * abs(beta)
 
 
-@numba.njit(cache=True)
+@njit
 def _decay_pair(b, w2, tau):
     """exp(-b tau) cos(W tau) and exp(-b tau) sin(W tau)/W with W^2 = w2 - b^2 (b >= 0, w2 > 0).
 
@@ -101,7 +101,7 @@ def _decay_pair(b, w2, tau):
     return decay, tau * decay
 
 
-@numba.njit(cache=True)
+@njit
 def _oscillator(u0, v0, b, w2, tau):
     """u, u', u'' at tau for u'' + 2 b u' + w2 u = 0 from (u0, v0), on every damping branch."""
     cos_part, sin_part = _decay_pair(b, w2, tau)
@@ -110,7 +110,7 @@ def _oscillator(u0, v0, b, w2, tau):
     return u, v, -2.0 * b * v - w2 * u
 
 
-@numba.njit(cache=True)
+@njit
 def _pair_polynomial(a, first, second):
     """(A - first I)(A - second I) for an eigenvalue pair closed under conjugation (real)."""
     trace = (first + second).real
@@ -118,7 +118,7 @@ def _pair_polynomial(a, first, second):
     return a @ a - trace * a + product * np.eye(4)
 
 
-@numba.njit(cache=True)
+@njit
 def _column_basis(p):
     """An orthonormal basis (as columns) of the rank-2 column space of p, by pivoted
     Gram-Schmidt."""
@@ -136,7 +136,7 @@ def _column_basis(p):
     return basis.T
 
 
-@numba.njit(cache=True)
+@njit
 def _split_modes(a):
     """A real X with X^-1 A X = diag(B0, B1), 2x2 blocks holding one eigenvalue pair each.
 
@@ -175,7 +175,7 @@ def _split_modes(a):
     return x, x_inv, blocks
 
 
-@numba.njit(cache=True)
+@njit
 def _companion(block):
     """R with (u, u') = R z, coordinates in which a 2x2 block is a damped oscillator.
 
@@ -199,7 +199,7 @@ def _companion(block):
     return best
 
 
-@numba.njit(cache=True)
+@njit
 def _block_coefficient(row, block, companion, power):
     """c with |row . B^power z| <= c sqrt(2 E) for the block's oscillator energy E."""
     ell = row.copy()
@@ -213,7 +213,7 @@ def _block_coefficient(row, block, companion, power):
     return abs(ell[0]) / omega + abs(ell[1])
 
 
-@numba.njit(cache=True)
+@njit
 def prepare(mu, z01, z12):
     """What the kernel needs for one drop, passed on whole to :func:`run` as ``prepared``.
 
@@ -274,13 +274,13 @@ def prepare(mu, z01, z12):
     return params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest
 
 
-@numba.njit(cache=True)
+@njit
 def _row4(m, i, a, b, c, d):
     """Row i of a 4x4 matrix times (a, b, c, d), without allocating."""
     return m[i, 0] * a + m[i, 1] * b + m[i, 2] * c + m[i, 3] * d
 
 
-@numba.njit(cache=True)
+@njit
 def _modes(x1, x2, v1, v2, x_inv, y_rest):
     """Mode coordinates z = X^-1 (y - y_rest) of a both-contact state."""
     d1, d2 = x1 - y_rest[0], x2 - y_rest[1]
@@ -292,7 +292,7 @@ def _modes(x1, x2, v1, v2, x_inv, y_rest):
     )
 
 
-@numba.njit(cache=True)
+@njit
 def _block_energy_root(block, companion, z0, z1):
     """sqrt(2 E) of a block's oscillator energy E = (u'^2 + det(B) u^2)/2, (u, u') = R z."""
     u = companion[0, 0] * z0 + companion[0, 1] * z1
@@ -301,7 +301,7 @@ def _block_energy_root(block, companion, z0, z1):
     return math.sqrt(du * du + det * u * u)
 
 
-@numba.njit(cache=True)
+@njit
 def _block_flow(b, z0, z1, tau):
     """exp(B tau) z and B exp(B tau) z for a 2x2 block, exact on every damping branch:
     exp(B tau) = cos_part I + sin_part (B - tr(B)/2 I) with the oscillator's decay pair."""
@@ -313,7 +313,7 @@ def _block_flow(b, z0, z1, tau):
     return n0, n1, b[0, 0] * n0 + b[0, 1] * n1, b[1, 0] * n0 + b[1, 1] * n1
 
 
-@numba.njit(cache=True)
+@njit
 def state_at(kind, tau, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest):
     """Exact state (x1, x2, v1, v2, a1, a2) a time tau into a phase of the given kind."""
     mu, z01, z12, w2 = params[P_MU], params[P_Z01], params[P_Z12], params[P_W2]
@@ -358,7 +358,7 @@ def state_at(kind, tau, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest):
     )
 
 
-@numba.njit(cache=True)
+@njit
 def _safe_step(f, fp, bound):
     """Largest h with f + fp h - bound h^2/2 > 0 on [0, h), for f > 0."""
     if bound <= 0.0:
@@ -369,7 +369,7 @@ def _safe_step(f, fp, bound):
     return 2.0 * f / (root - fp)
 
 
-@numba.njit(cache=True)
+@njit
 def _switching(
     kind, contact, active, x1, x2, v1, v2, a1, a2, params, c0, c1, c2, roots, tol_state, clock
 ):
@@ -411,7 +411,7 @@ def _switching(
     return value, rate, tol, step
 
 
-@numba.njit(cache=True)
+@njit
 def _energy_roots(kind, x1, x2, v1, v2, a1, a2, params, x_inv, blocks, companions, y_rest):
     """sqrt(2 E) of each oscillator of the phase (of w = y' for one contact, of the modes for
     both); each is non-increasing within the phase."""
@@ -429,7 +429,7 @@ def _energy_roots(kind, x1, x2, v1, v2, a1, a2, params, x_inv, blocks, companion
     return 0.0, 0.0
 
 
-@numba.njit(cache=True)
+@njit
 def _at_rest(roots, params, rest, tol):
     """True when neither contact of the both-contact phase can ever switch off again: the mode
     energies are too small for -g to fall from its value at rest to zero."""
@@ -438,7 +438,7 @@ def _at_rest(roots, params, rest, tol):
     return floor_margin > tol and ball_margin > tol
 
 
-@numba.njit(cache=True)
+@njit
 def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
     """Advance one phase, started at time t, to its first event.
 
@@ -523,12 +523,11 @@ class RunOutcome(NamedTuple):
     ball_contacts_first: int  # ball contacts that start before the first apex
     floor_contacts_first: int
     contacts: np.ndarray  # (n, 3): contact, start, end (empty unless recorded)
-    phases: (
-        np.ndarray
-    )  # (n, 6): t, kind, x1, x2, v1, v2 at each phase start (empty unless recorded)
+    # (n, 6): t, kind, x1, x2, v1, v2 at each phase start (empty unless recorded)
+    phases: np.ndarray
 
 
-@numba.njit(cache=True)
+@njit
 def _room_for_one(rows, n):
     """``rows`` if it has a row free after the first ``n``, else a copy twice as long."""
     if n < rows.shape[0]:
@@ -538,7 +537,7 @@ def _room_for_one(rows, n):
     return grown
 
 
-@numba.njit(cache=True)
+@njit
 def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
     """Run from rest at heights (x1, x2) until the wanted apex, t_end, or rest.
 
@@ -629,7 +628,7 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
     )
 
 
-@numba.njit(cache=True)
+@njit
 def sample(phases, times, prepared):
     """Exact state and forces at the given times from the recorded phases.
 

@@ -11,12 +11,21 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numba
 import param
 
 from twoball.errors import ParameterError
+from twoball.jit import njit
 
 DEFAULT_HEIGHT = 1.0e4
+
+# The domain double precision can carry (docs/model.md, "The domain double precision can carry").
+# Measured, not derived: outside these the solver was seen to stall or to break the energy bound.
+SMALLEST_RESTITUTION = 0.01
+MASS_RATIO_RANGE = (1e-9, 1e6)
+# The largest rounding of the heights, relative to the contacts' overlap, that is accepted:
+# h1 and h2 then carry a relative error of about ten times this.
+RESOLUTION = 1e-6
+MACHINE_EPSILON = 2.220446049250313e-16
 
 
 class Parameters(param.Parameterized):
@@ -25,22 +34,19 @@ class Parameters(param.Parameterized):
 
     eps = param.Number(
         0.816,
-        bounds=(0.0, 1.0),
-        inclusive_bounds=(False, True),
+        bounds=(SMALLEST_RESTITUTION, 1.0),
         doc="Coefficient of restitution of the floor contact (eps01); also of the ball contact "
         "unless eps12 is given.",
     )
     eps12 = param.Number(
         None,
         allow_None=True,
-        bounds=(0.0, 1.0),
-        inclusive_bounds=(False, True),
+        bounds=(SMALLEST_RESTITUTION, 1.0),
         doc="Coefficient of restitution of the ball-ball contact; None means equal to eps.",
     )
     mu = param.Number(
         0.05,
-        bounds=(0.0, None),
-        inclusive_bounds=(False, True),
+        bounds=MASS_RATIO_RANGE,
         doc="Mass ratio m2/m1 (upper over lower ball).",
     )
     tau_ratio = param.Number(
@@ -162,7 +168,7 @@ def check_parameters(
     >>> check_parameters(1.5, 0.05, 0.3)
     Traceback (most recent call last):
     ...
-    twoball.errors.ParameterError: eps must be a finite number in (0, 1]; got 1.5
+    twoball.errors.ParameterError: eps must be a finite number in [0.01, 1]; got 1.5
     """
     eps = check_value("eps", eps)
     eps12 = eps if eps12 is None else check_value("eps12", eps12)
@@ -172,7 +178,50 @@ def check_parameters(
     zeta01, zeta12 = damping_ratios(eps, eps12, mu)
     tau_f = floor_contact_time(zeta01)
     x2_0 = initial_gap_height(height, tau_ratio * tau_f)
+    if rounding_ratio(height, mu, x2_0) > RESOLUTION:
+        raise ParameterError(_outside_domain(mu, tau_ratio, height, tau_f))
     return Drop(eps, eps12, mu, tau_ratio, height, zeta01, zeta12, tau_f, height, x2_0)
+
+
+def rounding_ratio(height: float, mu: float, x2_0: float) -> float:
+    """Rounding of the heights relative to the smallest lengths the drop must resolve
+    (docs/model.md, "The domain double precision can carry"): machine epsilon times the largest
+    height, over the smaller of the two contacts' typical overlaps (impact or static
+    compression), and at least 1e-3 times the rounding relative to the floor's static
+    compression (1), which the balls' last, gentle contacts and their rest depend on."""
+    floor_overlap = max(math.sqrt(2.0 * height), 1.0)
+    ball_overlap = max(math.sqrt(2.0 * height * mu / (1.0 + mu)), mu)
+    largest = max(x2_0, 1.0)
+    return MACHINE_EPSILON * largest * max(1.0 / min(floor_overlap, ball_overlap), 1e-3)
+
+
+def _outside_domain(mu: float, tau_ratio: float, height: float, tau_f: float) -> str:
+    """The error for a drop beyond :data:`RESOLUTION`: the largest height, or gap, allowed."""
+    where = 'docs/model.md, "The domain double precision can carry"'
+    if rounding_ratio(height, mu, height) > RESOLUTION:
+        low, high = 0.0, 300.0  # log10 of the height: the ratio grows with it at tau_ratio = 0
+        for _ in range(60):
+            middle = 0.5 * (low + high)
+            if rounding_ratio(10.0**middle, mu, 10.0**middle) > RESOLUTION:
+                high = middle
+            else:
+                low = middle
+        return (
+            f"height must be at most {10.0**low:.3g} for mu = {mu:g} (got {height:g}): beyond "
+            f"it double precision cannot resolve the contacts ({where})"
+        )
+    x2_max = RESOLUTION / rounding_ratio(height, mu, 1.0)  # the ratio is linear in X2(0)
+    tau_max = math.sqrt(2.0) * (math.sqrt(x2_max) - math.sqrt(height)) / tau_f
+    return (
+        f"tau_ratio must be at most {tau_max:.3g} for height = {height:g} and mu = {mu:g} "
+        f"(got {tau_ratio:g}): beyond it double precision cannot resolve the contacts ({where})"
+    )
+
+
+def apex_bound(drop: Drop) -> float:
+    """The highest apex the energy at release allows the upper ball (docs/model.md, "The
+    domain double precision can carry"): X2(0) + (X1(0) + 1/2) / mu."""
+    return drop.x2_0 + (drop.x1_0 + 0.5) / drop.mu
 
 
 def restitution(r: float) -> float:
@@ -188,7 +237,7 @@ def restitution(r: float) -> float:
     return math.exp(-r / math.sqrt(r * r - 1.0) * math.acosh(2.0 * r * r - 1.0))
 
 
-@numba.njit(cache=True)
+@njit
 def _log_restitution(r: float) -> float:
     """-log eps(r), smooth and increasing in r; equal to 2 at r = 1 from both sides."""
     if r < 1.0:
@@ -210,7 +259,7 @@ def decay_ratio(eps: float) -> float:
     return _decay_ratio(eps)
 
 
-@numba.njit(cache=True)
+@njit
 def _decay_ratio(eps: float) -> float:
     if eps == 1.0:
         return 0.0

@@ -17,6 +17,8 @@ from twoball.errors import Status
 from twoball.model import Drop, icm_height
 
 FLOOR_CONTACT, BALL_CONTACT = 0, 1
+# The one early end that is an answer, not a failure (docs/model.md, "What is measured").
+REST = Status.REST.message  # the reason a run gives when the upper ball came to rest
 
 
 @dataclass(frozen=True)

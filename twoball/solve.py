@@ -3,23 +3,19 @@
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from twoball import exact, reference
-from twoball.errors import ParameterError, SolverError, SolverWarning, Status
-from twoball.model import DEFAULT_HEIGHT, check_parameters
+from twoball.errors import ParameterError, SolverError, Status
+from twoball.model import DEFAULT_HEIGHT, apex_bound, check_parameters
 from twoball.observables import Result, contact_intervals, trajectory_of
 
 METHODS = ("exact", *reference.METHODS)
 UNTIL = {"first": 1, "second": 2}
 # A run "until a time" wants no apex limit; the kernel's apex table grows with what it finds.
 NO_APEX_LIMIT = 2**62
-# Outcomes that simulate reports loudly (raise, or warn with throw=False): a bug or an input
-# beyond what the solver can carry, never a physical answer.
-LOUD = (Status.STUCK, Status.PHASE_LIMIT, Status.IMPOSSIBLE)
 
 
 def simulate(
@@ -65,9 +61,11 @@ def simulate(
         exact method); without ``t_eval`` the trajectory is then sampled at plotting times
         that show every contact.
     throw : bool
-        A run whose root finder made no progress or that hit the phase limit raises
-        :class:`~twoball.errors.SolverError` (the default); with ``throw=False`` it warns
-        (:class:`~twoball.errors.SolverWarning`) and returns the result, for batch callers.
+        A run that fails (the root finder stuck, the phase limit, a scipy method's failure or
+        no apex before its horizon, an apex that is not finite or above what the energy at
+        release allows) raises :class:`~twoball.errors.SolverError` (the default); with
+        ``throw=False`` (batch callers, as diffrax's ``throw``) it returns a Result whose
+        ``success`` is False and whose ``status`` and ``reason`` say what happened.
 
     Returns
     -------
@@ -77,7 +75,9 @@ def simulate(
     Raises
     ------
     ParameterError
-        A ``ValueError`` naming the parameter and its allowed range.
+        A ``ValueError`` naming the parameter and its allowed range, also for a drop outside
+        the domain double precision can carry (docs/model.md, "The domain double precision can
+        carry").
 
     Examples
     --------
@@ -109,8 +109,9 @@ def simulate(
         outcome = exact.solve(drop, apexes, t_end, dense_output=keep)
     else:
         outcome = reference.solve(drop, method, apexes, t_end, rtol, atol, keep)
-    if not all(math.isfinite(h) and h <= apex_bound(drop) for h in outcome.apex_h):
-        outcome = outcome._replace(status=Status.IMPOSSIBLE, message=Status.IMPOSSIBLE.message)
+    failure = _failure(outcome.message, outcome.apex_h, drop)
+    if failure:
+        outcome = outcome._replace(status=Status.IMPOSSIBLE, message=failure)
     trajectory = None
     if keep:
         times = outcome.plot_times if times is None else times
@@ -131,21 +132,21 @@ def simulate(
         status=outcome.status,
         dense=outcome.evaluate if dense_output else None,
     )
-    if result.status in LOUD:
-        if throw:
-            raise SolverError(result)
-        warnings.warn(f"{method}: {result.status.message}", SolverWarning, stacklevel=2)
+    if throw and not result.success:
+        raise SolverError(f"{method} failed on {drop}: {result.reason}", result)
     return result
 
 
-def apex_bound(drop) -> float:
-    """The highest apex of the upper ball the energy at release allows, with rounding room.
-
-    The energy E = (v1^2 + mu v2^2)/2 + x1 + mu x2 + min(x1, 0)^2/2 + min(x2 - x1, 0)^2/2 never
-    increases (docs/model.md, "Bodies, coordinates, forces"), and x1 + min(x1, 0)^2/2 >= -1/2, so
-    at any apex mu h <= x1(0) + mu x2(0) + 1/2.
-    """
-    return (drop.x1_0 + drop.mu * drop.x2_0 + 0.5) / drop.mu * (1.0 + 1e-9)
+def _failure(reason: str | None, apex_h: list[float], drop) -> str | None:
+    """Why the apexes cannot be right (not finite, or above the energy bound), else None."""
+    bound = apex_bound(drop)
+    for number, height in enumerate(apex_h, start=1):
+        if not math.isfinite(height) or height > bound * (1.0 + 1e-9):
+            return (
+                f"apex {number} at {height:.6g} is impossible: the energy at release allows "
+                f"{bound:.6g} at most ({reason or 'no reason given by the solver'})"
+            )
+    return None
 
 
 def _stop_rule(until: str | float) -> tuple[int, float]:

@@ -63,3 +63,16 @@ def browser():
         chromium = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
         yield chromium
         chromium.close()
+
+
+@pytest.fixture(autouse=True)
+def _no_traceback_in_the_server_log(request):
+    """Every test that uses the served app fails on a traceback the server logged meanwhile."""
+    if "app_server" not in request.fixturenames:
+        yield
+        return
+    _, log = request.getfixturevalue("app_server")
+    start = log.stat().st_size
+    yield
+    new = log.read_bytes()[start:].decode(errors="replace")
+    assert "Traceback" not in new, new[-3000:]

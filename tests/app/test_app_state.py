@@ -18,9 +18,9 @@ def test_validate_accepts_a_value_in_range():
 @pytest.mark.parametrize(
     ("name", "text", "words"),
     [
-        ("eps", "abc", "eps must be a number in (0, 1]"),
-        ("eps", "1.5", "eps must be a finite number in (0, 1]"),
-        ("mu", "-1", "mu must be a finite number in (0, inf)"),
+        ("eps", "abc", "eps must be a number in [0.01, 1]"),
+        ("eps", "1.5", "eps must be a finite number in [0.01, 1]"),
+        ("mu", "-1", "mu must be a finite number in [1e-09, 1e+06]"),
         ("height", "nan", "height must be a finite number in (0, inf)"),
         ("tau_ratio", "inf", "tau_ratio must be a finite number in [0, inf)"),
     ],

@@ -21,7 +21,6 @@ from twoball.errors import ParameterError
 from twoball.observables import relative_error
 from twoball.solve import simulate
 from twoball.studies.timing import median_seconds
-from twoball.studies.truth import solve_truth
 
 PAPER_CUBE = {"eps": (0.5, 1.0), "mu": (0.01, 1.0 / 3.0), "tau_ratio": (0.01, 1.0)}
 
@@ -65,6 +64,8 @@ def benchmark(count: int = 50, seed: int = 0, repeats: int = 5, height: float = 
         )
     ratios = [row["lsoda_s"] / row["exact_s"] for row in rows]
     worst = max(rows, key=lambda row: row["exact_vs_dop853"])
+    from twoball.studies.truth import solve_truth  # the studies extra (mpmath)
+
     truth = solve_truth(worst["eps"], worst["mu"], worst["tau_ratio"], height=height)
     exact = simulate(worst["eps"], worst["mu"], worst["tau_ratio"], height=height)
     check = simulate(

@@ -19,8 +19,7 @@ import textwrap
 import time
 from collections.abc import Sequence
 from pathlib import Path
-
-from matplotlib.figure import Figure
+from typing import TYPE_CHECKING
 
 from twoball import reference
 from twoball.errors import ParameterError, Status
@@ -28,6 +27,9 @@ from twoball.model import DEFAULT_HEIGHT, check_parameters
 from twoball.observables import relative_error
 from twoball.solve import simulate
 from twoball.studies.timing import median_seconds
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 METHODS = ("exact", *reference.IVP_METHODS)
 # Cheap enough for the app (a few seconds on benign cases); the command line uses FULL_TOLERANCES.
@@ -134,8 +136,9 @@ def measure_case(
                 if method == "exact":
                     return simulate(eps, mu, tau_ratio, **drop)
                 return simulate(
-                    eps, mu, tau_ratio, method=method, rtol=tol, atol=tol, until=until, **drop
-                )
+                    eps, mu, tau_ratio, method=method, rtol=tol, atol=tol, until=until,
+                    throw=False, **drop,
+                )  # fmt: skip
 
             start = time.perf_counter()
             try:
@@ -180,6 +183,8 @@ def work_precision_figure(rows: Sequence[dict], title: str | None = None) -> Fig
     columns = min(len(cases), 3)
     lines = math.ceil(len(cases) / columns)
     width = max(5.2 * columns, 7.0)
+    from matplotlib.figure import Figure
+
     figure = Figure(figsize=(width, 4.2 * lines + 0.8), layout="constrained")
     axes = figure.subplots(lines, columns, squeeze=False).ravel()
     markers = dict(zip(METHODS, "*osD^v", strict=True))

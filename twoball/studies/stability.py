@@ -29,19 +29,21 @@ import csv
 import math
 import multiprocessing
 import time
-import warnings
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-from matplotlib.figure import Figure
 
-from twoball.errors import ParameterError, SolverWarning, Status
+from twoball.errors import ParameterError, Status
 from twoball.exact import ROUNDING  # per phase, of the exact solver's state
 from twoball.model import check_parameters
 from twoball.observables import relative_error
 from twoball.solve import METHODS, simulate
 from twoball.studies import precision
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 EPS_BRANCH_SWITCH = math.exp(-2.0)
 GRID = {
@@ -219,18 +221,10 @@ def diagnose(
     row = {"eps": eps, "mu": mu, "tau_ratio": tau_ratio, "height": height, "method": method}
     start = time.perf_counter()
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", SolverWarning)  # the row records the status
-            result = simulate(
-                eps,
-                mu,
-                tau_ratio,
-                height=height,
-                method=method,
-                dense_output=True,
-                throw=False,
-                **options,
-            )
+        result = simulate(
+            eps, mu, tau_ratio, height=height, method=method, dense_output=True, throw=False,
+            **options,
+        )  # fmt: skip
     except (ValueError, ArithmeticError, RuntimeError, MemoryError) as error:
         row.update(finished=False, seconds=time.perf_counter() - start)
         row.update(reason=f"{type(error).__name__}: {error}", problems=["crashed"])
@@ -437,6 +431,8 @@ def stability_figure(rows: Sequence[dict]) -> Figure:
     subset = list(dict.fromkeys(_case_key(r) for r in scipy_rows))
     methods = list(dict.fromkeys(r["method"] for r in rows))
     by_key = {(_case_key(r), r["method"]): r for r in rows}
+    from matplotlib.figure import Figure
+
     figure = Figure(figsize=(15, 0.32 * len(subset) + 2.5), layout="constrained")
     left, right = figure.subplots(1, 2, width_ratios=(2.2, 1))
     for i, case in enumerate(subset):
@@ -548,6 +544,8 @@ def h_convergence(
 
 def h_convergence_figure(rows: Sequence[dict]) -> Figure:
     """h1/h_ICM and h2/h1 against H, one line per parameter point."""
+    from matplotlib.figure import Figure
+
     figure = Figure(figsize=(10, 4), layout="constrained")
     axes = figure.subplots(1, 2)
     points = list(dict.fromkeys((r["eps"], r["mu"], r["tau_ratio"]) for r in rows))

@@ -1,0 +1,75 @@
+"""The explorer's first start with an empty numba cache: seconds from ``panel serve app`` to the
+first page with plots, then the time each new page takes while the solver compiles in the
+background and after (medians), and when the compiled kernels take over.
+
+    .venv/bin/python benchmarks/first_start.py
+"""
+
+from __future__ import annotations
+
+import os
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "tests" / "app"))
+
+from apphelpers import (  # noqa: E402
+    CHROMIUM,
+    CHROMIUM_ARGS,
+    free_port,
+    open_page,
+    panel_serve,
+    serve,
+    wait_until_served,
+)
+
+NOTICE = "solver is still being compiled"
+
+
+def main() -> None:
+    from playwright.sync_api import sync_playwright
+
+    port = free_port()
+    cache = Path(tempfile.mkdtemp()) / "numba-cache"
+    log = Path(tempfile.mkdtemp()) / "server.log"
+    started = time.monotonic()
+    process = serve(
+        panel_serve("app", port), log, env={**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    )
+    url = f"http://127.0.0.1:{port}/app"
+    pages: dict[str, list[float]] = {"compiling": [], "compiled": []}
+    try:
+        wait_until_served(url, process)
+        with sync_playwright() as playwright:
+            browser = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+            context, page, _ = open_page(browser, url)
+            first = time.monotonic() - started
+            context.close()
+            switched = None
+            while len(pages["compiled"]) < 5 and time.monotonic() - started < 900:
+                opened = time.monotonic()
+                context, page, _ = open_page(browser, url)
+                seconds = time.monotonic() - opened
+                compiling = page.get_by_text(NOTICE).filter(visible=True).count() > 0
+                context.close()
+                pages["compiling" if compiling else "compiled"].append(seconds)
+                if not compiling and switched is None:
+                    switched = time.monotonic() - started
+            browser.close()
+    finally:
+        process.terminate()
+        process.wait(timeout=30)
+    print(f"first page with plots: {first:.1f} s after panel serve started (empty cache)")
+    for state, times in pages.items():
+        if times:
+            print(f"a new page while {state}: median {statistics.median(times):.1f} s, "
+                  f"max {max(times):.1f} s ({len(times)} pages)")  # fmt: skip
+    print(f"compiled kernels in use by {switched:.0f} s after start" if switched else "no switch")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,110 @@
+"""How users install twoball: a plain (non-editable) wheel in a fresh virtual environment, used
+from another directory, first with the core dependencies only, then with the extras; and where
+numba's cache goes when the usual places cannot be written."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+EXTRA_MODULES = ("xarray", "zarr", "dask", "tqdm", "matplotlib", "mpmath", "panel", "holoviews")
+
+
+def test_import_twoball_loads_no_extra():
+    code = (
+        "import json, sys, twoball; twoball.simulate(0.9, 0.01, 0.01);"
+        f"print(json.dumps([m for m in {EXTRA_MODULES!r} if m in sys.modules]))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert json.loads(out.stdout) == []
+
+
+def _run(command: list[str], cwd: Path, **options) -> subprocess.CompletedProcess:
+    environment = {k: v for k, v in os.environ.items() if k not in ("VIRTUAL_ENV", "PYTHONPATH")}
+    return subprocess.run(
+        command, cwd=cwd, capture_output=True, text=True, env=environment, timeout=900, **options
+    )
+
+
+@pytest.mark.slow
+def test_plain_wheel_works_from_another_directory(tmp_path):
+    wheels = tmp_path / "wheels"
+    built = _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-w", str(wheels), "."], REPO)
+    assert built.returncode == 0, built.stderr
+    (wheel,) = wheels.glob("twoball-*.whl")
+    venv = tmp_path / "venv"
+    _run([sys.executable, "-m", "venv", str(venv)], tmp_path, check=True)
+    python, pins = str(venv / "bin" / "python"), str(REPO / "requirements" / "test.txt")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+
+    core = _run([python, "-m", "pip", "install", "-q", "-c", pins, str(wheel)], elsewhere)
+    assert core.returncode == 0, core.stderr
+    drop = _run([str(venv / "bin" / "twoball"), "simulate", "--eps", "0.9", "--mu", "0.01",
+                 "--tau-ratio", "0.01", "--json"], elsewhere)  # fmt: skip
+    assert drop.returncode == 0, drop.stderr
+    assert abs(json.loads(drop.stdout)["h1"] - 9256.04845) < 1e-4  # docs/model.md check value
+    # a command that needs an extra says which, in one line, with status 2
+    report = _run([str(venv / "bin" / "twoball"), "report"], elsewhere)
+    assert report.returncode == 2
+    assert report.stderr.count("\n") == 1 and "pip install 'twoball[sweep]'" in report.stderr
+
+    extras = _run(
+        [python, "-m", "pip", "install", "-q", "-c", pins, f"{wheel}[sweep,studies]"], elsewhere
+    )
+    assert extras.returncode == 0, extras.stderr
+    code = (
+        "import twoball; cube = twoball.load_cube('map'); print(twoball.__file__);"
+        "print(cube.sizes['eps'] * cube.sizes['mu'] * cube.sizes['tau_ratio'])"
+    )
+    cube = _run([python, "-c", code], elsewhere)
+    assert cube.returncode == 0, cube.stderr
+    location, size = cube.stdout.split()
+    assert Path(location).is_relative_to(venv) and int(size) == 21 * 73 * 81
+    report = _run([str(venv / "bin" / "twoball"), "report"], elsewhere)
+    assert report.returncode == 0, report.stderr
+    assert "delayed rebound" in report.stdout.lower()
+
+
+def test_unwritable_cache_directory_is_not_fatal(tmp_path):
+    """A NUMBA_CACHE_DIR that cannot be written (here: below a file, which even root cannot
+    write) makes twoball use a private directory; before, declaring the kernels failed with
+    "cannot cache function ...: no locator available". The Docker tests do this for real."""
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    code = (
+        "import twoball; from numba.core import config; from twoball import jit;"
+        "print(jit.CACHE_DIR, config.CACHE_DIR)"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        env={**os.environ, "NUMBA_CACHE_DIR": str(blocker / "cache"), "TMPDIR": str(tmp_path)},
+        capture_output=True,
+        text=True,
+    )
+    assert out.returncode == 0, out.stderr
+    chosen, configured = out.stdout.split()
+    assert chosen == configured and Path(chosen).parent == tmp_path
+
+
+def test_prebuilt_cache_that_cannot_be_written_is_copied(tmp_path, monkeypatch):
+    from twoball import jit
+
+    prebuilt = tmp_path / "prebuilt"
+    (prebuilt / "kernels").mkdir(parents=True)
+    (prebuilt / "kernels" / "exact.nbi").write_text("index")
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(prebuilt))
+    monkeypatch.setenv("TMPDIR", str(tmp_path / "tmp"))
+    monkeypatch.setattr(jit.tempfile, "tempdir", None)  # gettempdir() reads TMPDIR again
+    (tmp_path / "tmp").mkdir()
+    writable = jit._writable
+    monkeypatch.setattr(jit, "_writable", lambda path: path != prebuilt and writable(path))
+    chosen = jit.choose_cache_dir()
+    assert chosen.parent == tmp_path / "tmp"
+    assert (chosen / "kernels" / "exact.nbi").read_text() == "index"

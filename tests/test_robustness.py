@@ -1,0 +1,252 @@
+"""Every input gets a right answer or a clear refusal (docs/model.md, "The domain double
+precision can carry"): extreme drops, failed runs, bad paths, absurd grids, and random input."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import os
+import subprocess
+import sys
+import warnings
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import twoball
+from twoball import cli, exact, sweep
+from twoball.model import apex_bound, check_parameters
+
+
+def run_cli(*arguments: str) -> tuple[int, str, str]:
+    """(status, stdout, stderr) of the command line, in this process; a traceback fails."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        status = cli.main(list(arguments))
+    return status, out.getvalue(), err.getvalue()
+
+
+def test_heights_inside_the_domain_agree_with_the_large_height_limit():
+    """h1/X2(0) and h2/X2(0) converge as H grows, about as H^-1/2 (docs/model.md): at the
+    domain's edge they agree with H = 1e12 to 2e-6, and the change from 1e10 to 1e12 is ten times
+    the change from 1e12 to the edge, as H^-1/2 says (rounding would not shrink so)."""
+    ratios = {
+        height: twoball.simulate(0.9, 0.01, 0.01, height=height).h1_over_drop
+        for height in (1e10, 1e12, 4.4e12)
+    }
+    assert ratios[4.4e12] == pytest.approx(ratios[1e12], rel=2e-6)
+    early, late = ratios[1e12] - ratios[1e10], ratios[4.4e12] - ratios[1e12]
+    assert early > 0 and late > 0
+    expected = (1e-5 - 1e-6) / (1e-6 - 4.4e12**-0.5)  # H^-1/2 at the three heights
+    assert early / late == pytest.approx(expected, rel=0.2)
+
+
+@pytest.mark.parametrize("height", [1e30, 1e100, 1e300])
+def test_heights_beyond_the_domain_are_refused_with_the_limit(height):
+    with pytest.raises(
+        ValueError, match=r"height must be at most ([0-9.e+]+) for mu = 0.01"
+    ) as info:
+        twoball.simulate(0.9, 0.01, 0.01, height=height)
+    largest = float(info.value.args[0].split("at most ")[1].split()[0])
+    assert 1e12 < largest < 1e13
+    twoball.simulate(0.9, 0.01, 0.01, height=largest * 0.99)  # the limit it names is usable
+    with pytest.raises(ValueError, match="height"):
+        twoball.simulate(0.9, 0.01, 0.01, height=largest * 1.05)
+
+
+def test_a_gap_beyond_the_domain_names_tau_ratio():
+    with pytest.raises(ValueError, match=r"tau_ratio must be at most ([0-9.e+]+) for height"):
+        twoball.simulate(0.9, 0.01, 1e8)
+
+
+def test_the_energy_bound_holds_and_is_nearly_reached():
+    """h <= X2(0) + (X1(0) + 1/2)/mu; an elastic heavy upper ball on a light lower one comes
+    back close to it (mu = 1e3: the lower ball can give it almost nothing)."""
+    for arguments in [(0.9, 0.01, 0.01), (1.0, 1e-4, 0.0), (0.5, 3.0, 2.0), (1.0, 1e3, 0.0)]:
+        result = twoball.simulate(*arguments)
+        bound = apex_bound(result.drop)
+        assert result.h1 <= bound and (result.h2 is None or result.h2 <= bound)
+    heavy = twoball.simulate(1.0, 1e3, 0.0)
+    assert heavy.h1 > 0.99 * apex_bound(heavy.drop)
+
+
+def test_an_impossible_apex_is_an_error_not_a_value(monkeypatch):
+    """A solver that returned an apex above the energy bound (as the H = 1e30 drop did before)
+    makes simulate raise; with throw=False the result says why and is not a success."""
+    real = exact.solve
+
+    def doctored(drop, apexes, t_end, **options):
+        apex_t, apex_h, *rest = real(drop, apexes, t_end, **options)
+        return (apex_t, [apex_h[0], 4.0e106], *rest)
+
+    monkeypatch.setattr(exact, "solve", doctored)
+    with pytest.raises(twoball.SolverError, match="apex 2 .* is impossible"):
+        twoball.simulate(0.9, 0.01, 0.01)
+    result = twoball.simulate(0.9, 0.01, 0.01, throw=False)
+    assert not result.success and "impossible" in result.reason
+
+
+def test_a_stuck_root_finder_is_loud_everywhere(monkeypatch):
+    real = exact.solve
+
+    def stuck(drop, apexes, t_end, **options):
+        apex_t, apex_h, rows, end, _, *rest = real(drop, apexes, t_end, **options)
+        return (apex_t[:1], apex_h[:1], rows, end, exact.STATUS_TEXT[exact.STATUS_STUCK], *rest)
+
+    monkeypatch.setattr(exact, "solve", stuck)
+    with pytest.raises(twoball.SolverError, match="root finder"):
+        twoball.simulate(0.9, 0.01, 0.01)
+    status, _, err = run_cli("simulate", "--eps", "0.9", "--mu", "0.01", "--tau-ratio", "0.01")
+    assert status == 1 and err.count("\n") == 1 and "root finder" in err
+
+
+def test_rest_is_an_answer_not_a_failure():
+    result = twoball.simulate(0.05, 0.01, 0.01)  # a very dead floor keeps it down
+    assert result.reason == "the upper ball came to rest on the lower one" and result.success
+
+
+# Drops inside the domain on which the exact solver fails, loudly (found by a random search
+# over the domain: about 2 in 100 000 drops). Strict: when the solver is fixed, these
+# turn red and move to the tests of right answers.
+KNOWN_FAILURES = [
+    pytest.param(0.02294046722074834, 0.00031392552790641373, 0.0, 42042.49414996337,
+                 id="stuck-root-finder-eps-0.023-mu-3e-4"),
+    pytest.param(1.0, 123655.02807555212, 0.0, 0.20806664471994354,
+                 id="phase-limit-elastic-heavy-upper-ball"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("eps", "mu", "tau_ratio", "height"), KNOWN_FAILURES)
+@pytest.mark.xfail(strict=True, raises=twoball.SolverError, reason="known solver limits")
+def test_known_solver_failures_are_loud(eps, mu, tau_ratio, height):
+    result = twoball.simulate(eps, mu, tau_ratio, height=height)
+    assert result.success
+
+
+@pytest.mark.parametrize(
+    "arguments",
+    [
+        ("report", "--paper-cube", "/nonexistent"),
+        ("sweep", "/proc/x.zarr", "--eps", "0.9", "--mu", "0.01", "--tau-ratio", "0.01"),
+        ("precision", "--out", "/proc/nope"),
+        ("stability", "--out", "/proc/nope"),
+    ],
+    ids=["missing-cube", "unwritable-store", "precision-out", "stability-out"],
+)
+def test_bad_paths_give_one_line_and_status_2(arguments):
+    status, _, err = run_cli(*arguments)
+    assert status == 2
+    line = err.strip().splitlines()[-1]
+    assert line.startswith("twoball: error:") and ("/proc" in line or "/nonexistent" in line)
+    assert "Traceback" not in err
+
+
+def test_a_directory_that_is_not_a_store_is_named(tmp_path):
+    status, _, err = run_cli("report", "--paper-cube", str(tmp_path))
+    assert status == 2 and f"{tmp_path}" in err and "not a Zarr store" in err
+
+
+AXES = ("--eps", "0.5:1:3", "--mu", "0.01:1:3", "--tau-ratio", "0.01:1:3", "--quiet")
+
+
+def test_a_sweep_states_what_it_undertakes_and_refuses_absurd_grids(tmp_path):
+    huge = ("--eps", "0.5:1:100000", "--mu", "0.01:1:100000", "--tau-ratio", "0.01:1:100000")
+    status, _, err = run_cli("sweep", str(tmp_path / "huge.zarr"), *huge, "--quiet")
+    assert status == 2 and "1,000,000,000,000,000 drops" in err and "--force" in err
+    assert not (tmp_path / "huge.zarr").exists()
+    status, out, err = run_cli("sweep", str(tmp_path / "small.zarr"), *AXES)
+    assert status == 0 and "27 drops (3 x 3 x 3)" in out and "MB stored" in out
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # consolidated: plain xarray opens it without a warning
+        import xarray
+
+        assert xarray.open_zarr(tmp_path / "small.zarr").h1.shape == (3, 3, 3)
+
+
+def test_a_second_sweep_on_a_store_being_written_is_told_and_nothing_is_lost(tmp_path):
+    store = tmp_path / "cube.zarr"
+    lock = tmp_path / "cube.zarr.lock"
+    lock.write_text(str(os.getppid()))  # a live process holds it
+    status, _, err = run_cli("sweep", str(store), *AXES)
+    assert status == 2 and "being written by another sweep" in err
+    assert lock.read_text() == str(os.getppid()) and not store.exists()
+    finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                              capture_output=True, text=True, check=True)  # fmt: skip
+    lock.write_text(finished.stdout.strip())  # its holder is gone: taken over
+    status, _, _ = run_cli("sweep", str(store), *AXES)
+    assert status == 0 and not lock.exists()
+    assert twoball.load_cube(store).h1.notnull().all()
+
+
+finite = st.floats(allow_nan=False, allow_infinity=False)
+extreme_numbers = st.one_of(
+    st.floats(min_value=-1e300, max_value=1e300),
+    st.sampled_from([0.0, -0.0, 1e-320, 1e-9, 0.01, 1.0, 1e6, 1e17, 1e30, math.inf, math.nan]),
+    st.floats(min_value=1e-14, max_value=1e14).map(lambda x: x),
+)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    eps=st.one_of(st.floats(min_value=0.01, max_value=1.0), extreme_numbers),
+    mu=st.one_of(st.floats(min_value=1e-9, max_value=1e6), extreme_numbers),
+    tau_ratio=st.one_of(st.floats(min_value=0.0, max_value=1e6), extreme_numbers),
+    height=st.one_of(st.floats(min_value=1e-12, max_value=1e20), extreme_numbers),
+)
+def test_simulate_gives_a_bounded_answer_or_a_clear_refusal(eps, mu, tau_ratio, height):
+    try:
+        drop = check_parameters(eps, mu, tau_ratio, height=height)
+    except ValueError as error:
+        message = str(error)
+        assert any(name in message for name in ("eps", "mu", "tau_ratio", "height"))
+        with pytest.raises(ValueError):
+            twoball.simulate(eps, mu, tau_ratio, height=height)
+        return
+    result = twoball.simulate(eps, mu, tau_ratio, height=height, throw=False)
+    if not result.success:  # a stated failure (KNOWN_FAILURES), raised by default
+        assert result.reason
+        with pytest.raises(twoball.SolverError, match="failed"):
+            twoball.simulate(eps, mu, tau_ratio, height=height)
+        return
+    bound = apex_bound(drop)
+    for apex in result.apex_h:
+        assert math.isfinite(apex) and apex <= bound * (1 + 1e-9)
+    if result.h2 is None:
+        assert result.reason is not None
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    st.lists(
+        st.one_of(
+            st.sampled_from(["--eps", "--mu", "--tau-ratio", "--height", "--eps12", "--until",
+                             "--method", "--json", "simulate", "1e400", "nan", "-1", "0.9"]),
+            st.text(max_size=12),
+            finite.map(repr),
+        ),
+        max_size=10,
+    )
+)  # fmt: skip
+def test_the_command_line_never_shows_a_traceback(arguments):
+    try:
+        status, _, err = run_cli("simulate", *arguments)
+    except SystemExit as exit_:  # argparse's --help
+        assert exit_.code == 0
+        return
+    assert status in (0, 1, 2)
+    if status:
+        assert err.count("\n") == 1 and err.startswith("twoball:")
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.sampled_from(sweep.DIMS), st.text(max_size=30))
+def test_the_axis_parser_gives_an_axis_or_a_clear_error(name, text):
+    try:
+        axis = sweep.parse_axis(name, text)
+    except ValueError as error:
+        assert name in str(error) or "axis" in str(error)
+        return
+    values = axis.values()
+    assert len(values) == axis.count and all(math.isfinite(v) for v in values)

@@ -1,0 +1,160 @@
+"""How the kernels are compiled: numba's disk cache where it can be written, and the kernels'
+own Python functions standing in for them while the compiler runs.
+
+The kernels are the ``@njit`` functions of :mod:`twoball.model` and :mod:`twoball.exact`. numba
+compiles them on first call (15-40 s for the solver) and keeps the machine code on disk, beside
+the sources or in ``NUMBA_CACHE_DIR``. Two rules follow from how programs are deployed:
+
+- A cache that cannot be written never stops a program. The location is chosen once, before
+  any kernel is declared: ``NUMBA_CACHE_DIR`` if it can be written; if it cannot (a prebuilt
+  cache in a read-only image, or owned by another user), its contents are copied to a private
+  directory under the temporary directory and that is used; without ``NUMBA_CACHE_DIR``, numba's
+  default beside the sources, else ``~/.cache/twoball-numba``, else the temporary directory. If
+  nothing can be written at all, the kernels compile in every process without a disk cache.
+- A program that cannot wait for the compiler (the app's first start) calls
+  :func:`use_python_kernels`: every kernel is replaced by its pure-Python function (numba keeps
+  it as ``py_func``; the calls between kernels follow, since they look each other up in their
+  module). Same results, about 100 times slower. :func:`compile_in_background` compiles in a
+  separate process, which fills the disk cache, and then switches back to the machine code.
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+from collections.abc import Callable
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parent
+KERNEL_MODULES = ("twoball.model", "twoball.exact")
+# what compiles every kernel in a new process (the Dockerfile runs it too)
+WARM_UP = "from twoball import jit; jit.warm_up()"
+
+log = logging.getLogger(__name__)
+
+
+def _writable(directory: Path) -> bool:
+    """Whether files can be created in ``directory`` (made if missing), as numba needs."""
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=directory):
+            return True
+    except OSError:
+        return False
+
+
+def _private_directory() -> Path:
+    return Path(tempfile.gettempdir()) / f"twoball-numba-{os.getuid()}"
+
+
+def choose_cache_dir() -> Path | None | bool:
+    """Where numba's cache goes: a directory, None for numba's default (``__pycache__`` beside
+    the sources), or False when nothing can be written (no disk cache)."""
+    configured = os.environ.get("NUMBA_CACHE_DIR")
+    if configured:
+        if _writable(Path(configured)):
+            return Path(configured)
+        private = _private_directory()
+        if not _writable(private):
+            return False
+        if Path(configured).is_dir():  # a prebuilt cache we may read but not write: copy it
+            shutil.copytree(configured, private, dirs_exist_ok=True)
+        return private
+    if _writable(PACKAGE / "__pycache__"):
+        return None
+    for candidate in (Path.home() / ".cache" / "twoball-numba", _private_directory()):
+        if _writable(candidate):
+            return candidate
+    return False
+
+
+CACHE_DIR = choose_cache_dir()
+CACHING = CACHE_DIR is not False
+
+import numba  # noqa: E402 (after the cache directory is in the environment numba reads)
+from numba.core import config as _numba_config  # noqa: E402
+from numba.core.registry import CPUDispatcher  # noqa: E402
+
+if isinstance(CACHE_DIR, Path):
+    os.environ["NUMBA_CACHE_DIR"] = str(CACHE_DIR)
+    _numba_config.CACHE_DIR = str(CACHE_DIR)
+
+
+def njit(function: Callable) -> Callable:
+    """``numba.njit`` with the disk cache wherever one can be written (see the module)."""
+    return numba.njit(cache=CACHING)(function)
+
+
+_dispatchers: dict[str, dict[str, CPUDispatcher]] = {}
+_lock = threading.Lock()
+state = "compiled"  # or "python" while the kernels' Python functions stand in, or "compiling"
+
+
+def use_python_kernels() -> None:
+    """Run every kernel as its pure-Python function from now on (same results, ~100x slower)."""
+    global state
+    with _lock:
+        for name in KERNEL_MODULES:
+            module = importlib.import_module(name)
+            saved = _dispatchers.setdefault(name, {})
+            for attribute, value in vars(module).items():
+                if isinstance(value, CPUDispatcher):
+                    saved[attribute] = value
+            for attribute, dispatcher in saved.items():
+                setattr(module, attribute, dispatcher.py_func)
+        state = "python"
+
+
+def use_compiled_kernels() -> None:
+    """Put the compiled kernels back (they load from the disk cache, or compile, on first call)."""
+    global state
+    with _lock:
+        for name, saved in _dispatchers.items():
+            module = importlib.import_module(name)
+            for attribute, dispatcher in saved.items():
+                setattr(module, attribute, dispatcher)
+        state = "compiled"
+
+
+def warm_up() -> None:
+    """Call every kernel path once (a drop to its second apex with a sampled trajectory)."""
+    from twoball.solve import simulate
+
+    simulate(0.9, 0.01, 0.01, until="second", dense=True)
+
+
+def compile_in_background(done: Callable[[], None] | None = None) -> threading.Thread:
+    """Stand the Python functions in for the kernels now; compile them in another process
+    (:data:`WARM_UP`, which fills the disk cache) and switch back when it is done.
+
+    Without a disk cache the other process cannot help: the kernels then compile in this
+    process's thread, under the lock that numba takes, and the switch comes after that.
+    ``done`` is called once the compiled kernels are in use.
+    """
+    use_python_kernels()
+
+    def work() -> None:
+        global state
+        state = "compiling"
+        if CACHING:
+            outcome = subprocess.run(  # niced: the pages being served come first
+                [sys.executable, "-c", f"import os; os.nice(10); {WARM_UP}"],
+                capture_output=True,
+                text=True,
+            )
+            if outcome.returncode != 0:
+                log.warning("compiling the kernels failed: %s", outcome.stderr.strip()[-2000:])
+        use_compiled_kernels()
+        warm_up()  # loads the machine code from the cache (or compiles it here)
+        if done is not None:
+            done()
+
+    thread = threading.Thread(target=work, name="twoball-compile", daemon=True)
+    thread.start()
+    return thread
