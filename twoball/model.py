@@ -301,7 +301,10 @@ def floor_contact_time(r: float) -> float:
 
 def initial_gap_height(height: float, tau_d: float) -> float:
     """X2(0) = (sqrt(H) + tau_d/sqrt(2))^2 (docs/model.md, "Initial condition")."""
-    return (math.sqrt(height) + tau_d / math.sqrt(2.0)) ** 2
+    try:
+        return (math.sqrt(height) + tau_d / math.sqrt(2.0)) ** 2
+    except OverflowError:  # a gap beyond any float: the domain check then refuses the drop
+        return math.inf
 
 
 def icm_height(height: float, gap: float, eps01: float, eps12: float, mu: float) -> float:
