@@ -143,7 +143,7 @@ def test_a_run_over_the_cap_is_killed_and_reported_too_slow():
         workers=1,
         diagnose_one=_slow_diagnose,  # imported by name in the spawned worker
     )
-    assert time.monotonic() - started < 30
+    assert time.monotonic() - started < 55  # below the 60 s the task sleeps: it was killed
     assert rows[0]["verdict"] == "too slow" and rows[0]["method"] == "LSODA"
 
 
