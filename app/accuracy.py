@@ -1,7 +1,7 @@
 """Scene 4, accuracy: error against run time of every integrator at the current drop.
 
-The work is :func:`twoball.precision.work_precision` (a few seconds); it runs in a thread only
-while the scene is on screen, with a loading indicator, and a newer request supersedes an
+The work is :func:`twoball.studies.precision.work_precision` (a few seconds); it runs in a thread
+only while the scene is on screen, with a loading indicator, and a newer request supersedes an
 older one.
 """
 
@@ -15,7 +15,7 @@ import panel as pn
 import param
 from bokeh.palettes import Category10
 
-from twoball.precision import work_precision
+from twoball.studies.precision import work_precision
 
 from .scene import Scene
 

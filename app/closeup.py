@@ -8,6 +8,8 @@ Drawn with Bokeh directly, like the drop scene: a move replaces one ColumnDataSo
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import panel as pn
 import param
@@ -15,10 +17,10 @@ from bokeh.models import ColumnDataSource, Span
 from bokeh.plotting import figure
 
 import twoball
+from twoball.units import units_named
 
 from .drop import LOWER, UPPER
 from .scene import Scene
-from .units import units_named
 
 SAMPLES = 1500
 MARGIN = 0.08  # of the collision's duration, shown before and after it
@@ -91,13 +93,13 @@ class CloseUpScene(Scene):
     def update(self) -> None:
         s = self.state
         drop = dict(eps12=s.eps12, height=s.height, until="first", throw=False)
-        first = twoball.simulate(s.eps, s.mu, s.tau_ratio, **drop)
+        first = twoball.simulate(s.eps, s.mu, s.tau_ratio, dense_output=True, **drop)
         start, stop = collision_window(first.contacts, first.end_time)
         times = np.union1d(
             np.linspace(start, stop, SAMPLES),
             [t for c in first.contacts for t in (c.start, c.end) if start <= t <= stop],
         )
-        self.result = twoball.simulate(s.eps, s.mu, s.tau_ratio, dense=times, **drop)
+        self.result = dataclasses.replace(first, trajectory=first.evaluate(times))
 
     def _contacts_text(self, revision: int) -> str:
         if not self.active:

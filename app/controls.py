@@ -14,7 +14,8 @@ import panel as pn
 import param
 from bokeh.models import CustomJSTickFormatter
 
-from . import presets
+from twoball import presets
+
 from .state import APP_RANGES, ExplorerState, validate
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)

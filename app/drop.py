@@ -14,9 +14,9 @@ from bokeh.models import ColumnDataSource, LabelSet, Legend, LegendItem, Range1d
 from bokeh.plotting import figure
 
 import twoball
+from twoball.units import units_named
 
 from .scene import Scene
-from .units import units_named
 
 FRAMES = 240
 LOWER, UPPER = "#1f77b4", "#d62728"
@@ -113,7 +113,8 @@ class DropScene(Scene):
     def update(self) -> None:
         s = self.state
         self.result = twoball.simulate(
-            s.eps, s.mu, s.tau_ratio, eps12=s.eps12, height=s.height, until="second", dense=True,
+            s.eps, s.mu, s.tau_ratio, eps12=s.eps12, height=s.height, until="second",
+            dense_output=True,
             throw=False,  # a drop the solver cannot finish is shown as far as it got, with why
         )  # fmt: skip
         self.summary.object = self._summary_text()

@@ -1,4 +1,4 @@
-"""Benchmark: the paper's 50 x 50 x 50 sweep, end to end, on all local cores (issue 4).
+"""Benchmark: the paper's 50 x 50 x 50 sweep, end to end, on all local cores.
 
     .venv/bin/python benchmarks/sweep_speed.py [--repeats 3] [--workers N]
 

@@ -8,4 +8,4 @@ import twoball
 
 
 def pytest_sessionstart(session):
-    twoball.simulate(0.9, 0.01, 0.01, dense=True)
+    twoball.simulate(0.9, 0.01, 0.01, dense_output=True)

@@ -1,4 +1,5 @@
-"""The exact solver against closed forms, conservation laws, model.md's check values and scipy."""
+"""The exact solver against closed forms, conservation laws, the check values of docs/model.md and
+scipy."""
 
 import math
 import subprocess
@@ -6,6 +7,7 @@ import sys
 
 import numpy as np
 import pytest
+from cases import BENIGN, CLOSE_UP
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
@@ -23,7 +25,8 @@ def _advance(kind, state, mu, z01, z12, horizon=np.inf):
 @pytest.mark.parametrize("eps", [0.05, math.exp(-2), 0.5, 0.9, 1.0])
 def test_isolated_ball_contact_returns_eps(mu, eps):
     # Both balls in the air: gravity drops out of the relative motion exactly, so the
-    # separation speed over the approach speed must be eps(r) of model.md.
+    # separation speed over the approach speed must be eps(r) of docs/model.md, "Restitution and
+    # damping".
     z01, z12 = damping_ratios(eps, eps, mu)
     approach = 100.0
     event, tau, *touching = _advance(
@@ -53,7 +56,8 @@ def test_isolated_floor_contact_returns_eps(eps):
 
 def _energy(trajectory, mu):
     """Kinetic + gravitational + spring energy; with the spring counted wherever the bodies
-    overlap, this is non-increasing along the clamped model (model.md)."""
+    overlap, this is non-increasing along the clamped model (docs/model.md, "Bodies, coordinates,
+    forces")."""
     x1, x2, v1, v2 = trajectory.x1, trajectory.x2, trajectory.v1, trajectory.v2
     overlap = np.minimum(x2 - x1, 0.0)
     floor = np.minimum(x1, 0.0)
@@ -73,7 +77,7 @@ CASES = [
 
 @pytest.mark.parametrize(("eps", "mu", "tau_ratio", "height"), CASES)
 def test_energy_never_increases(eps, mu, tau_ratio, height):
-    result = twoball.simulate(eps, mu, tau_ratio, height=height, dense=True)
+    result = twoball.simulate(eps, mu, tau_ratio, height=height, dense_output=True)
     energy = _energy(result.trajectory, mu)
     scale = height + mu * result.x2_0
     assert np.max(np.diff(energy)) <= 1e-12 * scale
@@ -84,7 +88,7 @@ def test_energy_never_increases(eps, mu, tau_ratio, height):
 @pytest.mark.parametrize(("eps", "mu", "tau_ratio", "height"), CASES)
 def test_balls_never_pass_through_each_other(eps, mu, tau_ratio, height):
     # Energy bounds the overlap: 1/2 min(eta, 0)^2 <= E0 - x1 - mu x2 at every instant.
-    result = twoball.simulate(eps, mu, tau_ratio, height=height, dense=True)
+    result = twoball.simulate(eps, mu, tau_ratio, height=height, dense_output=True)
     tr = result.trajectory
     energy0 = height + mu * result.x2_0
     allowed = np.sqrt(2.0 * np.maximum(energy0 - tr.x1 - mu * tr.x2, 0.0))
@@ -96,8 +100,8 @@ def test_balls_never_pass_through_each_other(eps, mu, tau_ratio, height):
 
 def test_close_up_case_of_model_md():
     result = twoball.simulate(0.9, 0.01, 0.01)
-    assert result.h1 == pytest.approx(9256.04845, rel=1e-8)
-    assert result.h2 == pytest.approx(50076.3922, rel=1e-8)
+    assert result.h1 == pytest.approx(CLOSE_UP.h1, rel=1e-8)
+    assert result.h2 == pytest.approx(CLOSE_UP.h2, rel=1e-8)
     assert result.contacts_first == 4
     assert result.delayed_rebound
     floor = [c for c in result.contacts if c.contact == "floor"][0]
@@ -108,8 +112,8 @@ def test_close_up_case_of_model_md():
 
 def test_second_check_value_of_model_md():
     result = twoball.simulate(0.816, 0.05, 0.3)
-    assert result.h1 == pytest.approx(26344.4166, rel=1e-8)
-    assert result.h2 == pytest.approx(19354.2754, rel=1e-8)
+    assert result.h1 == pytest.approx(BENIGN.h1, rel=1e-8)
+    assert result.h2 == pytest.approx(BENIGN.h2, rel=1e-8)
 
 
 @pytest.mark.parametrize(
@@ -186,7 +190,7 @@ def test_near_miss_is_not_a_contact(depth):
 
 
 def test_dense_trajectory_matches_the_apexes_and_forces():
-    result = twoball.simulate(0.816, 0.05, 0.3, dense=True)
+    result = twoball.simulate(0.816, 0.05, 0.3, dense_output=True)
     tr = result.trajectory
     # the sampled heights reach, and never exceed, the reported first apex in its flight
     near = (tr.t > result.t1 - 5) & (tr.t < result.t1 + 5)
@@ -246,17 +250,17 @@ def test_compiled_kernels_load_from_the_disk_cache_in_any_order():
     # numba's disk cache once broke the boxing of returned arrays in a fresh process when a
     # compiled caller of prepare() was loaded before prepare itself; run the public paths in a
     # new process, in the order a sweep after a simulate uses them.
-    twoball.simulate(0.9, 0.01, 0.01, dense=True)  # make sure the cache is on disk
+    twoball.simulate(0.9, 0.01, 0.01, dense_output=True)  # make sure the cache is on disk
     script = (
         "import numpy as np, twoball\n"
         "from twoball import exact\n"
         "twoball.simulate(0.9, 0.01, 0.01)\n"
         "prepared = exact.prepare(0.01, 0.05, 0.005)\n"
         "exact.run(1e4, 1e4, 2, np.inf, prepared, False, False)\n"
-        "print(twoball.simulate(0.9, 0.01, 0.01, dense=True).h1)\n"
+        "print(twoball.simulate(0.9, 0.01, 0.01, dense_output=True).h1)\n"
     )
     completed = subprocess.run(
         [sys.executable, "-c", script], capture_output=True, text=True, timeout=300
     )
     assert completed.returncode == 0, completed.stderr
-    assert float(completed.stdout) == pytest.approx(9256.04845, rel=1e-8)
+    assert float(completed.stdout) == pytest.approx(CLOSE_UP.h1, rel=1e-8)

@@ -22,7 +22,7 @@ def test_reference_methods_agree_with_exact_on_a_benign_case(method):
 
 
 def test_reference_dense_output_has_the_same_shape_as_exact():
-    result = twoball.simulate(0.816, 0.05, 0.3, height=1e2, method="DOP853", dense=True)
+    result = twoball.simulate(0.816, 0.05, 0.3, height=1e2, method="DOP853", dense_output=True)
     tr = result.trajectory
     assert tr.t.shape == tr.x1.shape == tr.f12.shape
     assert tr.t[0] == 0.0 and tr.x1[0] == 1e2

@@ -9,7 +9,7 @@ import pytest
 
 import twoball
 from twoball.cli import main
-from twoball.report import close_up_row, contact_row, sweep_rows
+from twoball.studies.report import close_up_row, contact_row, sweep_rows
 from twoball.sweep import Axis, Grid, sweep
 
 PAPER_VALUES = ["12.3 %", "93 %", "22 %", "all", "0.87 to 1.27", "0.49 to 1.48", "1 to 12"]
@@ -76,7 +76,7 @@ def test_close_up_row_against_sampled_forces():
     assert row.ours == "4 contacts, 4 of them during floor contact"
     # independently: on a dense sample, the ball force never acts without the floor force
     end = twoball.simulate(0.9, 0.01, 0.01, until="first").end_time
-    result = twoball.simulate(0.9, 0.01, 0.01, until="first", dense=np.linspace(0, end, 300001))
+    result = twoball.simulate(0.9, 0.01, 0.01, until="first", t_eval=np.linspace(0, end, 300001))
     force = result.trajectory
     pushing = force.f12 > 0
     assert pushing.any() and (force.f01[pushing] > 0).all()

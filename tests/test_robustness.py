@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 
 import twoball
 from twoball import cli, exact, sweep
+from twoball.errors import Status
 from twoball.model import apex_bound, check_parameters
 
 
@@ -79,8 +80,8 @@ def test_an_impossible_apex_is_an_error_not_a_value(monkeypatch):
     real = exact.solve
 
     def doctored(drop, apexes, t_end, **options):
-        apex_t, apex_h, *rest = real(drop, apexes, t_end, **options)
-        return (apex_t, [apex_h[0], 4.0e106], *rest)
+        outcome = real(drop, apexes, t_end, **options)
+        return outcome._replace(apex_h=[outcome.apex_h[0], 4.0e106])
 
     monkeypatch.setattr(exact, "solve", doctored)
     with pytest.raises(twoball.SolverError, match="apex 2 .* is impossible"):
@@ -93,8 +94,13 @@ def test_a_stuck_root_finder_is_loud_everywhere(monkeypatch):
     real = exact.solve
 
     def stuck(drop, apexes, t_end, **options):
-        apex_t, apex_h, rows, end, _, *rest = real(drop, apexes, t_end, **options)
-        return (apex_t[:1], apex_h[:1], rows, end, exact.STATUS_TEXT[exact.STATUS_STUCK], *rest)
+        outcome = real(drop, apexes, t_end, **options)
+        return outcome._replace(
+            apex_t=outcome.apex_t[:1],
+            apex_h=outcome.apex_h[:1],
+            status=Status.STUCK,
+            message=Status.STUCK.message,
+        )
 
     monkeypatch.setattr(exact, "solve", stuck)
     with pytest.raises(twoball.SolverError, match="root finder"):

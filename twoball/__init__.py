@@ -1,4 +1,4 @@
-"""twoball: the two-ball bounce solved exactly (see model.md and the README)."""
+"""twoball: the two-ball bounce solved exactly (see docs/model.md and the README)."""
 
 from importlib.metadata import PackageNotFoundError, version
 

@@ -1,6 +1,9 @@
 """The ``twoball`` command line.
 
-Bad input never shows a traceback: it prints one line on stderr and exits with status 2.
+Bad input never shows a traceback: a :class:`~twoball.errors.ParameterError` (or argparse's own
+complaint) prints one line on stderr and exits with status 2. A run that is no answer (a
+:class:`~twoball.errors.SolverError`: stuck root finder, phase limit) prints one line and exits
+with status 1. Any other exception is a bug and keeps its traceback.
 Each subcommand lives in the module of its idea, which adds its own parser with
 ``add_parser(subparsers)`` and sets ``func`` to a function of the parsed arguments.
 """
@@ -12,16 +15,16 @@ import importlib
 import json
 import sys
 
-from twoball.solve import SolverError
+from twoball.errors import ParameterError, SolverError
 
 # The modules that contribute subcommands, in the order --help lists them.
 SUBCOMMAND_MODULES = (
     "twoball.cli",
-    "twoball.bench",
+    "twoball.studies.bench",
     "twoball.sweep",
-    "twoball.report",
-    "twoball.precision",
-    "twoball.stability",
+    "twoball.studies.report",
+    "twoball.studies.precision",
+    "twoball.studies.stability",
 )
 
 
@@ -37,7 +40,7 @@ EXTRAS = {
 }
 
 
-class UsageError(Exception):
+class UsageError(ParameterError):
     """Bad input on the command line: reported in one line, exit status 2."""
 
 
@@ -49,15 +52,19 @@ class _Parser(argparse.ArgumentParser):
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """``twoball simulate``: one drop, its observables as text or JSON."""
     parser = subparsers.add_parser("simulate", help="simulate one drop and print its bounces")
-    parser.add_argument("--eps", required=True, help="restitution eps in (0, 1]")
-    parser.add_argument("--mu", required=True, help="mass ratio m2/m1 > 0")
-    parser.add_argument("--tau-ratio", required=True, help="tau_d/tau_f >= 0")
-    parser.add_argument("--eps12", default=None, help="ball-ball restitution (default: eps)")
-    parser.add_argument("--height", default="1e4", help="dimensionless drop height H > 0")
+    parser.add_argument("--eps", type=float, required=True, help="restitution eps in (0, 1]")
+    parser.add_argument("--mu", type=float, required=True, help="mass ratio m2/m1 > 0")
+    parser.add_argument("--tau-ratio", type=float, required=True, help="tau_d/tau_f >= 0")
+    parser.add_argument(
+        "--eps12", type=float, default=None, help="ball-ball restitution (default: eps)"
+    )
+    parser.add_argument("--height", type=float, default=1e4, help="dimensionless drop height H > 0")
     parser.add_argument(
         "--method", default="exact", help="exact, LSODA, Radau, BDF, DOP853, RK45 or odeint"
     )
-    parser.add_argument("--until", default="second", help="first, second or a time")
+    parser.add_argument(
+        "--until", type=until_argument, default="second", help="first, second or a time"
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.set_defaults(func=_simulate)
 
@@ -65,14 +72,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 def _simulate(args: argparse.Namespace) -> int:
     from twoball import simulate
 
-    until = args.until if args.until in ("first", "second") else _number("until", args.until)
     result = simulate(
-        _number("eps", args.eps),
-        _number("mu", args.mu),
-        _number("tau_ratio", args.tau_ratio),
-        eps12=None if args.eps12 is None else _number("eps12", args.eps12),
-        height=_number("height", args.height),
-        until=until,
+        args.eps,
+        args.mu,
+        args.tau_ratio,
+        eps12=args.eps12,
+        height=args.height,
+        until=args.until,
         method=args.method,
     )
     summary = result.summary()
@@ -86,12 +92,12 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _number(name: str, text: str) -> float:
-    """A number from the command line, or a one-line error naming the parameter."""
+def until_argument(text: str) -> str | float:
+    """``--until``: "first", "second" or a number (argparse reports anything else)."""
     try:
-        return float(text)
+        return text if text in ("first", "second") else float(text)
     except ValueError:
-        raise UsageError(f"{name} must be a number; got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"first, second or a number; got {text!r}") from None
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -107,7 +113,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         args = build_parser().parse_args(argv)
         return args.func(args)
-    except (UsageError, ValueError) as error:
+    except ParameterError as error:
         print(f"twoball: error: {error}", file=sys.stderr)
         return 2
     except OSError as error:

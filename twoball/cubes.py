@@ -6,6 +6,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from twoball.errors import ParameterError
+
 PRECOMPUTED = Path(__file__).resolve().parent / "precomputed"
 
 
@@ -18,7 +20,7 @@ def cube_path(name: str) -> Path:
     """The store of a shipped cube; ValueError naming the cubes that exist."""
     path = PRECOMPUTED / f"{name}.zarr"
     if not (path / "zarr.json").is_file():
-        raise ValueError(f"no cube named {name!r}; shipped cubes: {', '.join(cube_names())}")
+        raise ParameterError(f"no cube named {name!r}; shipped cubes: {', '.join(cube_names())}")
     return path
 
 
@@ -36,5 +38,5 @@ def load_cube(name: str | os.PathLike):
     path = Path(text) if is_path else cube_path(text)
     if not (path / "zarr.json").is_file():
         what = "does not exist" if not path.exists() else "is not a Zarr store (no zarr.json)"
-        raise ValueError(f"cannot open the cube {path}: it {what}")
+        raise ParameterError(f"cannot open the cube {path}: it {what}")
     return xr.open_zarr(path, consolidated=False)

@@ -1,4 +1,5 @@
-"""The exact solver: the model advanced phase by phase in closed form (model.md).
+"""The exact solver: the model advanced phase by phase in closed form (docs/model.md, "Bodies,
+coordinates, forces").
 
 Between switches the equations are linear with constant coefficients, so each phase has a
 closed-form solution:
@@ -16,7 +17,8 @@ defective (eps near exp(-2)) cost no accuracy. The two eigenvalue pairs of the b
 phase are grouped so that the two closest eigenvalues share a block.
 
 Switching times (a contact switching on or off, an apex of the upper ball) are the first roots of
-the switching functions F(t) of model.md ("Restitution and damping"): for an inactive contact
+the switching functions F(t) of docs/model.md, "Bodies, coordinates, forces": for an inactive
+contact
 F = max(eta, g), which must become negative for the contact to push; for an active contact
 F = -g, which reaches zero when the force does.
 
@@ -42,12 +44,14 @@ either contact force to reach zero, no switch can ever happen again.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
+from twoball.errors import Status
 from twoball.jit import njit
 from twoball.model import Drop
-from twoball.observables import REST
+from twoball.observables import Outcome
 
 # Phase kinds: bit 0 floor contact active, bit 1 ball contact active.
 FREE, FLOOR, BALL, BOTH = 0, 1, 2, 3
@@ -55,14 +59,9 @@ FREE, FLOOR, BALL, BOTH = 0, 1, 2, 3
 # Events returned by one phase.
 EVENT_FLOOR, EVENT_BALL, EVENT_APEX, EVENT_TIME, EVENT_REST, EVENT_STUCK = 0, 1, 2, 3, 4, 5
 
-# Status of a run.
-STATUS_DONE, STATUS_REST, STATUS_STUCK, STATUS_PHASES = 0, 1, 2, 3
-STATUS_TEXT = {
-    STATUS_DONE: "",
-    STATUS_REST: REST,
-    STATUS_STUCK: "root finder made no progress (please report: this is a bug)",
-    STATUS_PHASES: "phase limit reached",
-}
+# Status of a run (plain integers inside the kernel; twoball.errors.Status names them).
+STATUS_DONE, STATUS_REST = int(Status.DONE), int(Status.REST)
+STATUS_STUCK, STATUS_PHASES = int(Status.STUCK), int(Status.PHASE_LIMIT)
 
 MAX_STEPS_PER_PHASE = 100_000
 MAX_PHASES = 1_000_000
@@ -240,7 +239,8 @@ def prepare(mu, z01, z12):
     c1[BALL, 0, 1] = _oscillator_bound(-nu2, -2 * z01 * nu2, b12, om12)
     c1[BALL, 1, 0] = _oscillator_bound(1.0, 0.0, b12, om12)
     c1[BALL, 1, 1] = _oscillator_bound(1.0, 2 * z12, b12, om12)
-    # both contacts: y' = A (y - y_rest), A from M q'' = -C q' - K q (model.md)
+    # both contacts: y' = A (y - y_rest), A from M q'' = -C q' - K q (docs/model.md, "Bodies,
+    # coordinates, forces")
     a = np.zeros((4, 4))
     a[0, 2] = a[1, 3] = 1.0
     a[2, 0], a[2, 1], a[2, 2], a[2, 3] = -2.0, 1.0, -2.0 * (z01 + z12), 2.0 * z12
@@ -513,38 +513,55 @@ def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
     return EVENT_STUCK, tau, x1, x2, v1, v2
 
 
+class RunOutcome(NamedTuple):
+    """What :func:`run` returns (a named tuple inside numba too)."""
+
+    status: int  # a twoball.errors.Status value
+    end_time: float
+    apex_t: np.ndarray  # (n_apex,) times of the upper ball's apexes
+    apex_h: np.ndarray  # (n_apex,) their heights X2
+    ball_contacts_first: int  # ball contacts that start before the first apex
+    floor_contacts_first: int
+    contacts: np.ndarray  # (n, 3): contact, start, end (empty unless recorded)
+    # (n, 6): t, kind, x1, x2, v1, v2 at each phase start (empty unless recorded)
+    phases: np.ndarray
+
+
+@njit
+def _room_for_one(rows, n):
+    """``rows`` if it has a row free after the first ``n``, else a copy twice as long."""
+    if n < rows.shape[0]:
+        return rows
+    grown = np.empty((max(2 * rows.shape[0], 8), rows.shape[1]))
+    grown[:n] = rows[:n]
+    return grown
+
+
 @njit
 def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
     """Run from rest at heights (x1, x2) until the wanted apex, t_end, or rest.
 
-    Returns (status, t, apex_t[apexes_wanted], apex_h[...], n_apex, ball_first, floor_first,
-    contacts (n, 3: contact, start, end), phases (n, 6: t, kind, x1, x2, v1, v2)).
-    Contacts and phases are recorded only when asked (the arrays are empty otherwise).
+    Returns a :class:`RunOutcome`. Contacts and phases are recorded only when asked (the arrays
+    are empty otherwise); the apex table grows as apexes come, so a run to a time with no apex
+    limit allocates only what it finds.
     """
     v1 = 0.0
     v2 = 0.0
     t = 0.0
     kind = FREE
-    apex_t = np.full(apexes_wanted, np.nan)
-    apex_h = np.full(apexes_wanted, np.nan)
+    apexes = np.empty((min(apexes_wanted, 64), 2))  # rows: t, h
     n_apex = 0
     ball_first = 0
     floor_first = 0
     start = np.zeros(2)
-    contact_cap = 64 if record_contacts else 0
-    contacts = np.empty((contact_cap, 3))
+    contacts = np.empty((64 if record_contacts else 0, 3))
     n_contacts = 0
-    phase_cap = 64 if record_phases else 0
-    phases = np.empty((phase_cap, 6))
+    phases = np.empty((64 if record_phases else 0, 6))
     n_phases = 0
     status = STATUS_PHASES
     for _ in range(MAX_PHASES):
         if record_phases:
-            if n_phases == phase_cap:
-                phase_cap *= 2
-                grown = np.empty((phase_cap, 6))
-                grown[:n_phases] = phases[:n_phases]
-                phases = grown
+            phases = _room_for_one(phases, n_phases)
             row = phases[n_phases]
             row[0], row[1], row[2], row[3], row[4], row[5] = t, kind, x1, x2, v1, v2
             n_phases += 1
@@ -561,11 +578,7 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
             bit = 1 << event
             if kind & bit:
                 if record_contacts:
-                    if n_contacts == contact_cap:
-                        contact_cap *= 2
-                        grown = np.empty((contact_cap, 3))
-                        grown[:n_contacts] = contacts[:n_contacts]
-                        contacts = grown
+                    contacts = _room_for_one(contacts, n_contacts)
                     row = contacts[n_contacts]
                     row[0], row[1], row[2] = event, start[event], t
                     n_contacts += 1
@@ -579,8 +592,9 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
             kind ^= bit
         elif event == EVENT_APEX:
             v2 = 0.0
-            apex_t[n_apex] = t
-            apex_h[n_apex] = x2
+            apexes = _room_for_one(apexes, n_apex)
+            apexes[n_apex, 0] = t
+            apexes[n_apex, 1] = x2
             n_apex += 1
             if n_apex == apexes_wanted:
                 status = STATUS_DONE
@@ -598,25 +612,19 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
         # contacts still open at the end of the run end there
         for contact in range(2):
             if kind & (1 << contact):
-                if n_contacts == contact_cap:
-                    contact_cap *= 2
-                    grown = np.empty((contact_cap, 3))
-                    grown[:n_contacts] = contacts[:n_contacts]
-                    contacts = grown
+                contacts = _room_for_one(contacts, n_contacts)
                 row = contacts[n_contacts]
                 row[0], row[1], row[2] = contact, start[contact], t
                 n_contacts += 1
-    return (
+    return RunOutcome(
         status,
         t,
-        apex_t,
-        apex_h,
-        n_apex,
+        apexes[:n_apex, 0].copy(),
+        apexes[:n_apex, 1].copy(),
         ball_first,
         floor_first,
         contacts[:n_contacts],
         phases[:n_phases],
-        (x1, x2, v1, v2, float(kind)),
     )
 
 
@@ -653,30 +661,34 @@ def sample(phases, times, prepared):
     return out
 
 
-def solve(drop: Drop, apexes: int, t_end: float, *, dense: bool | np.ndarray = False):
+def solve(drop: Drop, apexes: int, t_end: float, *, dense_output: bool = False) -> Outcome:
     """Run the exact solver on a validated drop; see :func:`twoball.simulate`.
 
-    Returns (apex_t, apex_h, contacts rows, end time, status text or None, ball contacts before
-    the first apex, floor contacts before it, sampled rows or None).
+    With ``dense_output`` the phases are recorded, and the outcome's ``evaluate`` gives the exact
+    state at any times.
     """
-    record_phases = dense is not False
     prepared = prepare(drop.mu, drop.zeta01, drop.zeta12)
-    (status, end, apex_t, apex_h, n_apex, ball_first, floor_first, contacts, phases, _) = run(
-        drop.x1_0, drop.x2_0, max(apexes, 1), t_end, prepared, True, record_phases
-    )
-    samples = None
-    if record_phases:
-        times = default_times(phases, end) if dense is True else np.asarray(dense, dtype=float)
-        samples = (times, sample(phases, times, prepared))
-    return (
-        apex_t[:n_apex].tolist(),
-        apex_h[:n_apex].tolist(),
-        contacts,
-        end,
-        STATUS_TEXT[status] or None,
-        ball_first,
-        floor_first,
-        samples,
+    out = run(drop.x1_0, drop.x2_0, max(apexes, 1), t_end, prepared, True, dense_output)
+    evaluate = plot_times = None
+    if dense_output:
+        phases = out.phases
+
+        def evaluate(times: np.ndarray) -> np.ndarray:
+            return sample(phases, np.asarray(times, dtype=float), prepared)
+
+        plot_times = default_times(phases, out.end_time)
+    status = Status(out.status)
+    return Outcome(
+        out.apex_t.tolist(),
+        out.apex_h.tolist(),
+        out.contacts,
+        out.end_time,
+        status,
+        status.message or None,
+        out.ball_contacts_first,
+        out.floor_contacts_first,
+        evaluate,
+        plot_times,
     )
 
 

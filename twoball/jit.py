@@ -126,7 +126,7 @@ def warm_up() -> None:
     """Call every kernel path once (a drop to its second apex with a sampled trajectory)."""
     from twoball.solve import simulate
 
-    simulate(0.9, 0.01, 0.01, until="second", dense=True)
+    simulate(0.9, 0.01, 0.01, until="second", dense_output=True)
 
 
 def compile_in_background(done: Callable[[], None] | None = None) -> threading.Thread:

@@ -1,4 +1,4 @@
-"""The two-ball model: parameters, restitution and damping, initial condition (model.md).
+"""The two-ball model: parameters, restitution and damping, initial condition (docs/model.md).
 
 Everything here is plain physics: no solver, no UI. Parameters are declared once, in
 :class:`Parameters`, with their bounds and documentation; :func:`check_parameters` validates plain
@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import param
 
+from twoball.errors import ParameterError
 from twoball.jit import njit
 
 DEFAULT_HEIGHT = 1.0e4
@@ -28,7 +29,8 @@ MACHINE_EPSILON = 2.220446049250313e-16
 
 
 class Parameters(param.Parameterized):
-    """The inputs of one drop (model.md, "Bodies, coordinates, forces" and "Initial condition")."""
+    """The inputs of one drop (docs/model.md, "Bodies, coordinates, forces" and "Initial
+    condition")."""
 
     eps = param.Number(
         0.816,
@@ -87,7 +89,7 @@ def check_value(name: str, value: object) -> float:
     try:
         number = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
-        raise ValueError(
+        raise ParameterError(
             f"{name} must be a number in {_allowed_range(name)}; got {value!r}"
         ) from None
     low, high, low_closed, high_closed = _BOUNDS[name]
@@ -97,13 +99,16 @@ def check_value(name: str, value: object) -> float:
     if ok and high is not None:
         ok = number <= high if high_closed else number < high
     if not ok:
-        raise ValueError(f"{name} must be a finite number in {_allowed_range(name)}; got {value!r}")
+        raise ParameterError(
+            f"{name} must be a finite number in {_allowed_range(name)}; got {value!r}"
+        )
     return number
 
 
 @dataclass(frozen=True)
 class Drop:
-    """A validated drop: the parameters and everything derived from them (model.md).
+    """A validated drop: the parameters and everything derived from them (docs/model.md,
+    "Restitution and damping" and "Initial condition").
 
     ``zeta01`` and ``zeta12`` are the damping ratios of the two contacts, ``tau_f`` the floor
     contact time, ``x1_0`` and ``x2_0`` the initial heights.
@@ -129,7 +134,42 @@ def check_parameters(
     eps12: float | None = None,
     height: float = DEFAULT_HEIGHT,
 ) -> Drop:
-    """Validate the inputs of one drop and derive damping, contact time and initial state."""
+    """Validate the inputs of one drop and derive damping, contact time and initial state.
+
+    Parameters
+    ----------
+    eps, eps12 : float
+        Restitution of the floor and of the ball contact, in (0, 1]; ``eps12`` defaults to eps.
+    mu : float
+        Mass ratio m2/m1 > 0.
+    tau_ratio : float
+        tau_d/tau_f >= 0.
+    height : float
+        Dimensionless drop height H > 0.
+
+    Returns
+    -------
+    Drop
+        The parameters with zeta01, zeta12 (docs/model.md, "Restitution and damping"), tau_f
+        and the initial heights (docs/model.md, "Initial condition").
+
+    Raises
+    ------
+    ParameterError
+        A ``ValueError`` naming the parameter and its allowed range.
+
+    Examples
+    --------
+    The check values of docs/model.md, "Restitution and damping":
+
+    >>> drop = check_parameters(0.816, 0.05, 0.3)
+    >>> round(drop.zeta01, 13), round(drop.tau_f, 11)
+    (0.0674788868542, 3.0134006872)
+    >>> check_parameters(1.5, 0.05, 0.3)
+    Traceback (most recent call last):
+    ...
+    twoball.errors.ParameterError: eps must be a finite number in [0.01, 1]; got 1.5
+    """
     eps = check_value("eps", eps)
     eps12 = eps if eps12 is None else check_value("eps12", eps12)
     mu = check_value("mu", mu)
@@ -139,7 +179,7 @@ def check_parameters(
     tau_f = floor_contact_time(zeta01)
     x2_0 = initial_gap_height(height, tau_ratio * tau_f)
     if rounding_ratio(height, mu, x2_0) > RESOLUTION:
-        raise ValueError(_outside_domain(mu, tau_ratio, height, tau_f))
+        raise ParameterError(_outside_domain(mu, tau_ratio, height, tau_f))
     return Drop(eps, eps12, mu, tau_ratio, height, zeta01, zeta12, tau_f, height, x2_0)
 
 
@@ -185,10 +225,11 @@ def apex_bound(drop: Drop) -> float:
 
 
 def restitution(r: float) -> float:
-    """Coefficient of restitution of one clamped contact with decay ratio r = beta/w0 (model.md,
+    """Coefficient of restitution of one clamped contact with decay ratio r = beta/w0
+    (docs/model.md,
     "Restitution and damping"), on both branches; eps(1) = exp(-2)."""
     if r < 0.0 or not math.isfinite(r):
-        raise ValueError(f"r must be a finite number in [0, inf); got {r!r}")
+        raise ParameterError(f"r must be a finite number in [0, inf); got {r!r}")
     if r < 1.0:
         return math.exp(-r / math.sqrt(1.0 - r * r) * math.acos(2.0 * r * r - 1.0))
     if r == 1.0:
@@ -207,13 +248,14 @@ def _log_restitution(r: float) -> float:
 
 
 def decay_ratio(eps: float) -> float:
-    """The unique r = beta/w0 with restitution(r) = eps, for eps in (0, 1] (model.md).
+    """The unique r = beta/w0 with restitution(r) = eps, for eps in (0, 1] (docs/model.md,
+    "Restitution and damping").
 
     Solved on -log eps, which is increasing in r, by bisection to the last bit; the two branches
     join continuously at r = 1, so bisection is safe across the switch.
     """
     if not 0.0 < eps <= 1.0:
-        raise ValueError(f"a restitution must be a number in (0, 1]; got {eps!r}")
+        raise ParameterError(f"a restitution must be a number in (0, 1]; got {eps!r}")
     return _decay_ratio(eps)
 
 
@@ -239,7 +281,7 @@ def _decay_ratio(eps: float) -> float:
 
 
 def damping_ratios(eps01: float, eps12: float, mu: float) -> tuple[float, float]:
-    """zeta01 and zeta12 from the two restitutions (model.md, "Restitution and damping").
+    """zeta01 and zeta12 from the two restitutions (docs/model.md, "Restitution and damping").
 
     Floor: w0 = 1, so zeta01 = r(eps01). Ball pair: w0^2 = (1 + mu)/mu and beta = zeta12 w0^2,
     so zeta12 = r(eps12) sqrt(mu/(1 + mu)).
@@ -248,7 +290,8 @@ def damping_ratios(eps01: float, eps12: float, mu: float) -> tuple[float, float]
 
 
 def floor_contact_time(r: float) -> float:
-    """Duration tau_f of one floor contact with decay ratio r = zeta01 (model.md)."""
+    """Duration tau_f of one floor contact with decay ratio r = zeta01 (docs/model.md, "Restitution
+    and damping")."""
     if r < 1.0:
         return math.acos(2.0 * r * r - 1.0) / math.sqrt(1.0 - r * r)
     if r == 1.0:
@@ -257,13 +300,14 @@ def floor_contact_time(r: float) -> float:
 
 
 def initial_gap_height(height: float, tau_d: float) -> float:
-    """X2(0) = (sqrt(H) + tau_d/sqrt(2))^2 (model.md, "Initial condition")."""
+    """X2(0) = (sqrt(H) + tau_d/sqrt(2))^2 (docs/model.md, "Initial condition")."""
     root = math.sqrt(height) + tau_d / math.sqrt(2.0)
     return root * root  # inf, not OverflowError, for an absurd gap: the domain check refuses it
 
 
 def icm_height(height: float, gap: float, eps01: float, eps12: float, mu: float) -> float:
-    """Apex of the upper ball in the independent contact model (model.md, paper section II).
+    """Apex of the upper ball in the independent contact model (docs/model.md, "What is measured";
+    paper section II).
 
     The steps of the paper with eps01 at the floor and eps12 between the balls: the lower ball
     reaches the floor at v_i = sqrt(2H) and leaves at eps01 v_i; the balls meet at

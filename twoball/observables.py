@@ -1,4 +1,4 @@
-"""What a run measures (model.md, "What is measured"): apexes, contacts, ICM and ratios.
+"""What a run measures (docs/model.md, "What is measured"): apexes, contacts, ICM and ratios.
 
 Every solver returns a :class:`Result`; the observables are derived from the apexes and the
 contact intervals it found, the same way whatever the method.
@@ -7,15 +7,18 @@ contact intervals it found, the same way whatever the method.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
+from twoball.errors import Status
 from twoball.model import Drop, icm_height
 
 FLOOR_CONTACT, BALL_CONTACT = 0, 1
 # The one early end that is an answer, not a failure (docs/model.md, "What is measured").
-REST = "the upper ball came to rest on the lower one"
+REST = Status.REST.message  # the reason a run gives when the upper ball came to rest
 
 
 @dataclass(frozen=True)
@@ -25,6 +28,22 @@ class ContactInterval:
     contact: str
     start: float
     end: float
+
+
+class Outcome(NamedTuple):
+    """What a solver (:func:`twoball.exact.solve`, :func:`twoball.reference.solve`) returns."""
+
+    apex_t: list[float]
+    apex_h: list[float]
+    contacts: np.ndarray  # rows (contact, start, end)
+    end_time: float
+    status: Status
+    message: str | None  # None on success without remark, else what happened in words
+    contacts_first: int  # ball contacts that start before the first apex
+    floor_contacts_first: int
+    # state at any times -> array (n, 6): x1, x2, v1, v2, f01, f12; None unless asked for
+    evaluate: Callable[[np.ndarray], np.ndarray] | None
+    plot_times: np.ndarray | None  # times that show every contact; None unless asked for
 
 
 @dataclass(frozen=True)
@@ -44,9 +63,12 @@ class Trajectory:
 class Result:
     """The outcome of one drop.
 
-    ``apex_t`` and ``apex_h`` list the upper ball's apexes in free flight (model.md), in order.
-    ``reason`` is None when the run reached what was asked, else why it stopped early.
-    ``contacts`` lists every contact interval found; ``trajectory`` is set only when asked.
+    ``apex_t`` and ``apex_h`` list the upper ball's apexes in free flight (docs/model.md, "What is
+    measured"), in order.
+    ``status`` says how the run ended (``success`` is True for a run that reached what was asked
+    or ended at rest); ``reason`` is None when the run reached what was asked, else why it
+    stopped early, in words. ``contacts`` lists every contact interval found; ``trajectory`` is
+    set only when asked (``t_eval`` or ``dense_output``); :meth:`evaluate` needs ``dense_output``.
     """
 
     drop: Drop
@@ -61,11 +83,33 @@ class Result:
     rtol: float | None = None
     atol: float | None = None
     trajectory: Trajectory | None = field(default=None, repr=False)
+    status: Status = Status.DONE
+    dense: Callable[[np.ndarray], np.ndarray] | None = field(
+        default=None, repr=False, compare=False
+    )
 
     @property
     def success(self) -> bool:
-        """True when the run reached what was asked, or found the upper ball at rest."""
-        return self.reason in (None, REST)
+        """True when the run reached what was asked or the upper ball came to rest."""
+        return self.status.success
+
+    def evaluate(self, t: np.ndarray | float) -> Trajectory:
+        """The state and forces at times ``t`` (exact at every t for the exact method).
+
+        Needs ``simulate(..., dense_output=True)``.
+
+        Examples
+        --------
+        >>> import twoball
+        >>> r = twoball.simulate(0.816, 0.05, 0.3, dense_output=True)
+        >>> at = r.evaluate(r.t1)  # the first apex: the upper ball at rest, at height h1
+        >>> bool(abs(at.v2[0]) < 1e-9), bool(abs(at.x2[0] - r.h1) < 1e-9 * r.h1)
+        (True, True)
+        """
+        if self.dense is None:
+            raise ValueError("evaluate needs a run with dense_output=True")
+        times = np.atleast_1d(np.asarray(t, dtype=float))
+        return trajectory_of(times, self.dense(times))
 
     def _apex(self, values: list[float], index: int) -> float | None:
         return values[index] if len(values) > index else None
@@ -99,21 +143,26 @@ class Result:
         d = self.drop
         return icm_height(d.x1_0, d.x2_0 - d.x1_0, d.eps, d.eps12, d.mu)
 
+    def _ratio(self, name: str) -> float | None:
+        h1, h2 = (math.nan if h is None else h for h in (self.h1, self.h2))
+        value = float(ratios(np.float64(h1), np.float64(h2), self.x2_0, self.h_icm)[name])
+        return None if math.isnan(value) else value
+
     @property
     def h1_over_icm(self) -> float | None:
-        return None if self.h1 is None else self.h1 / self.h_icm
+        return self._ratio("h1_over_icm")
 
     @property
     def h1_over_drop(self) -> float | None:
-        return None if self.h1 is None else self.h1 / self.x2_0
+        return self._ratio("h1_over_drop")
 
     @property
     def h2_over_drop(self) -> float | None:
-        return None if self.h2 is None else self.h2 / self.x2_0
+        return self._ratio("h2_over_drop")
 
     @property
     def h2_over_h1(self) -> float | None:
-        return None if self.h1 is None or self.h2 is None else self.h2 / self.h1
+        return self._ratio("h2_over_h1")
 
     @property
     def delayed_rebound(self) -> bool | None:
@@ -156,6 +205,37 @@ class Result:
             "delayed_rebound": self.delayed_rebound,
             "reason": self.reason,
         }
+
+
+def relative_error(value, reference_value) -> float:
+    """|value - reference| / |reference| of one observable of two runs, the one rule for every
+    comparison: inf when only one of them has the value (a missed or an invented bounce) or the
+    value is not finite, NaN when neither has it (there is no such bounce to compare).
+
+    >>> relative_error(3.3, 3.0) < 0.11, relative_error(None, 3.0), relative_error(None, None)
+    (True, inf, nan)
+    """
+    if reference_value is None:
+        return math.nan if value is None else math.inf
+    if value is None or not math.isfinite(value):
+        return math.inf
+    return float(abs(value - reference_value) / abs(reference_value))
+
+
+def ratios(h1, h2, x2_0, h_icm) -> dict:
+    """The four ratios of docs/model.md, "What is measured": h1/h_ICM, h1/X2(0), h2/X2(0) and
+    h2/h1, elementwise on numbers or arrays (NaN in, NaN out where a bounce is missing)."""
+    return {
+        "h1_over_icm": h1 / h_icm,
+        "h1_over_drop": h1 / x2_0,
+        "h2_over_drop": h2 / x2_0,
+        "h2_over_h1": h2 / h1,
+    }
+
+
+def trajectory_of(times: np.ndarray, values: np.ndarray) -> Trajectory:
+    """A :class:`Trajectory` from times and rows (x1, x2, v1, v2, f01, f12)."""
+    return Trajectory(times, *(np.ascontiguousarray(values[:, i]) for i in range(6)))
 
 
 def contact_intervals(rows: np.ndarray) -> list[ContactInterval]:

@@ -1,8 +1,9 @@
-"""Reference integrators: the same equations (model.md) through scipy, for comparison only.
+"""Reference integrators: the same equations (docs/model.md, "Bodies, coordinates, forces") through
+scipy, for comparison only.
 
 These exist to be compared with the exact solver, not to be trusted over it: an adaptive method
 with event location can step over a brief contact and silently let the balls pass through each
-other (model.md, "Where numerics go wrong").
+other (docs/model.md, "Where numerics go wrong").
 
 - ``solve_ivp`` methods (LSODA, Radau, BDF, DOP853, RK45): apexes are located by an event on the
   upper ball's velocity, kept when the ball contact does not push; contacts by events on the
@@ -18,18 +19,20 @@ import math
 import numpy as np
 from scipy.integrate import odeint, solve_ivp
 
+from twoball.errors import Status
 from twoball.model import Drop
+from twoball.observables import Outcome
 
 IVP_METHODS = ("LSODA", "Radau", "BDF", "DOP853", "RK45")
 METHODS = (*IVP_METHODS, "odeint")
 DEFAULT_TOL = 1e-8
-nfev = [0]
 ODEINT_STEP = 0.01
 ODEINT_WINDOW = 50.0
 
 
 def forces(state: np.ndarray, zeta01: float, zeta12: float) -> tuple[np.ndarray, np.ndarray]:
-    """Clamped contact forces f01 and f12 (model.md): active when eta < 0 and g < 0."""
+    """Clamped contact forces f01 and f12 (docs/model.md, "Bodies, coordinates, forces"): active
+    when eta < 0 and g < 0."""
     x1, x2, v1, v2 = state
     eta12 = x2 - x1
     g01 = x1 + 2.0 * zeta01 * v1
@@ -86,18 +89,19 @@ def solve(
     t_end: float,
     rtol: float | None,
     atol: float | None,
-    dense: bool | np.ndarray = False,
-):
-    """Integrate with scipy; returns the same tuple as :func:`twoball.exact.solve`."""
+    dense_output: bool = False,
+) -> Outcome:
+    """Integrate with scipy; returns an :class:`~twoball.observables.Outcome` like
+    :func:`twoball.exact.solve` (``evaluate`` interpolates the integrator's output)."""
     rtol = DEFAULT_TOL if rtol is None else rtol
     atol = DEFAULT_TOL if atol is None else atol
     horizon = min(t_end, time_limit(drop, apexes))
     if method == "odeint":
-        return _solve_odeint(drop, apexes, horizon, t_end, rtol, atol, dense)
-    return _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense)
+        return _solve_odeint(drop, apexes, horizon, t_end, rtol, atol, dense_output)
+    return _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense_output)
 
 
-def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense):
+def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense_output):
     rhs, jacobian = _right_hand_side(drop)
     z01, z12 = drop.zeta01, drop.zeta12
 
@@ -125,10 +129,10 @@ def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense):
     apex_t, apex_h = [], []
     events = ([], [])
     pieces = []
-    evaluations = 0
     failure = None
     # One solve_ivp call per flight: it stops at a fall of v2 through zero, which is an apex
-    # only if the balls do not push then (model.md); otherwise it goes on from there.
+    # only if the balls do not push then (docs/model.md, "Bodies, coordinates, forces"); otherwise
+    # it goes on from there.
     while len(apex_t) < apexes and t0 < horizon:
         try:
             sol = solve_ivp(
@@ -139,14 +143,13 @@ def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense):
                 rtol=rtol,
                 atol=atol,
                 events=(floor_switch, ball_switch, upper_velocity),
-                dense_output=dense is not False,
+                dense_output=dense_output,
                 **implicit,
             )
         except (ValueError, ArithmeticError) as error:  # e.g. NaN in a Newton iteration
             failure = f"{method} failed: {error}"
             break
-        evaluations += sol.nfev
-        if dense is not False and sol.sol is not None and sol.t.size > 1:
+        if dense_output and sol.sol is not None and sol.t.size > 1:
             pieces.append(sol.sol)  # a call that stopped at once has no interpolant
         for contact in (0, 1):
             events[contact].extend(zip(sol.t_events[contact], sol.y_events[contact], strict=True))
@@ -162,7 +165,6 @@ def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense):
             apex_t.append(t0)
             apex_h.append(float(y0[1]))
         y0[3] = min(y0[3], 0.0)  # below the event's zero, so it does not fire again at once
-    nfev[0] = evaluations
     end = apex_t[-1] if len(apex_t) == apexes else t0
     contacts = []
     counts = [0, 0]
@@ -182,17 +184,23 @@ def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense):
                 start = None
         if start is not None:
             contacts.append((contact, start, end))
-    reason = failure
+    status, reason = (Status.FAILED, failure) if failure else (Status.DONE, None)
     if reason is None and len(apex_t) < apexes and t_end > horizon:
+        status = Status.NO_APEX
         reason = f"no apex {len(apex_t) + 1} before t = {horizon:.6g}"
-    samples = None
-    if dense is not False:
-        times = np.linspace(0.0, end, 4001) if dense is True else np.asarray(dense, dtype=float)
-        states = _evaluate_pieces(pieces, times)
-        f01, f12 = forces(states, z01, z12)
-        samples = (times, np.column_stack([states.T, f01, f12]))
+    evaluate = plot_times = None
+    if dense_output:
+
+        def evaluate(times: np.ndarray) -> np.ndarray:
+            states = _evaluate_pieces(pieces, np.asarray(times, dtype=float))
+            f01, f12 = forces(states, z01, z12)
+            return np.column_stack([states.T, f01, f12])
+
+        plot_times = np.linspace(0.0, end, 4001)
     rows = np.array(contacts, dtype=float).reshape(-1, 3)
-    return apex_t, apex_h, rows, end, reason, counts[1], counts[0], samples
+    return Outcome(
+        apex_t, apex_h, rows, end, status, reason, counts[1], counts[0], evaluate, plot_times
+    )
 
 
 def _evaluate_pieces(pieces, times: np.ndarray) -> np.ndarray:
@@ -225,7 +233,7 @@ def _switch_rate(y: np.ndarray, contact: int, drop: Drop) -> float:
     return deta if eta >= g else deta + 2.0 * zeta * ddeta
 
 
-def _solve_odeint(drop, apexes, horizon, t_end, rtol, atol, dense):
+def _solve_odeint(drop, apexes, horizon, t_end, rtol, atol, dense_output):
     """LSODA on a fixed grid of step ODEINT_STEP, observables read off the grid (the paper).
 
     The grid is integrated in windows of ODEINT_WINDOW and stops after the window in which the
@@ -287,18 +295,21 @@ def _solve_odeint(drop, apexes, horizon, t_end, rtol, atol, dense):
                 contacts.append((contact, float(times[s]), float(stop)))
                 if not apex_t or times[s] < apex_t[0]:
                     counts[contact] += 1
-    reason = None
+    status, reason = Status.DONE, None
     if len(apex_t) < apexes and t_end > horizon:
+        status = Status.NO_APEX
         reason = f"no apex {len(apex_t) + 1} before t = {horizon:.6g}"
-    samples = None
-    if dense is not False:
+    evaluate = plot_times = None
+    if dense_output:
         keep = times <= end
-        samples = (times[keep], np.column_stack([states[keep], f01[keep], f12[keep]]))
-        if dense is not True:
-            wanted = np.asarray(dense, dtype=float)
-            samples = (
-                wanted,
-                np.column_stack([np.interp(wanted, times, column) for column in samples[1].T]),
-            )
+        grid, values = times[keep], np.column_stack([states[keep], f01[keep], f12[keep]])
+
+        def evaluate(wanted: np.ndarray) -> np.ndarray:
+            wanted = np.asarray(wanted, dtype=float)
+            return np.column_stack([np.interp(wanted, grid, column) for column in values.T])
+
+        plot_times = grid
     rows = np.array(contacts, dtype=float).reshape(-1, 3)
-    return apex_t, apex_h, rows, end, reason, counts[1], counts[0], samples
+    return Outcome(
+        apex_t, apex_h, rows, end, status, reason, counts[1], counts[0], evaluate, plot_times
+    )

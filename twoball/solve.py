@@ -5,15 +5,17 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from twoball import exact, reference
+from twoball.errors import ParameterError, SolverError, Status
 from twoball.model import DEFAULT_HEIGHT, apex_bound, check_parameters
-from twoball.observables import REST, Result, Trajectory, contact_intervals
+from twoball.observables import Result, contact_intervals, trajectory_of
 
 METHODS = ("exact", *reference.METHODS)
 UNTIL = {"first": 1, "second": 2}
-# A run "until a time" records apexes up to this many (a bound on the kernel's apex table).
-MAX_APEXES = 100_000
+# A run "until a time" wants no apex limit; the kernel's apex table grows with what it finds.
+NO_APEX_LIMIT = 2**62
 
 
 def simulate(
@@ -27,66 +29,112 @@ def simulate(
     method: str = "exact",
     rtol: float | None = None,
     atol: float | None = None,
-    dense: bool | np.ndarray = False,
+    t_eval: ArrayLike | None = None,
+    dense_output: bool = False,
     throw: bool = True,
 ) -> Result:
-    """Drop the two balls and measure their bounces (model.md).
+    """Drop the two balls and measure their bounces (docs/model.md, "What is measured").
 
-    eps, eps12: restitution of the floor and the ball contact (eps12 defaults to eps), in (0, 1].
-    mu: mass ratio m2/m1 > 0. tau_ratio: tau_d/tau_f >= 0. height: dimensionless H > 0.
-    until: "first" or "second" apex of the upper ball, or a dimensionless time; a run also ends
-    early when the upper ball comes to rest on the lower one (``Result.reason`` says so).
-    method: "exact" (closed form, the default), or a scipy reference: "LSODA", "Radau", "BDF",
-    "DOP853", "RK45" (solve_ivp with events), "odeint" (the paper's fixed grid); rtol and atol
-    apply to these only (default 1e-8).
-    dense: False (no trajectory is computed), True (a plotting grid), or an array of times.
-    throw: a run that fails (the root finder stuck, the phase limit, a scipy method's failure,
-    an apex that is not finite or above what the energy at release allows) raises
-    :class:`SolverError`; with ``throw=False`` (batch callers) it returns a Result whose
-    ``success`` is False and whose ``reason`` says what happened.
+    Parameters
+    ----------
+    eps, eps12 : float
+        Restitution of the floor and of the ball contact, in (0, 1]; ``eps12`` defaults to
+        ``eps``.
+    mu : float
+        Mass ratio m2/m1 > 0.
+    tau_ratio : float
+        tau_d/tau_f >= 0 (docs/model.md, "Initial condition").
+    height : float
+        Dimensionless drop height H > 0.
+    until : "first", "second" or float
+        The apex of the upper ball to run to, or a dimensionless time. A run also ends early
+        when the upper ball comes to rest on the lower one (``Result.status`` is ``REST``).
+    method : str
+        "exact" (closed form, the default), or a scipy reference: "LSODA", "Radau", "BDF",
+        "DOP853", "RK45" (solve_ivp with events), "odeint" (the paper's fixed grid).
+    rtol, atol : float, optional
+        Tolerances of the scipy methods only (default 1e-8).
+    t_eval : array_like, optional
+        Times at which ``Result.trajectory`` samples the state and the forces.
+    dense_output : bool
+        Keep a solution that ``Result.evaluate(t)`` evaluates at any times (exactly, for the
+        exact method); without ``t_eval`` the trajectory is then sampled at plotting times
+        that show every contact.
+    throw : bool
+        A run that fails (the root finder stuck, the phase limit, a scipy method's failure or
+        no apex before its horizon, an apex that is not finite or above what the energy at
+        release allows) raises :class:`~twoball.errors.SolverError` (the default); with
+        ``throw=False`` (batch callers, as diffrax's ``throw``) it returns a Result whose
+        ``success`` is False and whose ``status`` and ``reason`` say what happened.
 
-    Raises ValueError naming the parameter and its allowed range, also for a drop outside the
-    domain double precision can carry (docs/model.md, "The domain double precision can carry").
+    Returns
+    -------
+    Result
+        Apexes, contacts, ratios, ``status`` and ``success``.
+
+    Raises
+    ------
+    ParameterError
+        A ``ValueError`` naming the parameter and its allowed range, also for a drop outside
+        the domain double precision can carry (docs/model.md, "The domain double precision can
+        carry").
+
+    Examples
+    --------
+    The paper's close-up case: four ball contacts in the first bounce, then a delayed rebound.
+
+    >>> import twoball
+    >>> r = twoball.simulate(0.9, 0.01, 0.01)
+    >>> r.contacts_first, round(r.h1, 5), round(r.h2, 4), r.delayed_rebound
+    (4, 9256.04845, 50076.3922, True)
+    >>> r.success, r.status.name
+    (True, 'DONE')
     """
     drop = check_parameters(eps, mu, tau_ratio, eps12=eps12, height=height)
     apexes, t_end = _stop_rule(until)
     if method not in METHODS:
-        raise ValueError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
+        raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     for name, tol in (("rtol", rtol), ("atol", atol)):
         if tol is not None and not (math.isfinite(tol) and 0.0 < tol < 1.0):
-            raise ValueError(f"{name} must be a finite number in (0, 1); got {tol!r}")
+            raise ParameterError(f"{name} must be a finite number in (0, 1); got {tol!r}")
+    times = None
+    if t_eval is not None:
+        times = np.atleast_1d(np.asarray(t_eval, dtype=float))
+        if times.ndim != 1 or not np.isfinite(times).all():
+            raise ParameterError("t_eval must be a one-dimensional array of finite times")
+    keep = dense_output or times is not None
     if method == "exact":
         if rtol is not None or atol is not None:
-            raise ValueError("rtol and atol apply to the scipy methods only, not to 'exact'")
-        outcome = exact.solve(drop, apexes, t_end, dense=dense)
+            raise ParameterError("rtol and atol apply to the scipy methods only, not to 'exact'")
+        outcome = exact.solve(drop, apexes, t_end, dense_output=keep)
     else:
-        outcome = reference.solve(drop, method, apexes, t_end, rtol, atol, dense)
-    apex_t, apex_h, rows, end, reason, ball_first, floor_first, samples = outcome
-    reason = _failure(reason, apex_h, drop) or reason
-    if throw and reason not in (None, REST):
-        raise SolverError(f"{method} failed on {drop}: {reason}")
+        outcome = reference.solve(drop, method, apexes, t_end, rtol, atol, keep)
+    failure = _failure(outcome.message, outcome.apex_h, drop)
+    if failure:
+        outcome = outcome._replace(status=Status.IMPOSSIBLE, message=failure)
     trajectory = None
-    if samples is not None:
-        times, values = samples
-        trajectory = Trajectory(times, *(np.ascontiguousarray(values[:, i]) for i in range(6)))
-    return Result(
+    if keep:
+        times = outcome.plot_times if times is None else times
+        trajectory = trajectory_of(times, outcome.evaluate(times))
+    result = Result(
         drop=drop,
         method=method,
-        apex_t=[float(t) for t in apex_t],
-        apex_h=[float(h) for h in apex_h],
-        contacts=contact_intervals(rows),
-        end_time=float(end),
-        reason=reason,
-        contacts_first=int(ball_first),
-        floor_contacts_first=int(floor_first),
+        apex_t=[float(t) for t in outcome.apex_t],
+        apex_h=[float(h) for h in outcome.apex_h],
+        contacts=contact_intervals(outcome.contacts),
+        end_time=float(outcome.end_time),
+        reason=outcome.message,
+        contacts_first=int(outcome.contacts_first),
+        floor_contacts_first=int(outcome.floor_contacts_first),
         rtol=None if method == "exact" else (rtol or reference.DEFAULT_TOL),
         atol=None if method == "exact" else (atol or reference.DEFAULT_TOL),
         trajectory=trajectory,
+        status=outcome.status,
+        dense=outcome.evaluate if dense_output else None,
     )
-
-
-class SolverError(RuntimeError):
-    """A run that did not reach a trustworthy result (see ``simulate``'s ``throw``)."""
+    if throw and not result.success:
+        raise SolverError(f"{method} failed on {drop}: {result.reason}", result)
+    return result
 
 
 def _failure(reason: str | None, apex_h: list[float], drop) -> str | None:
@@ -105,12 +153,14 @@ def _stop_rule(until: str | float) -> tuple[int, float]:
     """(apexes wanted, end time) for an ``until`` argument."""
     if isinstance(until, str):
         if until not in UNTIL:
-            raise ValueError(f"until must be 'first', 'second' or a time > 0; got {until!r}")
+            raise ParameterError(f"until must be 'first', 'second' or a time > 0; got {until!r}")
         return UNTIL[until], math.inf
     try:
         t_end = float(until)
     except (TypeError, ValueError):
-        raise ValueError(f"until must be 'first', 'second' or a time > 0; got {until!r}") from None
+        raise ParameterError(
+            f"until must be 'first', 'second' or a time > 0; got {until!r}"
+        ) from None
     if not (math.isfinite(t_end) and t_end > 0.0):
-        raise ValueError(f"until must be 'first', 'second' or a finite time > 0; got {until!r}")
-    return MAX_APEXES, t_end
+        raise ParameterError(f"until must be 'first', 'second' or a finite time > 0; got {until!r}")
+    return NO_APEX_LIMIT, t_end

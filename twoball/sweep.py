@@ -1,6 +1,6 @@
 """Sweeps: the bounces over a grid of (eps, mu, tau_ratio), stored as a resumable Zarr cube.
 
-The grid is cut into chunks; each chunk is computed by the exact solver (model.md, "What is
+The grid is cut into chunks; each chunk is computed by the exact solver (docs/model.md, "What is
 measured"), calling its compiled kernel case by case for the apex heights and times and the
 contact count only (no contact intervals, no phases are recorded). Chunks run in parallel
 (local processes, or a Dask distributed cluster) and each is written to the store as soon as it
@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from twoball.errors import ParameterError
 from twoball.exact import STATUS_DONE, STATUS_PHASES, STATUS_REST, STATUS_STUCK, prepare, run
 from twoball.model import (
     DEFAULT_HEIGHT,
@@ -44,6 +45,7 @@ from twoball.model import (
     icm_height,
     initial_gap_height,
 )
+from twoball.observables import ratios
 
 DIMS = ("eps", "mu", "tau_ratio")
 SPACINGS = ("linear", "log")
@@ -100,19 +102,21 @@ class Axis:
 
     def __post_init__(self) -> None:
         if self.name not in DIMS:
-            raise ValueError(f"axis must be one of {', '.join(DIMS)}; got {self.name!r}")
+            raise ParameterError(f"axis must be one of {', '.join(DIMS)}; got {self.name!r}")
         check_value(self.name, self.start)
         check_value(self.name, self.stop)
         if not isinstance(self.count, int) or self.count < 1:
-            raise ValueError(f"{self.name}: count must be an integer >= 1; got {self.count!r}")
+            raise ParameterError(f"{self.name}: count must be an integer >= 1; got {self.count!r}")
         if self.spacing not in SPACINGS:
-            raise ValueError(f"{self.name}: spacing must be linear or log; got {self.spacing!r}")
+            raise ParameterError(
+                f"{self.name}: spacing must be linear or log; got {self.spacing!r}"
+            )
         if self.spacing == "log" and self.start <= 0.0:
-            raise ValueError(f"{self.name}: a log axis needs start > 0; got {self.start!r}")
+            raise ParameterError(f"{self.name}: a log axis needs start > 0; got {self.start!r}")
         if self.count == 1 and self.stop != self.start:
-            raise ValueError(f"{self.name}: one value needs start == stop")
+            raise ParameterError(f"{self.name}: one value needs start == stop")
         if self.count > 1 and not self.stop > self.start:
-            raise ValueError(f"{self.name}: stop must be greater than start")
+            raise ParameterError(f"{self.name}: stop must be greater than start")
 
     def values(self) -> np.ndarray:
         """The grid values, end points exactly as given."""
@@ -134,21 +138,28 @@ def parse_axis(name: str, text: str) -> Axis:
         value = _parse_number(name, parts[0])
         return Axis(name, value, value, 1)
     if len(parts) not in (3, 4):
-        raise ValueError(f"{name} must be VALUE or START:STOP:COUNT[:linear|log]; got {text!r}")
+        raise ParameterError(f"{name} must be VALUE or START:STOP:COUNT[:linear|log]; got {text!r}")
     try:
         count = int(parts[2])
     except ValueError:
-        raise ValueError(f"{name}: COUNT must be an integer; got {parts[2]!r}") from None
+        raise ParameterError(f"{name}: COUNT must be an integer; got {parts[2]!r}") from None
     spacing = parts[3] if len(parts) == 4 else "linear"
     start, stop = _parse_number(name, parts[0]), _parse_number(name, parts[1])
     return Axis(name, start, stop, count, spacing)
+
+
+def _height_argument(text: str) -> float:
+    try:
+        return _parse_number("height", text)
+    except ParameterError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def _parse_number(name: str, text: str) -> float:
     try:
         return float(Fraction(text.strip())) if "/" in text else float(text)
     except (ValueError, ZeroDivisionError):
-        raise ValueError(f"{name}: not a number: {text!r}") from None
+        raise ParameterError(f"{name}: not a number: {text!r}") from None
 
 
 @dataclass(frozen=True)
@@ -169,17 +180,17 @@ class Grid:
         object.__setattr__(self, "axes", (self.eps, self.mu, self.tau_ratio))
         for axis, dim in zip(self.axes, DIMS, strict=True):
             if axis.name != dim:
-                raise ValueError(f"the {dim} axis is named {axis.name!r}")
+                raise ParameterError(f"the {dim} axis is named {axis.name!r}")
         check_value("height", self.height)
         if self.eps12 is not None:
             check_value("eps12", self.eps12)
         if self.dtype not in DTYPES:
-            raise ValueError(f"dtype must be float64 or float32; got {self.dtype!r}")
+            raise ParameterError(f"dtype must be float64 or float32; got {self.dtype!r}")
         if self.chunks is None:
             object.__setattr__(self, "chunks", (1, self.mu.count, self.tau_ratio.count))
         chunks = tuple(self.chunks)
         if len(chunks) != 3 or not all(isinstance(c, int) and c >= 1 for c in chunks):
-            raise ValueError(f"chunks must be three integers >= 1; got {self.chunks!r}")
+            raise ParameterError(f"chunks must be three integers >= 1; got {self.chunks!r}")
         object.__setattr__(self, "chunks", chunks)
         # every drop must lie in the domain double precision carries; its rounding ratio is
         # monotone along each axis, so the grid's corners decide (docs/model.md)
@@ -229,25 +240,25 @@ class Grid:
 
 
 def _bounce_block(mu, zeta01, zeta12, x2_0, height, apex_h, apex_t, contacts, status) -> None:
-    """Run every case of a block to its second apex (model.md, "What is measured").
+    """Run every case of a block to its second apex (docs/model.md, "What is measured").
 
     mu (nm), zeta01 (ne), zeta12 (ne, nm), x2_0 (ne, nt); outputs (ne, nm, nt), apex arrays with
     a leading axis of 2, pre-filled with NaN. Nothing but apexes and counts is recorded.
 
-    The loop is Python around the compiled kernel (~40 us a case, the loop adds ~10 %): a cached
-    numba loop here would inline ``exact.run``, and numba's cache does not notice when another
-    module changes, so after a change to exact.py it ran stale machine code (a segfault).
+    The loop is Python around the compiled kernel: a cached numba loop here would inline
+    ``exact.run``, and numba's cache does not notice when another module changes (stale machine
+    code, a segfault); docs/performance.md has what the loop costs.
     """
     for i in range(x2_0.shape[0]):
         for j in range(mu.shape[0]):
             prepared = prepare(mu[j], zeta01[i], zeta12[i, j])
             for k in range(x2_0.shape[1]):
                 outcome = run(height, x2_0[i, k], 2, np.inf, prepared, False, False)
-                n_apex = outcome[4]
-                apex_t[:n_apex, i, j, k] = outcome[2][:n_apex]
-                apex_h[:n_apex, i, j, k] = outcome[3][:n_apex]
-                contacts[i, j, k] = outcome[5] if n_apex > 0 else np.nan
-                status[i, j, k] = outcome[0]
+                n_apex = outcome.apex_t.size
+                apex_t[:n_apex, i, j, k] = outcome.apex_t
+                apex_h[:n_apex, i, j, k] = outcome.apex_h
+                contacts[i, j, k] = outcome.ball_contacts_first if n_apex > 0 else np.nan
+                status[i, j, k] = outcome.status
 
 
 def compute_block(
@@ -259,7 +270,8 @@ def compute_block(
     eps12: float | None = None,
 ) -> dict[str, np.ndarray]:
     """Every cube variable (float64, bool for delayed_rebound, int8 for status) on the outer
-    grid of the three 1-d arrays, with the per-drop setup of model.md ("Restitution and damping",
+    grid of the three 1-d arrays, with the per-drop setup of docs/model.md ("Restitution and
+    damping",
     "Initial condition") done exactly as :func:`twoball.check_parameters` does it."""
     eps, mu, tau_ratio = (np.asarray(a, dtype=float) for a in (eps, mu, tau_ratio))
     zeta01 = np.array([decay_ratio(e) for e in eps])
@@ -287,10 +299,7 @@ def compute_block(
         "contacts_first": contacts,
         "h_icm": h_icm,
         "x2_0": np.array(x2_0),
-        "h1_over_icm": h1 / h_icm,
-        "h1_over_drop": h1 / x2_0,
-        "h2_over_drop": h2 / x2_0,
-        "h2_over_h1": h2 / h1,
+        **ratios(h1, h2, x2_0, h_icm),
         "delayed_rebound": h2 > h1,  # False where h2 is NaN
         "status": status,
     }
@@ -336,7 +345,7 @@ def _template(grid: Grid, command: str):
         "height": grid.height,
         "eps12": "equal to eps" if grid.eps12 is None else grid.eps12,
         "grid": json.dumps({a.name: asdict(a) for a in grid.axes}),
-        "solver": SOLVER + " (closed-form phase-by-phase solver, model.md)",
+        "solver": SOLVER + " (closed-form phase-by-phase solver, docs/model.md)",
         "twoball_version": __version__,
         "precision": f"{grid.dtype} floats, computed in float64",
         "sweep_command": command,
@@ -358,12 +367,12 @@ def _open_or_create(grid: Grid, store: Path) -> set[str]:
             attrs = json.loads((store / "zarr.json").read_text())["attributes"]
             found = json.loads(attrs["sweep_arguments"])
         except (OSError, KeyError, ValueError):
-            raise ValueError(
+            raise ParameterError(
                 f"{store} exists and is not a twoball sweep store: refusing to overwrite it"
             ) from None
         if found != wanted:
             differences = sorted(k for k in wanted if wanted[k] != found.get(k))
-            raise ValueError(
+            raise ParameterError(
                 f"{store} was written by a sweep with other arguments (differing: "
                 f"{', '.join(differences)}; it was made by: {attrs.get('sweep_command')}); "
                 "refusing to overwrite it: choose another store or delete it"
@@ -421,9 +430,9 @@ def sweep(
 
     store = Path(store)
     if workers is not None and (not isinstance(workers, int) or workers < 1):
-        raise ValueError(f"workers must be an integer >= 1; got {workers!r}")
+        raise ParameterError(f"workers must be an integer >= 1; got {workers!r}")
     if scheduler is not None and workers is not None:
-        raise ValueError("workers applies to local runs only, not with a scheduler")
+        raise ParameterError("workers applies to local runs only, not with a scheduler")
     client = None if scheduler is None else _connect(scheduler)
     lock = _lock(store)
     try:
@@ -472,6 +481,16 @@ def sweep(
         lock.unlink(missing_ok=True)
         if client is not None:
             client.close()
+    # complete: one metadata document, so that xarray.open_zarr reads it without a warning
+    import warnings
+
+    import zarr
+
+    with warnings.catch_warnings():
+        # zarr notes that consolidation is not in the v3 spec (xarray relies on it), and that
+        # the done-markers in _progress/ are not zarr objects: both known and harmless here
+        warnings.simplefilter("ignore", UserWarning)
+        zarr.consolidate_metadata(str(store))
     from twoball.cubes import load_cube
 
     return load_cube(store)
@@ -494,14 +513,14 @@ def _lock(store: Path) -> Path:
                 continue
             except PermissionError:
                 pass  # alive, another user's
-            raise ValueError(
+            raise ParameterError(
                 f"{store} is being written by another sweep (process {holder}); nothing was "
                 f"changed: wait for it to finish, then run again to resume or check the cube"
             ) from None
         with os.fdopen(descriptor, "w") as handle:
             handle.write(str(os.getpid()))
         return lock
-    raise ValueError(f"could not take the lock {lock}")
+    raise ParameterError(f"could not take the lock {lock}")
 
 
 def plan(grid: Grid, workers: int) -> str:
@@ -543,7 +562,7 @@ def _connect(scheduler: str):
     try:
         return Client(scheduler, timeout=SCHEDULER_TIMEOUT)
     except (OSError, TimeoutError, ValueError, TypeError) as error:
-        raise ValueError(
+        raise ParameterError(
             f"scheduler: cannot reach a Dask scheduler at {scheduler!r} within "
             f"{SCHEDULER_TIMEOUT} ({type(error).__name__}: {error})"
         ) from None
@@ -568,11 +587,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         parser.add_argument(
             f"--{name.replace('_', '-')}", required=True, help=axis_help.format(doc)
         )
-    parser.add_argument("--height", default=repr(DEFAULT_HEIGHT), help="drop height H (1e4)")
+    parser.add_argument(
+        "--height", type=_height_argument, default=DEFAULT_HEIGHT, help="drop height H (1e4)"
+    )
     parser.add_argument("--eps12", default=None, help="ball-ball restitution (default: eps)")
     parser.add_argument("--chunks", default=None, help="chunk sizes E,M,T (default 1,all,all)")
     parser.add_argument("--dtype", default="float64", help="stored floats: float64 or float32")
-    parser.add_argument("--workers", default=None, help="local processes (default: all cores)")
+    parser.add_argument(
+        "--workers", type=int, default=None, help="local processes (default: all cores)"
+    )
     parser.add_argument("--scheduler", default=None, help="Dask distributed scheduler address")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.add_argument(
@@ -588,24 +611,20 @@ def _main(args: argparse.Namespace) -> int:
         try:
             chunks = tuple(int(part) for part in args.chunks.split(","))
         except ValueError:
-            raise ValueError(f"chunks must be three integers E,M,T; got {args.chunks!r}") from None
-    workers = None
-    if args.workers is not None:
-        try:
-            workers = int(args.workers)
-        except ValueError:
-            raise ValueError(f"workers must be an integer >= 1; got {args.workers!r}") from None
+            raise ParameterError(
+                f"chunks must be three integers E,M,T; got {args.chunks!r}"
+            ) from None
     grid = Grid(
         *axes,
-        height=_parse_number("height", args.height),
+        height=args.height,
         eps12=None if args.eps12 is None else _parse_number("eps12", args.eps12),
         chunks=chunks,
         dtype=args.dtype,
     )
-    undertaking = plan(grid, workers or os.cpu_count() or 1)
+    undertaking = plan(grid, args.workers or os.cpu_count() or 1)
     if grid.size > MAX_DROPS and not args.force:
-        raise ValueError(f"refusing {undertaking}: more than {MAX_DROPS:,} drops needs --force")
+        raise ParameterError(f"refusing {undertaking}: more than {MAX_DROPS:,} drops needs --force")
     print(f"sweep {args.store}: {undertaking}", flush=True)  # on stdout: --quiet keeps it
-    sweep(grid, args.store, scheduler=args.scheduler, workers=workers, progress=not args.quiet)
+    sweep(grid, args.store, scheduler=args.scheduler, workers=args.workers, progress=not args.quiet)
     print(f"{args.store}: {grid.size} cases, {len(grid.chunk_slices())} chunks, complete")
     return 0

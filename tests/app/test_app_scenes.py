@@ -13,9 +13,9 @@ import pytest
 from bokeh.document import Document
 
 import twoball
-from app import presets
 from app.delayed_map import map_cube
 from app.explorer import Explorer
+from twoball import presets
 
 PAPER = {"eps": "0.9", "mu": "0.01", "tau_ratio": "0.01"}
 

@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from app import presets
 from app.state import APP_RANGES, ExplorerState, read_query, url_query, validate
+from twoball import presets
 from twoball.model import Parameters
 
 

@@ -1,4 +1,5 @@
-"""``twoball report``: the paper's headline numbers (model.md, last table) beside ours.
+"""``twoball report``: the paper's headline numbers (docs/model.md, "The paper's sweep and its
+headline numbers") beside ours.
 
 Ours come from the shipped cubes (``paper`` for the sweep statistics, ``contacts`` for the
 contact-count map) and, for the close-up case, from one exact run. Every row says what differs
@@ -36,7 +37,8 @@ def _grid_words(cube) -> str:
 
 
 def sweep_rows(cube) -> list[Row]:
-    """The rows computed from a cube over the paper's ranges (model.md, last section)."""
+    """The rows computed from a cube over the paper's ranges (docs/model.md, "The paper's sweep and
+    its headline numbers")."""
     data = cube[["h2", "h1_over_icm", "delayed_rebound"]].load()
     delayed = data.delayed_rebound.values
     below = data.h1_over_icm.values < 1.0
@@ -59,13 +61,14 @@ def sweep_rows(cube) -> list[Row]:
             "12.3 %",
             _percent(int(delayed.sum()), delayed.size),
             f"{grid}; the paper gives neither H nor the spacing, and h2/h1 depends on H "
-            f"(model.md); {missing} cases with no second apex count as not delayed",
+            f'(docs/model.md, "Initial condition"); {missing} cases with no second apex count '
+            "as not delayed",
         ),
         Row(
             "of those, share with h1 below the ICM",
             "93 %",
             _percent(int((delayed & below).sum()), int(delayed.sum())),
-            "h_ICM from model.md (exact for eps01 = eps12); same grid",
+            'h_ICM from docs/model.md, "What is measured" (exact for eps01 = eps12); same grid',
         ),
         Row(
             "of cases with h1 below the ICM, share with a delayed rebound",
@@ -134,7 +137,8 @@ def close_up_row() -> Row:
 
 
 def paper_table(paper: str = "paper", contacts: str = "contacts") -> list[Row]:
-    """All rows of the model.md table, from the named (or given) cubes."""
+    """All rows of the table in docs/model.md, "The paper's sweep and its headline numbers", from
+    the named (or given) cubes."""
     from twoball.cubes import load_cube
 
     return [

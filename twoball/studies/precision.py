@@ -1,10 +1,10 @@
-"""Error against run time: every integrator over a range of tolerances (issue 3).
+"""Error against run time: every integrator over a range of tolerances.
 
 :func:`work_precision` runs the exact solver and the scipy integrators of
-:mod:`twoball.reference` on one drop, to the second apex (model.md, "What is measured"), and
+:mod:`twoball.reference` on one drop, to the second apex (docs/model.md, "What is measured"), and
 returns one row per method and tolerance: the relative errors in h1 and h2 against the exact
 solver and the median run time. The exact solver's own error is established independently by
-:mod:`twoball.truth` (``twoball precision`` reports it beside the table).
+:mod:`twoball.studies.truth` (``twoball precision`` reports it beside the table).
 
 ``twoball precision --out DIR`` does this on the documented :data:`CASES` over the full range of
 tolerances and writes ``DIR/work_precision.csv`` and ``DIR/work_precision.png``.
@@ -15,16 +15,18 @@ from __future__ import annotations
 import argparse
 import csv
 import math
-import statistics
 import textwrap
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from twoball import reference
+from twoball.errors import ParameterError, Status
 from twoball.model import DEFAULT_HEIGHT, check_parameters
+from twoball.observables import relative_error
 from twoball.solve import simulate
+from twoball.studies.timing import median_seconds
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -47,25 +49,6 @@ CASES = {
     "overdamped": (0.12, 0.02, 1.0),
     "nearly elastic": (0.999, 0.05, 0.3),
 }
-
-
-def relative_error(value: float | None, reference_value: float | None) -> float:
-    """|value - reference| / |reference|; inf when only one of them has the value (a missed or
-    an invented bounce), NaN when neither has it (there is no such bounce to compare)."""
-    if reference_value is None:
-        return math.nan if value is None else math.inf
-    if value is None or not math.isfinite(value):
-        return math.inf
-    return abs(value - reference_value) / abs(reference_value)
-
-
-def _median_seconds(run: Callable[[], object], repeats: int) -> float:
-    times = []
-    for _ in range(max(repeats, 1)):
-        start = time.perf_counter()
-        run()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def case_label(eps: float, mu: float, tau_ratio: float, eps12: float | None, height: float) -> str:
@@ -127,18 +110,18 @@ def measure_case(
     methods = METHODS if methods is None else tuple(methods)
     unknown = [m for m in methods if m not in METHODS]
     if unknown:
-        raise ValueError(f"methods must be among {', '.join(METHODS)}; got {unknown!r}")
+        raise ParameterError(f"methods must be among {', '.join(METHODS)}; got {unknown!r}")
     tolerances = APP_TOLERANCES if tolerances is None else tuple(float(t) for t in tolerances)
     for tol in tolerances:
         if not (math.isfinite(tol) and 0.0 < tol < 1.0):
-            raise ValueError(f"tolerances must be finite numbers in (0, 1); got {tol!r}")
+            raise ParameterError(f"tolerances must be finite numbers in (0, 1); got {tol!r}")
     if repeats < 1:
-        raise ValueError(f"repeats must be at least 1; got {repeats!r}")
+        raise ParameterError(f"repeats must be at least 1; got {repeats!r}")
     drop = {"eps12": eps12, "height": height}
     truth = simulate(eps, mu, tau_ratio, **drop)  # also loads the compiled kernel
     # scipy cannot tell that the upper ball came to rest and would integrate to its time limit:
     # where the exact solver stopped at rest, run it to a little past that time instead
-    until = "second" if truth.reason is None else REST_MARGIN * truth.end_time
+    until = "second" if truth.status == Status.DONE else REST_MARGIN * truth.end_time
     rows = []
     for method in methods:
         over_budget = False
@@ -166,7 +149,7 @@ def measure_case(
             else:
                 h1, h2 = result.h1, result.h2
                 first = time.perf_counter() - start
-                seconds = first if repeats == 1 else _median_seconds(run, repeats)
+                seconds = first if repeats == 1 else median_seconds(run, repeats)
             over_budget = seconds > budget
             row["rel_err_h1"] = relative_error(h1, truth.h1)
             row["rel_err_h2"] = relative_error(h2, truth.h2)
@@ -286,7 +269,7 @@ def plot_work_precision(rows: Sequence[dict], path: str | Path, title: str | Non
     work_precision_figure(rows, title).savefig(path, dpi=110)
 
 
-# The exact solver's own error on these cases is measured against :mod:`twoball.truth`.
+# The exact solver's own error on these cases is measured against :mod:`twoball.studies.truth`.
 TRUTH_COLUMNS = (
     "case",
     "h1_truth",
@@ -315,7 +298,7 @@ def _title(with_truth: bool, height: float | None = None) -> str:
 
 def exact_against_truth(cases: dict[str, tuple[float, float, float]]) -> list[dict]:
     """The exact solver's relative errors in h1 and h2 against the 40-digit reference."""
-    from twoball.truth import solve_truth
+    from twoball.studies.truth import solve_truth
 
     rows = []
     for case, parameters in cases.items():
@@ -328,8 +311,8 @@ def exact_against_truth(cases: dict[str, tuple[float, float, float]]) -> list[di
                 "case": case,
                 "h1_truth": _digits(truth.h1),
                 "h2_truth": _digits(truth.h2),
-                "rel_err_h1": _truth_error(result.h1, truth.h1),
-                "rel_err_h2": _truth_error(result.h2, truth.h2),
+                "rel_err_h1": relative_error(result.h1, truth.h1),
+                "rel_err_h2": relative_error(result.h2, truth.h2),
                 "contacts_first": result.contacts_first,
                 "contacts_first_truth": truth.contacts_first,
                 "truth_seconds": seconds,
@@ -342,14 +325,6 @@ def _digits(value) -> str:
     import mpmath
 
     return "" if value is None else mpmath.nstr(value, 25)
-
-
-def _truth_error(value: float | None, truth) -> float:
-    if truth is None:
-        return math.nan if value is None else math.inf
-    if value is None:
-        return math.inf
-    return float(abs(value - truth) / abs(truth))
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -373,9 +348,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def _main(args: argparse.Namespace) -> int:
     if args.repeats < 1:
-        raise ValueError(f"--repeats must be at least 1; got {args.repeats!r}")
+        raise ParameterError(f"--repeats must be at least 1; got {args.repeats!r}")
     if not args.budget > 0:
-        raise ValueError(f"--budget must be a number of seconds > 0; got {args.budget!r}")
+        raise ParameterError(f"--budget must be a number of seconds > 0; got {args.budget!r}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     truth_rows = [] if args.no_truth else exact_against_truth(CASES)

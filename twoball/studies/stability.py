@@ -1,17 +1,19 @@
-"""Stiff and extreme cases: does each method finish, in what time, and is it right (issue 3)?
+"""Stiff and extreme cases: does each method finish, in what time, and is it right?
 
 ``twoball stability --out DIR`` runs the exact solver over a grid of extreme parameters (mu from
 1e-6 to 1e2, eps from 0.02 through exp(-2), the damping branch switch, to 0.999999 and exactly
 1, tau_d/tau_f from 0 to 10, H from 1 to 1e8) and the scipy methods over a subset of it, each run
 in a worker process killed after a time cap. It writes ``DIR/stability.csv`` and
-``DIR/stability.png``, and the convergence of the ratios as H grows (model.md, "H matters") to
+``DIR/stability.png``, and the convergence of the ratios as H grows (docs/model.md, "Initial
+condition", on H) to
 ``DIR/h_convergence.csv`` and ``DIR/h_convergence.png``.
 
 What went wrong is detected, not assumed (:func:`diagnose`), from the run's own sampled
 trajectory and against the exact solver:
 
 - missed contact: fewer contact intervals than the exact solver before the same time, or a sample
-  where the clamped force (recomputed from the sampled state, model.md) pushes outside every
+  where the clamped force (recomputed from the sampled state, docs/model.md, "Bodies, coordinates,
+  forces") pushes outside every
   contact interval the method reported;
 - passed through: an overlap X2 - X1 deeper than the energy allows (:func:`max_compression`);
 - energy gained: the energy E of :func:`energy` rising along the trajectory (with the potential
@@ -27,15 +29,18 @@ import csv
 import math
 import multiprocessing
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from twoball import precision
+from twoball.errors import ParameterError, Status
+from twoball.exact import ROUNDING  # per phase, of the exact solver's state
 from twoball.model import check_parameters
+from twoball.observables import relative_error
 from twoball.solve import METHODS, simulate
+from twoball.studies import precision
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -62,7 +67,6 @@ SCIPY_TOLERANCE = 1e-8
 CONTACT_CHECK = ("DOP853", 1e-11)
 EXACT_LIMIT_SECONDS = 1.0
 RIGHT_RELATIVE_ERROR = 1e-4  # a scipy result within this of the exact one counts as right
-ROUNDING = 16.0 * np.finfo(float).eps  # per phase, of the exact solver's state
 ENERGY_RISE_SCIPY = 1e-6  # well beyond a tolerance of 1e-8: a real gain, not truncation noise
 COLUMNS = (
     "eps",
@@ -110,7 +114,8 @@ def scipy_cases() -> list[tuple[float, float, float, float]]:
 
 def energy(x1, x2, v1, v2, mu: float):
     """E = (v1^2 + mu v2^2)/2 + x1 + mu x2 + min(x1, 0)^2/2 + min(x2 - x1, 0)^2/2 (units of
-    k (m1 g / k)^2); never increases along an exact solution of the clamped model (model.md)."""
+    k (m1 g / k)^2); never increases along an exact solution of the clamped model (docs/model.md,
+    "Bodies, coordinates, forces")."""
     x1, x2, v1, v2 = (np.asarray(a, dtype=float) for a in (x1, x2, v1, v2))
     floor = np.minimum(x1, 0.0)
     ball = np.minimum(x2 - x1, 0.0)
@@ -215,28 +220,19 @@ def diagnose(
     options = {} if method == "exact" else {"rtol": tolerance, "atol": tolerance}
     row = {"eps": eps, "mu": mu, "tau_ratio": tau_ratio, "height": height, "method": method}
     start = time.perf_counter()
-    note = ""
     try:
-        try:
-            result = simulate(
-                eps, mu, tau_ratio, height=height, method=method, dense=True, throw=False, **options
-            )
-        except ValueError as error:
-            # reference.py's dense output raises when a solve_ivp piece holds no sample time
-            # (see docs/accuracy.md); the run itself is judged without its trajectory
-            note = f"no trajectory (dense output raised: {error})"
-            start = time.perf_counter()
-            result = simulate(
-                eps, mu, tau_ratio, height=height, method=method, throw=False, **options
-            )
+        result = simulate(
+            eps, mu, tau_ratio, height=height, method=method, dense_output=True, throw=False,
+            **options,
+        )  # fmt: skip
     except (ValueError, ArithmeticError, RuntimeError, MemoryError) as error:
         row.update(finished=False, seconds=time.perf_counter() - start)
         row.update(reason=f"{type(error).__name__}: {error}", problems=["crashed"])
         return row
     row["seconds"] = time.perf_counter() - start
     problems = []
-    reason = "; ".join(text for text in (result.reason, note) if text)
-    failed = "failed" in reason
+    reason = result.reason or ""
+    failed = result.status == Status.FAILED
     if failed:
         problems.append("step-size failure")
     rise = deepest = None
@@ -278,7 +274,7 @@ def judge(row: dict, exact_row: dict) -> dict:
         elif mine > theirs:
             problems.append("extra ball contact")
         for name in ("h1", "h2"):
-            error = _relative(row[name], exact_row[name])
+            error = relative_error(row[name], exact_row[name])
             row[f"rel_err_{name}"] = error
             if error > RIGHT_RELATIVE_ERROR:
                 problems.append(f"wrong {name}")
@@ -293,35 +289,32 @@ def judge(row: dict, exact_row: dict) -> dict:
     return row
 
 
-def _relative(value: float | None, reference: float | None) -> float:
-    if value is None and reference is None:
-        return 0.0
-    if value is None or reference is None or not math.isfinite(value):
-        return math.inf
-    return abs(value - reference) / abs(reference)
-
-
-def _worker(connection) -> None:
+def _worker(connection, function: Callable[..., dict]) -> None:
     simulate(0.8, 0.1, 0.5)  # load the compiled kernel before any timing
+    connection.send("ready")
     while True:
         task = connection.recv()
         if task is None:
             return
-        connection.send(diagnose(*task))
+        connection.send(function(*task))
 
 
 class _Workers:
-    """Worker processes that run :func:`diagnose`; a task over the cap kills its worker."""
+    """Worker processes that run ``function`` (:func:`diagnose`); a task over the cap kills its
+    worker. Started with "spawn", as the sweep's are: no state is inherited, so ``function``
+    must be importable by name."""
 
-    def __init__(self, count: int, cap: float):
-        self.context = multiprocessing.get_context("fork")
+    def __init__(self, count: int, cap: float, function: Callable[..., dict]):
+        self.context = multiprocessing.get_context("spawn")
         self.cap = cap
+        self.function = function
         self.slots = [self._start() for _ in range(count)]
 
     def _start(self):
         parent, child = self.context.Pipe()
-        process = self.context.Process(target=_worker, args=(child,), daemon=True)
+        process = self.context.Process(target=_worker, args=(child, self.function), daemon=True)
         process.start()
+        parent.recv()  # started and warmed up: the time cap counts from the first task
         return process, parent
 
     def run(self, tasks: Sequence[tuple], progress=None) -> list[dict]:
@@ -378,12 +371,14 @@ def study(
     workers: int = 2,
     check: tuple[str, float] | None = None,
     progress=None,
+    diagnose_one: Callable[..., dict] | None = None,
 ) -> list[dict]:
     """The stability study: the exact solver on ``exact_cases``, every other method on
     ``scipy_subset`` (which must be among ``exact_cases``), each under a time cap.
 
     ``check``, a (method, tolerance) such as :data:`CONTACT_CHECK`, adds a tight run of that
     method on the subset, named "method tolerance", as an independent count of the contacts.
+    ``diagnose_one`` replaces :func:`diagnose` in the workers (a module-level function).
     """
     exact_cases = [tuple(float(v) for v in case) for case in exact_cases]
     scipy_subset = [tuple(float(v) for v in case) for case in scipy_subset]
@@ -397,7 +392,7 @@ def study(
     checked = len(tasks)
     if check is not None:
         tasks += [(*case, *check) for case in scipy_subset]
-    pool = _Workers(workers, cap)
+    pool = _Workers(workers, cap, diagnose if diagnose_one is None else diagnose_one)
     try:
         rows = pool.run(tasks, progress)
     finally:
@@ -517,7 +512,8 @@ def _short(row: dict) -> str:
     return seconds if not problems else seconds + "\n" + ",".join(problems[:3])
 
 
-# H-convergence (model.md, "H matters"): the paper says the ratios depend on (eps, mu,
+# H-convergence (docs/model.md, "Initial condition", on H): the paper says the ratios depend on
+# (eps, mu,
 # tau_d/tau_f) only; they do as H grows.
 H_VALUES = tuple(10.0**k for k in range(1, 9))
 H_POINTS = ((0.816, 0.05, 0.3), (0.9, 0.01, 0.01), (0.7, 0.1, 0.7), (0.816, 0.01, 0.05))
@@ -587,9 +583,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def _main(args: argparse.Namespace) -> int:
     if not (math.isfinite(args.cap) and args.cap > 0):
-        raise ValueError(f"--cap must be a number of seconds > 0; got {args.cap!r}")
+        raise ParameterError(f"--cap must be a number of seconds > 0; got {args.cap!r}")
     if args.workers < 1:
-        raise ValueError(f"--workers must be at least 1; got {args.workers!r}")
+        raise ParameterError(f"--workers must be at least 1; got {args.workers!r}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     subset = scipy_cases()

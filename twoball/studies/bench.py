@@ -5,7 +5,8 @@ H = 1e4), each run to the second apex in one process: the exact solver, and LSOD
 ``odeint`` with rtol = atol = 1e-8 on a time grid (the paper's way). Each time is the median of
 repeats; the ratio is per case, then summarised by its median. Accuracy is checked against an
 independent method, DOP853 at rtol = atol = 1e-12 with restarts at every apex; the case where
-the two differ most is then solved by the 40-digit reference of ``twoball.truth`` to say which
+the two differ most is then solved by the 40-digit reference of ``twoball.studies.truth`` to say
+which
 of the two is off.
 """
 
@@ -13,11 +14,13 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import time
 
 import numpy as np
 
+from twoball.errors import ParameterError
+from twoball.observables import relative_error
 from twoball.solve import simulate
+from twoball.studies.timing import median_seconds
 
 PAPER_CUBE = {"eps": (0.5, 1.0), "mu": (0.01, 1.0 / 3.0), "tau_ratio": (0.01, 1.0)}
 
@@ -27,21 +30,6 @@ def random_cases(count: int, seed: int) -> list[tuple[float, float, float]]:
     rng = np.random.default_rng(seed)
     columns = [rng.uniform(low, high, count) for low, high in PAPER_CUBE.values()]
     return [tuple(float(c[i]) for c in columns) for i in range(count)]
-
-
-def _median_time(run, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        run()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
-
-def _relative(value: float | None, truth: float | None) -> float:
-    if value is None or truth is None:
-        return float("nan") if value is truth else float("inf")
-    return abs(value - truth) / abs(truth)
 
 
 def benchmark(count: int = 50, seed: int = 0, repeats: int = 5, height: float = 1e4) -> dict:
@@ -64,17 +52,19 @@ def benchmark(count: int = 50, seed: int = 0, repeats: int = 5, height: float = 
                 "eps": eps,
                 "mu": mu,
                 "tau_ratio": tau_ratio,
-                "exact_s": _median_time(exact_run, repeats),
-                "lsoda_s": _median_time(lsoda_run, max(1, repeats // 2)),
+                "exact_s": median_seconds(exact_run, repeats),
+                "lsoda_s": median_seconds(lsoda_run, max(1, repeats // 2)),
                 "exact_vs_dop853": max(
-                    _relative(exact.h1, check.h1), _relative(exact.h2, check.h2)
+                    relative_error(exact.h1, check.h1), relative_error(exact.h2, check.h2)
                 ),
-                "lsoda_vs_exact": max(_relative(lsoda.h1, exact.h1), _relative(lsoda.h2, exact.h2)),
+                "lsoda_vs_exact": max(
+                    relative_error(lsoda.h1, exact.h1), relative_error(lsoda.h2, exact.h2)
+                ),
             }
         )
     ratios = [row["lsoda_s"] / row["exact_s"] for row in rows]
     worst = max(rows, key=lambda row: row["exact_vs_dop853"])
-    from twoball.truth import solve_truth  # the studies extra (mpmath)
+    from twoball.studies.truth import solve_truth  # the studies extra (mpmath)
 
     truth = solve_truth(worst["eps"], worst["mu"], worst["tau_ratio"], height=height)
     exact = simulate(worst["eps"], worst["mu"], worst["tau_ratio"], height=height)
@@ -90,8 +80,12 @@ def benchmark(count: int = 50, seed: int = 0, repeats: int = 5, height: float = 
     truth_h1, truth_h2 = float(truth.h1), float(truth.h2)
     return {
         "worst_case": (worst["eps"], worst["mu"], worst["tau_ratio"]),
-        "worst_exact_vs_truth": max(_relative(exact.h1, truth_h1), _relative(exact.h2, truth_h2)),
-        "worst_dop853_vs_truth": max(_relative(check.h1, truth_h1), _relative(check.h2, truth_h2)),
+        "worst_exact_vs_truth": max(
+            relative_error(exact.h1, truth_h1), relative_error(exact.h2, truth_h2)
+        ),
+        "worst_dop853_vs_truth": max(
+            relative_error(check.h1, truth_h1), relative_error(check.h2, truth_h2)
+        ),
         "cases": rows,
         "exact_median_s": statistics.median(row["exact_s"] for row in rows),
         "lsoda_median_s": statistics.median(row["lsoda_s"] for row in rows),
@@ -112,7 +106,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def _main(args: argparse.Namespace) -> int:
     if args.cases < 1 or args.repeats < 1:
-        raise ValueError("--cases and --repeats must be at least 1")
+        raise ParameterError("--cases and --repeats must be at least 1")
     figures = benchmark(args.cases, args.seed, args.repeats)
     print(f"{args.cases} random cases of the paper's cube, H = 1e4, to the second apex")
     print(f"exact solver      median {figures['exact_median_s'] * 1e3:9.3f} ms per case")
@@ -135,7 +129,7 @@ def _main(args: argparse.Namespace) -> int:
     eps, mu, tau_ratio = figures["worst_case"]
     print(
         f"where exact and DOP853 differ most (eps {eps:.4g}, mu {mu:.4g}, tau_ratio "
-        f"{tau_ratio:.4g}), relative error against the 40-digit reference (twoball.truth): "
+        f"{tau_ratio:.4g}), relative error against the 40-digit reference (twoball.studies.truth): "
         f"exact {figures['worst_exact_vs_truth']:.1e}, "
         f"DOP853 {figures['worst_dop853_vs_truth']:.1e}"
     )

@@ -1,4 +1,7 @@
-"""Presets a class knows, and the conversion between dimensionless and SI units (model.md).
+"""Presets a class knows, and the conversion between dimensionless and SI units.
+
+The scales follow from the dimensionless variables of docs/model.md, "Bodies, coordinates,
+forces".
 
 Plain physics, no UI. Both presets drop a small ball on a size-7 basketball, so the lower ball,
 and with it the unit conversion, is the same for both:
@@ -19,9 +22,10 @@ the rules allow):
   eps12 = sqrt(250/305) = 0.905.
 - Stiffness: the model has one linear stiffness k for both contacts. k = 6.0e4 N/m is an order
   of magnitude, not a measurement of these balls: it is the value for which a basketball dropped
-  from 1 m has H ~ 1e4 (model.md) and it gives a floor contact of about 10 ms
-  (tau_f sqrt(m1/k)), the duration measured for inflated balls on a rigid floor (R. Cross,
-  "The bounce of a ball", Am. J. Phys. 67, 222 (1999)). Change STIFFNESS to use a measured value.
+  from 1 m has H ~ 1e4 (docs/model.md, "Initial condition") and it gives a floor contact of
+  about 10 ms (tau_f sqrt(m1/k)), the duration measured for inflated balls on a rigid floor
+  (R. Cross, "The bounce of a ball", Am. J. Phys. 67, 222 (1999)). Change STIFFNESS to use a
+  measured value.
 """
 
 from __future__ import annotations

@@ -1,15 +1,16 @@
-"""A slow, high-precision reference for the exact solver: mpmath at 40 digits (issue 3).
+"""A slow, high-precision reference for the exact solver: mpmath at 40 digits.
 
 It shares no code with :mod:`twoball.exact` (only the validated inputs of
 :func:`twoball.model.check_parameters`, converted exactly to mpmath numbers, so that both solve
 the same equations with the same coefficients). The method is deliberately different:
 
 - The state y = (x1, x2, v1, v2, 1) of a phase obeys y' = A y, with A the phase's 5x5 matrix
-  (model.md, "Bodies, coordinates, forces": the equations of motion with the active contacts'
+  (docs/model.md, "Bodies, coordinates, forces": the equations of motion with the active contacts'
   forces, gravity carried by the constant fifth component). A phase is walked in steps of dt with
   the propagator expm(A dt) from ``mpmath.expm``.
 - Every switching quantity is a linear function of y: the overlap eta, g = eta + 2 zeta eta'
-  and their rates (rows of A and A^2). A contact is active while max(eta, g) < 0 (model.md); the
+  and their rates (rows of A and A^2). A contact is active while max(eta, g) < 0 (docs/model.md,
+  "Bodies, coordinates, forces"); the
   apex is v2 falling through zero while the ball contact is inactive ("What is measured").
 - A switch is looked for at each step's end and, to catch a touch that dips in and out within a
   step, at the extremum of eta and of g inside the step (where their rate changes sign). It is
@@ -56,7 +57,8 @@ class Truth:
 
 
 def _phase_matrix(floor_on: bool, ball_on: bool, mu, z01, z12) -> mpmath.matrix:
-    """y' = A y for y = (x1, x2, v1, v2, 1) with the given contacts active (model.md)."""
+    """y' = A y for y = (x1, x2, v1, v2, 1) with the given contacts active (docs/model.md, "Bodies,
+    coordinates, forces")."""
     a = mpmath.matrix(5, 5)
     a[0, 2] = a[1, 3] = 1
     a[2, 4] = a[3, 4] = -1  # gravity

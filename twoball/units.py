@@ -1,10 +1,10 @@
-"""Scales and labels of the two unit systems the explorer shows (presets.py has the physics)."""
+"""Scales and labels of the two unit systems results are shown in (the physics: twoball.presets)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from . import presets
+from twoball import presets
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,64 @@
+"""What can go wrong in a run, by name: bad input, and how a run ended.
+
+``ParameterError`` is the one exception for bad input (a ``ValueError``, so existing callers that
+catch ``ValueError`` keep working); the command line reports it in one line with exit status 2,
+and anything else keeps its traceback. ``Status`` is how a run ended, with the message a user
+reads, in the manner of scipy's ``OdeResult.status``/``message``.
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+
+class ParameterError(ValueError):
+    """Bad input: the message names the parameter and its allowed range."""
+
+
+class Status(IntEnum):
+    """How a run ended. ``DONE`` and ``REST`` are successes; the others are not.
+
+    ``STUCK`` and ``PHASE_LIMIT`` come from the exact solver (a bug or an input outside what
+    double precision carries); ``FAILED`` and ``NO_APEX`` from the scipy references (an
+    integrator error; no apex before the horizon, e.g. a ball at rest that the integrator cannot
+    tell). The integer values are those the exact kernel returns and the sweep stores.
+    """
+
+    DONE = 0
+    REST = 1
+    STUCK = 2
+    PHASE_LIMIT = 3
+    FAILED = 4
+    NO_APEX = 5
+    IMPOSSIBLE = 6
+
+    @property
+    def message(self) -> str:
+        """What happened, in words (empty for ``DONE``)."""
+        return _MESSAGES[self]
+
+    @property
+    def success(self) -> bool:
+        """True when the run reached what was asked or ended at rest, as the model says."""
+        return self in (Status.DONE, Status.REST)
+
+
+_MESSAGES = {
+    Status.DONE: "",
+    Status.REST: "the upper ball came to rest on the lower one",
+    Status.STUCK: "root finder made no progress (please report: this is a bug)",
+    Status.PHASE_LIMIT: "phase limit reached",
+    Status.FAILED: "integrator failed",
+    Status.NO_APEX: "no further apex before the integration horizon",
+    Status.IMPOSSIBLE: "an apex that is not finite or above what the energy at release allows "
+    "(the input is beyond what double precision resolves)",
+}
+
+
+class SolverError(RuntimeError):
+    """A run that did not reach a trustworthy result (see ``simulate``'s ``throw``);
+    ``result`` holds what was found, its ``status`` and ``reason`` say what happened."""
+
+    def __init__(self, message: str, result=None) -> None:
+        super().__init__(message)
+        self.result = result
