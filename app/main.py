@@ -10,4 +10,4 @@ query = {key: values[-1].decode(errors="replace") for key, values in pn.state.se
 explorer = Explorer(query)
 if pn.state.location is not None:
     explorer.follow_location(pn.state.location)
-explorer.servable(title="Two-ball bounce explorer")
+explorer.page().servable(title="Two-ball bounce explorer")

@@ -53,3 +53,21 @@ class Scene(pn.viewable.Viewer):
 
     def update(self) -> None:
         raise NotImplementedError
+
+
+def readable(fig, presentation: bool) -> None:
+    """Font sizes of a Bokeh figure: for a screen, or for a room (tick labels >= 16 px)."""
+    ticks, labels, title = ("16pt", "18pt", "20pt") if presentation else ("10pt", "11pt", "12pt")
+    for axis in fig.axis:
+        axis.major_label_text_font_size = ticks
+        axis.axis_label_text_font_size = labels
+    fig.title.text_font_size = title
+    for legend in fig.legend:
+        legend.label_text_font_size = ticks
+
+
+def font_sizes(presentation: bool) -> dict[str, int]:
+    """HoloViews' ``fontsize`` option, the same sizes as :func:`readable`."""
+    if presentation:
+        return {"ticks": "16pt", "labels": "18pt", "title": "20pt", "legend": "16pt"}
+    return {"ticks": "10pt", "labels": "11pt", "title": "12pt", "legend": "10pt"}

@@ -20,6 +20,7 @@ from apphelpers import (
     free_port,
     panel_serve,
     serve,
+    server_errors,
     wait_until_served,
 )
 
@@ -63,3 +64,13 @@ def browser():
         chromium = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
         yield chromium
         chromium.close()
+
+
+@pytest.fixture(autouse=True)
+def server_log_stays_clean(request):
+    """Every test that uses the served app fails on an error or traceback in its log."""
+    yield
+    if "app_server" in request.fixturenames:
+        _, log = request.getfixturevalue("app_server")
+        errors = server_errors(log)
+        assert errors == [], "the server logged:\n" + "\n".join(errors)
