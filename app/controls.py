@@ -15,6 +15,7 @@ import param
 from bokeh.models import CustomJSTickFormatter
 
 from . import presets
+from .scene import later
 from .state import APP_RANGES, ExplorerState, validate
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
@@ -30,21 +31,6 @@ def plain(text: str) -> str:
     text = LONG_WORD.sub(lambda match: match.group()[:40] + "...", text)
     text = text.replace("://", ":\u200b//")  # no bare address for a linkifier to catch
     return MARKDOWN_SPECIALS.sub(r"\\\1", text)
-
-
-def later(callback) -> None:
-    """Run ``callback`` on the session's next tick (at once without a server).
-
-    A typed value changes the state, which redraws Bokeh models and rewrites the widget it came
-    from. Done inside the widget's own callback, Bokeh raised "_pending_writes should be
-    non-None when we have a document lock" and dropped the redraw (issue: typed H). On the next
-    tick the document is locked by Bokeh with its pending writes set.
-    """
-    document = pn.state.curdoc
-    if document is None or document.session_context is None:
-        callback()
-    else:
-        document.add_next_tick_callback(callback)
 
 
 class Controls(pn.viewable.Viewer):

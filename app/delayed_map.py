@@ -37,15 +37,15 @@ RATIO_CENTRES = {"h2_over_h1": 1.0, "h1_over_icm": 1.0}
 RATIO_TICKS = [0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1, 1.4, 2, 3, 5, 10, 20, 50, 100]
 
 
+def ratio_colorbar() -> dict:
+    """Colour-bar options of a ratio: a FixedTicker shows the ticks inside the colour range
+    (new models each time: a Bokeh model belongs to one session's document)."""
+    return {"ticker": FixedTicker(ticks=RATIO_TICKS), "formatter": BasicTickFormatter()}
+
+
 def variable_label(variable: str) -> str:
     """The cube's own name of a variable (its ``long_name``)."""
     return map_cube()[variable].attrs.get("long_name", variable)
-
-
-def ratio_ticks(low: float, high: float) -> list[float]:
-    """The ticks of :data:`RATIO_TICKS` inside [low, high], at least its ends."""
-    inside = [t for t in RATIO_TICKS if low <= t <= high]
-    return inside if len(inside) >= 3 else [low, 1.0, high]
 
 
 @functools.cache
@@ -181,7 +181,10 @@ class MapScene(Scene):
         if self.slice is not None and variable not in self.slice.data_vars:
             self._stale = True  # a new variable: its slice is read now
         if not self.active:  # rendered off screen: nothing is read until the map is opened
-            return blank_image(mu_dim, tau_dim)
+            blank = blank_image(mu_dim, tau_dim)  # the plot keeps its first colour bar's ticker
+            if variable in RATIO_CENTRES:
+                return blank.opts(colorbar=True, logz=True, colorbar_opts=ratio_colorbar())
+            return blank
         self.current()
         label = variable_label(variable)
         if self.slice is None:
@@ -198,12 +201,11 @@ class MapScene(Scene):
             spread = float(np.percentile(np.abs(np.log10(finite)), 98)) if finite.size else 1.0
             spread = max(spread, 0.05)
             low, high = 10**-spread, 10**spread
-            ticker = FixedTicker(ticks=ratio_ticks(low, high))
             opts = dict(
                 cmap="RdBu_r",
                 logz=True,
                 clim=(low, high),
-                colorbar_opts={"ticker": ticker, "formatter": BasicTickFormatter()},
+                colorbar_opts=ratio_colorbar(),
             )
         else:
             opts = dict(cmap="viridis", logz=False, clim=(np.nan, np.nan))
