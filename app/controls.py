@@ -33,6 +33,21 @@ def plain(text: str) -> str:
     return MARKDOWN_SPECIALS.sub(r"\\\1", text)
 
 
+MEANINGS = """
+**eps**: how bouncy each contact is (1: no energy lost, 0: no bounce at all).
+
+**mu = m2/m1**: how much lighter the upper ball is (0.01: a hundred times lighter).
+
+**tau_d/tau_f**: how far apart the balls are at release: the time the gap takes to close,
+over the duration of one floor contact (0.01: nearly touching).
+
+**H**: the drop height in units of the lower ball's squash under its own weight, m1 g / k.
+
+**ICM** (dotted green line): the textbook prediction, one contact after the other (floor, then
+ball): up to 9 times the drop height for elastic balls and a very light upper ball.
+"""
+
+
 class Controls(pn.viewable.Viewer):
     """Widgets bound to one :class:`ExplorerState`, and the message box for bad input."""
 
@@ -216,5 +231,6 @@ class Controls(pn.viewable.Viewer):
             self.units,
             *self.sliders.values(),
             advanced,
+            pn.pane.Markdown(MEANINGS, sizing_mode="stretch_width"),
             sizing_mode="stretch_width",
         )
