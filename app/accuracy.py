@@ -17,7 +17,7 @@ from bokeh.palettes import Category10
 
 from twoball.studies.precision import work_precision
 
-from .scene import Scene
+from .scene import Scene, font_sizes
 
 ERROR_FLOOR = 1e-17  # a relative error of 0 (the exact solver against itself) is drawn here
 FAILED_ERROR = 10.0  # where failed runs and missed bounces are drawn
@@ -114,6 +114,8 @@ class AccuracyScene(Scene):
                 responsive=True,
                 height=420,
                 framewise=True,
+                padding=0.1,  # points at the ends of the axes are not cut in half
+                fontsize=font_sizes(self.state.presentation),
                 legend_position="right",
                 title="Error against run time at the current parameters",
             )

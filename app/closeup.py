@@ -19,17 +19,19 @@ from bokeh.plotting import figure
 import twoball
 from twoball.units import units_named
 
+from .collisions import first_collision
 from .drop import LOWER, UPPER
-from .scene import Scene
+from .scene import Scene, readable
 
 SAMPLES = 1500
 MARGIN = 0.08  # of the collision's duration, shown before and after it
 
 
 def collision_window(contacts: list[twoball.ContactInterval], end: float) -> tuple[float, float]:
-    """From the first contact to the last one that ends before the first apex, with margins."""
-    start = min(c.start for c in contacts)
-    stop = max(c.end for c in contacts)
+    """The first collision (:func:`first_collision`) with margins, before the first apex."""
+    collision = first_collision(contacts)
+    start = collision[0].start
+    stop = max(c.end for c in collision)
     pad = MARGIN * (stop - start)
     return max(start - pad, 0.0), min(stop + pad, end)
 
@@ -41,7 +43,8 @@ class CloseUpScene(Scene):
         super().__init__(**params)
         self.result: twoball.Result | None = None
         self.table = pn.pane.Markdown(
-            pn.bind(self._contacts_text, self.param.revision), sizing_mode="stretch_width"
+            pn.bind(self._contacts_text, self.param.revision, self.param.active),
+            sizing_mode="stretch_width",
         )
         self.samples = ColumnDataSource({"t": [], "x1": [], "x2": [], "f01": [], "f12": []})
         self.positions = self._figure("First collision: positions (negative = compressed)", 300)
@@ -58,6 +61,8 @@ class CloseUpScene(Scene):
         self.floor_force.line("t", "f01", source=self.samples, color="black", line_width=2)
         self.ball_force = self._figure("Ball-ball force f12", 200, x_range=self.positions.x_range)
         self.ball_force.line("t", "f12", source=self.samples, color=UPPER, line_width=2)
+        for fig in (self.positions, self.floor_force, self.ball_force):
+            readable(fig, self.state.presentation)
         self.param.watch(self._draw, "revision")
 
     def _figure(self, title: str, height: int, **shared):
@@ -101,17 +106,19 @@ class CloseUpScene(Scene):
         )
         self.result = dataclasses.replace(first, trajectory=first.evaluate(times))
 
-    def _contacts_text(self, revision: int) -> str:
+    def _contacts_text(self, revision: int, active: bool) -> str:
         if not self.active:
             return ""  # off screen: nothing is computed
         self.current()
         units = units_named(self.state.units)
         r = self.result
-        ball = [c for c in r.contacts if c.contact == "ball"]
-        floor = [c for c in r.contacts if c.contact == "floor"]
+        collision = first_collision(r.contacts)
+        ball = [c for c in collision if c.contact == "ball"]
+        floor = [c for c in collision if c.contact == "floor"]
         lines = [
             f"**{r.contacts_first} ball contact{'s' * (r.contacts_first != 1)}** and "
-            f"{r.floor_contacts_first} floor contact before the first apex.",
+            f"{r.floor_contacts_first} floor contact{'s' * (r.floor_contacts_first != 1)} "
+            "before the first apex (the table lists those of the first collision, shown above).",
             "",
             "| contact | starts | ends | lasts |",
             "| --- | --- | --- | --- |",

@@ -7,8 +7,8 @@ message and falls back, the app keeps running.
 
 from __future__ import annotations
 
-import html
 import math
+import re
 
 import panel as pn
 import param
@@ -16,11 +16,37 @@ from bokeh.models import CustomJSTickFormatter
 
 from twoball import presets
 
+from .scene import later
 from .state import APP_RANGES, ExplorerState, validate
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
 POWER_OF_TEN = "return Number((10 ** tick).toPrecision(3)).toString()"
 LOG_SLIDERS = ("mu", "tau_ratio")
+MARKDOWN_SPECIALS = re.compile(r"([\\`*_{}\[\]()#+!|<>~])")
+LONG_WORD = re.compile(r"\S{41,}")  # a bad value quoted in a message is cut to 40 characters
+
+
+def plain(text: str) -> str:
+    """``text`` shown literally in a Markdown pane: a value typed or read from the URL can
+    neither link elsewhere nor load an image; a long one is cut."""
+    text = LONG_WORD.sub(lambda match: match.group()[:40] + "...", text)
+    text = text.replace("://", ":\u200b//")  # no bare address for a linkifier to catch
+    return MARKDOWN_SPECIALS.sub(r"\\\1", text)
+
+
+MEANINGS = """
+**eps**: how bouncy each contact is (1: no energy lost, 0: no bounce at all).
+
+**mu = m2/m1**: how much lighter the upper ball is (0.01: a hundred times lighter).
+
+**tau_d/tau_f**: how far apart the balls are at release: the time the gap takes to close,
+over the duration of one floor contact (0.01: nearly touching).
+
+**H**: the drop height in units of the lower ball's squash under its own weight, m1 g / k.
+
+**ICM** (dotted green line): the textbook prediction, one contact after the other (floor, then
+ball): up to 9 times the drop height for elastic balls and a very light upper ball.
+"""
 
 
 class Controls(pn.viewable.Viewer):
@@ -30,20 +56,12 @@ class Controls(pn.viewable.Viewer):
 
     def __init__(self, messages: list[str] | None = None, **params):
         super().__init__(**params)
-        # plain text, escaped: a message quotes what was typed or put in the URL, which must
-        # never render as a link or an image (Alert would read it as Markdown)
-        self.message = pn.pane.HTML(
+        self.message = pn.pane.Alert(
             "",
+            alert_type="warning",
             visible=False,
             sizing_mode="stretch_width",
-            styles={
-                "background": "#fff3cd",
-                "color": "#664d03",
-                "border": "1px solid #ffe69c",
-                "border-radius": "6px",
-                "padding": "0 12px",
-                "overflow-wrap": "anywhere",
-            },
+            styles={"overflow-wrap": "anywhere"},
         )
         self.sliders = {
             "eps": pn.widgets.FloatSlider(
@@ -65,6 +83,7 @@ class Controls(pn.viewable.Viewer):
             options={"(custom)": ""} | {p.label: key for key, p in presets.PRESETS.items()},
         )
         self.preset.param.watch(self._apply_preset, "value")
+        self._applying_preset = False
         self.preset_source = pn.pane.Markdown("", styles={"font-size": "0.8em"})
         self.units = pn.widgets.RadioButtonGroup(
             label="Units", options={"dimensionless": "dimensionless", "metres, seconds": "SI"}
@@ -93,8 +112,8 @@ class Controls(pn.viewable.Viewer):
         )
 
     def show_messages(self, messages: list[str]) -> None:
-        """Show the messages (or hide the box when there are none)."""
-        self.message.object = "".join(f"<p>{html.escape(text)}</p>" for text in messages)
+        """Show the messages (or hide the box when there are none), literally."""
+        self.message.object = "\n\n".join(plain(m) for m in messages)
         self.message.visible = bool(messages)
 
     def _slider_moved(self, name: str, value: float) -> None:
@@ -110,6 +129,16 @@ class Controls(pn.viewable.Viewer):
             self.preset_source.object = ""
             return
         self.show_messages([])
+        self._applying_preset = True
+        try:
+            self._set_preset(preset)
+        finally:
+            self._applying_preset = False
+        self.preset_source.object = (
+            f"Drop from {presets.DEFAULT_DROP_METRES:g} m. Sources: {preset.source}"
+        )
+
+    def _set_preset(self, preset: presets.Preset) -> None:
         self.state.param.update(
             eps=preset.eps,
             eps12=preset.eps12,
@@ -117,55 +146,59 @@ class Controls(pn.viewable.Viewer):
             tau_ratio=preset.tau_ratio,
             height=presets.height_from_metres(presets.DEFAULT_DROP_METRES),
         )
-        self.preset_source.object = (
-            f"Drop from {presets.DEFAULT_DROP_METRES:g} m. Sources: {preset.source}"
-        )
 
     def _height_typed(self, event: param.parameterized.Event) -> None:
-        if self._syncing:
-            return
+        if not self._syncing:
+            later(lambda: self._take_height(event.new))
+
+    def _take_height(self, text: str) -> None:
+        """A typed drop height: H, or metres when the units are SI (checked and reported in the
+        units it was typed in)."""
         si = self.state.units == "SI"
         try:
-            typed = float(event.new)
+            typed = float(text)
         except ValueError:
-            typed = event.new
-        if si and isinstance(typed, float) and math.isfinite(typed):
-            typed = presets.height_from_metres(typed)
-        value, message = validate("height", typed, self.state.height)
-        if message and si:  # say it in the units the teacher typed
-            low, high = (presets.metres_from_height(h) for h in APP_RANGES["height"])
-            message = (
-                f"drop height must be a number of metres in [{low:.3g}, {high:.3g}]; got "
-                f"{event.new!r}. Using {presets.metres_from_height(value):.3g} m."
+            typed = text
+        if si:
+            value, message = self._metres_checked(typed)
+        else:
+            value, message = validate("height", typed, self.state.height)
+        self.show_messages([f"{'drop height [m]' if si else 'H'}: {message}"] if message else [])
+        self.state.height = value
+        self._show_state()
+
+    def _metres_checked(self, typed: object) -> tuple[float, str | None]:
+        """(H, message) for a drop height typed in metres; the message speaks metres."""
+        low, high = (presets.metres_from_height(h) for h in APP_RANGES["height"])
+        current = presets.metres_from_height(self.state.height)
+        if not isinstance(typed, float) or not math.isfinite(typed) or typed <= 0:
+            return self.state.height, (
+                f"must be a positive number of metres; got {typed!r}. Using {current:.4g} m."
             )
-        elif message:
-            message = f"H: {message}"
-        self._apply_typed("height", value, message)
+        if not low <= typed <= high:
+            clamped = min(max(typed, low), high)
+            return presets.height_from_metres(clamped), (
+                f"{typed:g} m is outside the explorer's range [{low:.3g} m, {high:.3g} m]; "
+                f"using {clamped:.4g} m."
+            )
+        return presets.height_from_metres(typed), None
 
     def _eps12_typed(self, event: param.parameterized.Event) -> None:
-        if self._syncing:
-            return
-        value, message = validate("eps12", event.new, self.state.eps12)
-        self._apply_typed("eps12", value, message and f"eps12: {message}")
+        if not self._syncing:
+            later(lambda: self._take_eps12(event.new))
 
-    def _apply_typed(self, name: str, value: float | None, message: str | None) -> None:
-        """Show the message (or clear an earlier one) and set the state on the document's next
-        tick: a text input's callback does not hold the document lock, and the scenes redraw
-        Bokeh models when the state changes (that raised "_pending_writes should be non-None")."""
-
-        def apply() -> None:
-            self.show_messages([message] if message else [])
-            self.state.param.update(**{name: value})
-            self._show_state()
-
-        document = pn.state.curdoc
-        if document is not None and document.session_context is not None:
-            document.add_next_tick_callback(apply)
-        else:
-            apply()
+    def _take_eps12(self, text: str) -> None:
+        value, message = validate("eps12", text, self.state.eps12)
+        self.show_messages([f"eps12: {message}"] if message else [])
+        self.state.eps12 = value
+        self._show_state()
 
     def _show_state(self, *events: param.parameterized.Event) -> None:
-        """Move the widgets to the state (after a preset, a map click or a URL)."""
+        """Move the widgets to the state (after a preset, a map click or a URL); a change not
+        made by the preset unselects it."""
+        moved = any(e.name != "units" for e in events)
+        if moved and not self._applying_preset and self.preset.value:
+            self.preset.value = ""
         self._syncing = True
         try:
             self._follow_state()
@@ -199,5 +232,6 @@ class Controls(pn.viewable.Viewer):
             self.units,
             *self.sliders.values(),
             advanced,
+            pn.pane.Markdown(MEANINGS, sizing_mode="stretch_width"),
             sizing_mode="stretch_width",
         )

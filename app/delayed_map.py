@@ -21,22 +21,31 @@ import numpy as np
 import panel as pn
 import param
 import xarray as xr
+from bokeh.models import BasicTickFormatter, FixedTicker
 from holoviews.operation import contours
 
 import twoball
 
-from .scene import Scene
+from .scene import Scene, font_sizes
 from .state import validate
 
 CUBE = "map"
-VARIABLES = {
-    "h2/h1": "h2_over_h1",
-    "h1/ICM": "h1_over_icm",
-    "h1/drop height": "h1_over_drop",
-    "h2/drop height": "h2_over_drop",
-    "ball contacts in the first bounce": "contacts_first",
-}
+SHOWN = ("h2_over_h1", "h1_over_icm", "h1_over_drop", "h2_over_drop", "contacts_first")
 RATIO_CENTRES = {"h2_over_h1": 1.0, "h1_over_icm": 1.0}
+# colour-bar ticks of the ratios' log scale: values below 1 get numbers too (LogTicker: powers
+# of ten only, so a range of 0.5 to 2 showed "1" alone)
+RATIO_TICKS = [0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1, 1.4, 2, 3, 5, 10, 20, 50, 100]
+
+
+def ratio_colorbar() -> dict:
+    """Colour-bar options of a ratio: a FixedTicker shows the ticks inside the colour range
+    (new models each time: a Bokeh model belongs to one session's document)."""
+    return {"ticker": FixedTicker(ticks=RATIO_TICKS), "formatter": BasicTickFormatter()}
+
+
+def variable_label(variable: str) -> str:
+    """The cube's own name of a variable (its ``long_name``)."""
+    return map_cube()[variable].attrs.get("long_name", variable)
 
 
 @functools.cache
@@ -67,11 +76,19 @@ def _decade_ticks(cube: xr.Dataset) -> dict[str, list[tuple[float, str]]]:
     return ticks
 
 
+def blank_image(mu_dim: hv.Dimension, tau_dim: hv.Dimension) -> hv.Image:
+    """An empty image over the cube's extent (the plot keeps the first frame's ranges)."""
+    cube = map_cube()
+    log_mu = np.log10(cube["mu"].values[[0, -1]])
+    log_tau = np.log10(cube["tau_ratio"].values[[0, -1]])
+    return hv.Image((log_mu, log_tau, np.ones((2, 2))), [mu_dim, tau_dim])
+
+
 class MapScene(Scene):
     """Heat map of one eps slice of the cube; a click moves mu and tau_d/tau_f."""
 
     variable = param.Selector(
-        default="h2_over_h1", objects=VARIABLES, doc="The quantity coloured on the map."
+        default="h2_over_h1", objects=list(SHOWN), doc="The quantity coloured on the map."
     )
 
     def __init__(self, **params):
@@ -79,9 +96,13 @@ class MapScene(Scene):
         self.slice: xr.Dataset | None = None
         self.slice_eps = float("nan")
         self.error: str | None = None
-        self.choice = pn.widgets.Select.from_param(self.param.variable, label="Colour by")
+        self.choice = pn.widgets.Select(
+            label="Colour by", options={variable_label(v): v for v in SHOWN}, value=self.variable
+        )
+        self.choice.link(self, value="variable")
         self.note = pn.pane.Markdown(
-            pn.bind(self._note, self.param.revision), sizing_mode="stretch_width"
+            pn.bind(self._note, self.param.revision, self.param.active),
+            sizing_mode="stretch_width",
         )
         self.tap: hv.streams.Tap | None = None
         # a new figure per variable (its colour scale and label change); within one, the
@@ -109,6 +130,7 @@ class MapScene(Scene):
             responsive=True,
             height=520,
             framewise=False,
+            fontsize=font_sizes(self.state.presentation),
         )
 
     def _state_changed(self, *events: param.parameterized.Event) -> None:
@@ -124,7 +146,7 @@ class MapScene(Scene):
         except (OSError, ValueError, KeyError) as error:
             self.slice, self.error = None, f"The map cube could not be read: {error}"
 
-    def _note(self, revision: int) -> str:
+    def _note(self, revision: int, active: bool) -> str:
         if not self.active:
             return ""  # off screen: nothing is computed
         self.current()
@@ -137,6 +159,14 @@ class MapScene(Scene):
             f"H = {attrs.get('height'):g}, eps12 = eps. Black outlines: delayed rebound (h2 > h1); "
             "star: current parameters. Click the map to set mu and tau_d/tau_f."
         ]
+        cube = map_cube()
+        for name, what in (("mu", "mu"), ("tau_ratio", "tau_d/tau_f")):
+            low, high = float(cube[name].min()), float(cube[name].max())
+            if not low <= getattr(s, name) <= high:
+                lines.append(
+                    f"**The current {what} = {getattr(s, name):g} lies outside the map** "
+                    f"({low:g} to {high:g}): the star is off the map."
+                )
         if s.height != attrs.get("height") or s.eps12 is not None:
             lines.append(
                 f"The current drop (H = {s.height:g}, eps12 = "
@@ -146,14 +176,19 @@ class MapScene(Scene):
         return "  \n".join(lines)
 
     def _image(self, revision: int, variable: str) -> hv.Image:
-        if self.slice is not None and variable not in self.slice.data_vars:
-            self._stale = True  # a new variable: its slice is read now
-        self.current()
-        label = next(k for k, v in VARIABLES.items() if v == variable)
         mu_dim = hv.Dimension("log_mu", label="log10 mu")
         tau_dim = hv.Dimension("log_tau_ratio", label="log10 tau_d/tau_f")
+        if self.slice is not None and variable not in self.slice.data_vars:
+            self._stale = True  # a new variable: its slice is read now
+        if not self.active:  # rendered off screen: nothing is read until the map is opened
+            blank = blank_image(mu_dim, tau_dim)  # the plot keeps its first colour bar's ticker
+            if variable in RATIO_CENTRES:
+                return blank.opts(colorbar=True, logz=True, colorbar_opts=ratio_colorbar())
+            return blank
+        self.current()
+        label = variable_label(variable)
         if self.slice is None:
-            return hv.Image(([-3.0, 0.0], [-3.0, 0.0], np.full((2, 2), np.nan)), [mu_dim, tau_dim])
+            return blank_image(mu_dim, tau_dim)
         values = self.slice[variable].transpose("tau_ratio", "mu")
         log_mu = np.log10(self.slice["mu"].values)
         log_tau = np.log10(self.slice["tau_ratio"].values)
@@ -165,7 +200,13 @@ class MapScene(Scene):
             # symmetric about 1 on a log scale; the 98th percentile, so outliers do not wash out
             spread = float(np.percentile(np.abs(np.log10(finite)), 98)) if finite.size else 1.0
             spread = max(spread, 0.05)
-            opts = dict(cmap="RdBu_r", logz=True, clim=(10**-spread, 10**spread))
+            low, high = 10**-spread, 10**spread
+            opts = dict(
+                cmap="RdBu_r",
+                logz=True,
+                clim=(low, high),
+                colorbar_opts=ratio_colorbar(),
+            )
         else:
             opts = dict(cmap="viridis", logz=False, clim=(np.nan, np.nan))
         return mesh.opts(colorbar=True, tools=["hover", "tap"], **opts)
@@ -176,8 +217,10 @@ class MapScene(Scene):
         One path per region instead of one cross per grid point: ~3000 markers made every
         repaint of the plot ~100 ms slower in the browser.
         """
-        self.current()
         dims = ["log_mu", "log_tau_ratio"]
+        if not self.active:
+            return hv.Contours([], dims)
+        self.current()
         if self.slice is None:
             return hv.Contours([], dims)
         delayed = self.slice["delayed_rebound"].transpose("tau_ratio", "mu").values

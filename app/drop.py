@@ -10,22 +10,54 @@ from __future__ import annotations
 import numpy as np
 import panel as pn
 import param
-from bokeh.models import ColumnDataSource, LabelSet, Legend, LegendItem, Range1d, Span
+from bokeh.models import (
+    BoxAnnotation,
+    ColumnDataSource,
+    LabelSet,
+    Legend,
+    LegendItem,
+    Range1d,
+    Span,
+)
 from bokeh.plotting import figure
 
 import twoball
 from twoball.units import units_named
 
-from .scene import Scene
+from .collisions import collisions
+from .scene import Scene, readable
 
-FRAMES = 240
-LOWER, UPPER = "#1f77b4", "#d62728"
+FLIGHT_FRAMES = 240  # evenly spread over the drop
+COLLISION_FRAMES = 90  # added through each collision: slow motion there
+# Okabe-Ito blue and vermillion: told apart with every common colour-vision deficiency
+LOWER, UPPER = "#0072B2", "#D55E00"
+BALL_RADIUS = 0.06  # of the plot's height: the lower ball as drawn
+PLAYER_HELP = (
+    "Animation: press play (the triangle). Frames are spaced evenly in time during the flight "
+    "and many more are spent on each collision: **slow motion through the collision**, "
+    "the time is shown above the balls."
+)
+
+
+def frame_times(end: float, contacts: list[twoball.ContactInterval]) -> np.ndarray:
+    """The times of the animation's frames: even in flight, dense through each collision."""
+    times = [np.linspace(0.0, end, FLIGHT_FRAMES)]
+    for group in collisions(contacts):
+        start, stop = group[0].start, max(c.end for c in group)
+        if start < end:
+            times.append(np.linspace(start, min(stop, end), COLLISION_FRAMES))
+    return np.unique(np.concatenate(times))
+
+
+def ball_radii(mu: float) -> tuple[float, float]:
+    """Drawn radii (fractions of the plot's height) of balls of equal density: m ~ r^3."""
+    return BALL_RADIUS, BALL_RADIUS * mu ** (1 / 3)
 
 
 class DropScene(Scene):
     """Heights against time to the second apex, apexes marked, drop height and ICM as lines."""
 
-    frame = param.Integer(default=0, bounds=(0, FRAMES - 1), doc="Animation frame.")
+    frame = param.Integer(default=0, bounds=(0, None), doc="Animation frame.")
 
     def __init__(self, **params):
         super().__init__(**params)
@@ -33,21 +65,25 @@ class DropScene(Scene):
         self.player = pn.widgets.Player(
             label="Animation",
             start=0,
-            end=FRAMES - 1,
+            end=FLIGHT_FRAMES - 1,
             value=0,
             interval=40,
             loop_policy="once",
             show_loop_controls=False,
             sizing_mode="stretch_width",
-            max_width=420,
+            max_width=520,
         )
+        self.times = np.zeros(1)
+        self.trails = pn.widgets.Checkbox(label="trails (the path of each ball's top)")
+        self.trails.param.watch(self._show_frame, "value")
         self.player.link(self, value="frame")
         self.summary = pn.pane.Markdown(sizing_mode="stretch_width")
         self.curves = ColumnDataSource({"t": [], "x1": [], "x2": []})
         self.apexes = ColumnDataSource({"t": [], "h": [], "text": []})
         self.balls = ColumnDataSource(
-            {"side": [-0.4, 0.4], "x": [0.0, 0.0], "size": [26, 12], "color": [LOWER, UPPER]}
+            {"x": [0.0, 0.0], "y": [0.0, 0.0], "r": [0.05, 0.02], "color": [LOWER, UPPER]}
         )
+        self.trail = ColumnDataSource({"t": [], "x1": [], "x2": []})
         self.drop_line = Span(dimension="width", line_color="gray", line_dash="dashed")
         self.icm_line = Span(
             dimension="width", line_color="green", line_dash="dotted", line_width=2
@@ -55,6 +91,10 @@ class DropScene(Scene):
         self.cursor = Span(dimension="height", location=0.0, line_color="black", line_width=1)
         self.heights = self._heights_figure()
         self.animation = self._animation_figure()
+        for fig in (self.heights, self.animation):
+            readable(fig, self.state.presentation)
+        if self.state.presentation:  # fills a 1366x768 screen under the header and the tabs
+            self.heights.height = self.animation.height = 520
         self.param.watch(self._show_frame, "frame")
         self.param.watch(self._draw, "revision")
 
@@ -97,8 +137,9 @@ class DropScene(Scene):
         return fig
 
     def _animation_figure(self):
+        """The two balls, one on the other, above the floor (a grey band below height 0)."""
         fig = figure(
-            width=160,
+            width=220,
             height=400,
             x_range=(-1, 1),
             y_range=Range1d(0.0, 1.0),
@@ -106,8 +147,15 @@ class DropScene(Scene):
             toolbar_location=None,
             title="t = 0",
         )
-        fig.scatter("side", "x", size="size", source=self.balls, color="color")
+        fig.add_layout(BoxAnnotation(top=0.0, fill_color="gray", fill_alpha=0.5))
+        fig.line(x=-0.6, y="x1", source=self.trail, color=LOWER, line_dash="dotted")
+        fig.line(x=0.6, y="x2", source=self.trail, color=UPPER, line_dash="dotted")
+        fig.circle(
+            "x", "y", radius="r", radius_dimension="y", source=self.balls, color="color",
+            line_color="black",
+        )  # fmt: skip
         fig.xaxis.visible = False
+        fig.xgrid.visible = False
         return fig
 
     def update(self) -> None:
@@ -118,6 +166,8 @@ class DropScene(Scene):
             throw=False,  # a drop the solver cannot finish is shown as far as it got, with why
         )  # fmt: skip
         self.summary.object = self._summary_text()
+        self.times = frame_times(self.result.end_time, self.result.contacts)
+        self.player.end = len(self.times) - 1
 
     def _draw(self, *events: param.parameterized.Event) -> None:
         """Send the current drop to the figures (only while on screen)."""
@@ -139,27 +189,48 @@ class DropScene(Scene):
         self.drop_line.location = r.x2_0 * units.length
         self.icm_line.location = r.h_icm * units.length
         top = max(r.x2_0, *r.apex_h, r.h_icm) * units.length
-        for fig in (self.heights, self.animation):
-            low, high = -0.03 * top, 1.12 * top
-            fig.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
+        low, high = -0.03 * top, 1.12 * top
+        self.heights.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
+        room = high / (1 - 4 * BALL_RADIUS)  # the balls drawn on top of their heights fit
+        self.animation.y_range.update(start=low, end=room, reset_start=low, reset_end=room)
         for fig in (self.heights, self.animation):
             fig.yaxis.axis_label = units.length_label
         self.heights.xaxis.axis_label = units.time_label
         self._show_frame()
 
     def _show_frame(self, *events: param.parameterized.Event) -> None:
+        """Place the balls at the frame's time: the lower ball stands on its height X1, the
+        upper ball on the lower one when X2 = X1 (they overlap by the compression)."""
         if self.result is None:
             return
         units = units_named(self.state.units)
-        tr = self.result.trajectory
-        at = self.result.end_time * self.frame / (FRAMES - 1)
-        heights = [
-            np.interp(at, tr.t, tr.x1) * units.length,
-            np.interp(at, tr.t, tr.x2) * units.length,
-        ]
-        self.balls.patch({"x": [(slice(0, 2), heights)]})
+        tr, r = self.result.trajectory, self.result
+        at = self.times[min(self.frame, len(self.times) - 1)]
+        top = self.animation.y_range.end - self.animation.y_range.start
+        r1, r2 = (top * f for f in ball_radii(self.state.mu))
+        x1 = np.interp(at, tr.t, tr.x1) * units.length
+        x2 = np.interp(at, tr.t, tr.x2) * units.length
+        self.balls.data = {
+            "x": [0.0, 0.0],
+            "y": [x1 + r1, x2 + 2 * r1 + r2],
+            "r": [r1, r2],
+            "color": [LOWER, UPPER],
+        }
+        if self.trails.value:
+            past = tr.t <= at
+            self.trail.data = {
+                "t": tr.t[past],
+                "x1": tr.x1[past] * units.length + 2 * r1,
+                "x2": tr.x2[past] * units.length + 2 * (r1 + r2),
+            }
+        elif len(self.trail.data["t"]):
+            self.trail.data = {"t": [], "x1": [], "x2": []}
         self.cursor.location = at * units.time
-        self.animation.title.text = f"t = {at * units.time:.4g}"
+        slow = any(g[0].start <= at <= max(c.end for c in g) for g in collisions(r.contacts))
+        unit = "s" if units.time != 1.0 else "tau"
+        self.animation.title.text = f"t = {at * units.time:.4g} {unit}" + (
+            "  slow motion" if slow else ""
+        )
 
     def _summary_text(self) -> str:
         r, units = self.result, units_named(self.state.units)
@@ -185,11 +256,15 @@ class DropScene(Scene):
         self._draw()
         return pn.Column(
             self.summary,
-            pn.Row(
-                pn.pane.Bokeh(self.heights, sizing_mode="stretch_width"),
+            pn.FlexBox(  # side by side on a wide screen, stacked on a phone
+                pn.pane.Bokeh(
+                    self.heights, sizing_mode="stretch_width", styles={"flex": "1 1 340px"}
+                ),
                 pn.pane.Bokeh(self.animation),
                 sizing_mode="stretch_width",
+                flex_wrap="wrap",
             ),
-            self.player,
+            pn.Row(self.player, self.trails, sizing_mode="stretch_width"),
+            pn.pane.Markdown(PLAYER_HELP, sizing_mode="stretch_width"),
             sizing_mode="stretch_width",
         )

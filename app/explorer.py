@@ -25,6 +25,22 @@ TITLES = {
     "accuracy": "Accuracy",
 }
 URL_DELAY_MS = 300
+# a phone or a narrow window: the controls above the scenes, each the full width
+PAGE_CSS = """
+@media (max-width: 767px) {
+  #content { flex-direction: column; flex-wrap: nowrap; height: auto !important;
+             overflow: visible !important; }
+  #sidebar { max-width: 100% !important; width: 100% !important; height: auto !important;
+             flex: none !important; }
+  #main { width: 100%; height: auto !important; max-height: none !important;
+          overflow: visible !important; flex: none !important; }
+}
+"""
+# presentation mode (?present=1): large text for a room
+PRESENTATION_CSS = """
+:root { --bokeh-font-size: 20px; --bokeh-base-font-size: 20px; --pn-font-size: 20px; }
+html, body { font-size: 20px; }
+"""
 SCENE_CLASSES = {
     "drop": DropScene,
     "closeup": CloseUpScene,
@@ -47,7 +63,9 @@ class Explorer(pn.viewable.Viewer):
         self.scenes = {name: SCENE_CLASSES[name](state=self.state) for name in SCENES}
         self.tabs = pn.Tabs(
             *((TITLES[name], scene) for name, scene in self.scenes.items()),
-            dynamic=True,
+            # all scenes stay rendered (only the one on screen computes): re-rendered tabs
+            # (dynamic=True) left Bokeh ranges that no longer followed the units or a preset
+            dynamic=False,
             active=SCENES.index(self.state.scene),
             sizing_mode="stretch_width",
         )
@@ -85,7 +103,7 @@ class Explorer(pn.viewable.Viewer):
                 pending = True
                 document.add_timeout_callback(write, URL_DELAY_MS)
 
-        self.state.param.watch(changed, [*MODEL_PARAMETERS, "scene"])
+        self.state.param.watch(changed, [*MODEL_PARAMETERS, "scene", "units"])
         pn.state.onload(write)  # once the browser has reported its own URL
 
     @staticmethod
@@ -104,9 +122,23 @@ class Explorer(pn.viewable.Viewer):
         return pn.Column(*self._compiling_notice(), self.controls, sizing_mode="stretch_width")
 
     def __panel__(self) -> pn.viewable.Viewable:
-        """The explorer without the page's template (main.py puts it in one)."""
-        return pn.Row(
-            pn.Column(pn.pane.Markdown("## Two-ball bounce explorer"), self.sidebar(), width=340),
-            self.tabs,
-            sizing_mode="stretch_width",
+        """The scenes (the controls go into the page's sidebar, :meth:`page`)."""
+        return self.tabs
+
+    def page(self) -> pn.template.BootstrapTemplate:
+        """The served page: a template gives the viewport meta tag, a sidebar that folds away
+        (the button top left), and a header; on a narrow screen the controls stack above the
+        scenes. BootstrapTemplate, not FastListTemplate: the latter loads a font from Google,
+        and the app must not reach the network."""
+        template = pn.template.BootstrapTemplate(
+            title="Two-ball bounce explorer",
+            sidebar=[self.sidebar()],
+            main=[self],
+            sidebar_width=330,
+            header_background="#0072B2",
+            meta_viewport="width=device-width, initial-scale=1",
         )
+        template.config.raw_css.append(PAGE_CSS)
+        if self.state.presentation:
+            template.config.raw_css.append(PRESENTATION_CSS)
+        return template

@@ -13,6 +13,21 @@ hv.renderer("bokeh")  # the plotting backend of every scene, also without ``pane
 MODEL_PARAMETERS = ("eps", "eps12", "mu", "tau_ratio", "height")
 
 
+def later(callback) -> None:
+    """Run ``callback`` on the session's next tick (at once without a server).
+
+    Bokeh models changed inside the callback of a change made in the browser (a typed value, a
+    tab chosen) either raised "_pending_writes should be non-None when we have a document lock"
+    or were not sent back to that browser; on the next tick the document is locked by Bokeh
+    with its pending writes set, and every change is sent.
+    """
+    document = pn.state.curdoc
+    if document is None or document.session_context is None:
+        callback()
+    else:
+        document.add_next_tick_callback(callback)
+
+
 class Scene(pn.viewable.Viewer):
     """A scene of the explorer. Subclasses implement :meth:`update` and :meth:`__panel__`.
 
@@ -40,7 +55,11 @@ class Scene(pn.viewable.Viewer):
             self.revision += 1
 
     def _activated(self, event: param.parameterized.Event) -> None:
-        if event.new and self._stale:
+        if event.new:  # redrawn each time it comes on screen (recomputed only if stale)
+            later(self._redraw)
+
+    def _redraw(self) -> None:
+        if self.active:  # (a text bound to ``active`` may have recomputed it meanwhile)
             self.revision += 1
 
     def current(self) -> None:
@@ -53,3 +72,21 @@ class Scene(pn.viewable.Viewer):
 
     def update(self) -> None:
         raise NotImplementedError
+
+
+def readable(fig, presentation: bool) -> None:
+    """Font sizes of a Bokeh figure: for a screen, or for a room (tick labels >= 16 px)."""
+    ticks, labels, title = ("16pt", "18pt", "20pt") if presentation else ("10pt", "11pt", "12pt")
+    for axis in fig.axis:
+        axis.major_label_text_font_size = ticks
+        axis.axis_label_text_font_size = labels
+    fig.title.text_font_size = title
+    for legend in fig.legend:
+        legend.label_text_font_size = ticks
+
+
+def font_sizes(presentation: bool) -> dict[str, int]:
+    """HoloViews' ``fontsize`` option, the same sizes as :func:`readable`."""
+    if presentation:
+        return {"ticks": "16pt", "labels": "18pt", "title": "20pt", "legend": "16pt"}
+    return {"ticks": "10pt", "labels": "11pt", "title": "12pt", "legend": "10pt"}

@@ -29,8 +29,15 @@ APP_RANGES = {
 URL_KEYS = {"eps": "eps", "mu": "mu", "tau_ratio": "tau_ratio", "height": "H", "eps12": "eps12"}
 
 
+OPENING_DROP = {"eps": 0.9, "mu": 0.01, "tau_ratio": 0.01}  # the paper's: h2 = 5.4 h1
+
+
 class ExplorerState(Parameters):
-    """One session's drop (the model's parameters) and what is on screen."""
+    """One session's drop (the model's parameters) and what is on screen.
+
+    The page opens on the paper's drop (docs/model.md, check values), a light ball dropped on
+    a heavy one that rebounds higher the second time: a delayed rebound, worth seeing first.
+    """
 
     scene = param.Selector(default="drop", objects=list(SCENES), doc="The scene on screen.")
     units = param.Selector(
@@ -38,6 +45,13 @@ class ExplorerState(Parameters):
         objects=list(UNITS),
         doc="Show dimensionless X and tau, or metres and seconds (basketball, presets.py).",
     )
+
+    presentation = param.Boolean(
+        default=False, doc="Large text and plots for a projector (URL: present=1)."
+    )
+
+    def __init__(self, **params):
+        super().__init__(**(OPENING_DROP | params))
 
 
 def validate(name: str, value: object, fallback: float | None) -> tuple[float | None, str | None]:
@@ -76,6 +90,16 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
         values[name] = value
         if message:
             messages.append(f"URL {key}: {message}")
+    if query.get("present") in ("1", "true", "yes"):
+        values["presentation"] = True
+    if "units" in query:
+        if query["units"] in UNITS:
+            values["units"] = query["units"]
+        else:
+            messages.append(
+                f"URL units: must be one of {', '.join(UNITS)}; got {query['units']!r}. "
+                f"Using {defaults.units}."
+            )
     if "scene" in query:
         if query["scene"] in SCENES:
             values["scene"] = query["scene"]
@@ -95,4 +119,8 @@ def url_query(state: ExplorerState) -> dict[str, str]:
         if getattr(state, name) is not None
     }
     query["scene"] = state.scene
+    if state.presentation:
+        query["present"] = "1"
+    if state.units != "dimensionless":
+        query["units"] = state.units
     return query

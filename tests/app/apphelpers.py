@@ -166,3 +166,60 @@ def start_slider_move(page, name: str, key: str = "ArrowRight", timeout_ms: floa
 def finish_slider_move(page) -> float:
     """The ms a move started by :func:`start_slider_move` took (-1: the plots did not change)."""
     return page.evaluate("() => window.__twoballMove")
+
+
+# Elements matching a CSS selector anywhere in the page, shadow roots included (Panel renders
+# its components inside shadow DOM).
+DEEP_QUERY_JS = """(selector) => {
+  const found = [];
+  const walk = (root) => {
+    for (const el of root.querySelectorAll("*")) {
+      if (el.matches(selector)) found.push(el);
+      if (el.shadowRoot) walk(el.shadowRoot);
+    }
+  };
+  walk(document);
+  return found.map((el) => {
+    const box = el.getBoundingClientRect();
+    return {text: el.innerText || "", href: el.getAttribute("href"), src: el.getAttribute("src"),
+            width: box.width, height: box.height, left: box.left, right: box.right,
+            font: parseFloat(getComputedStyle(el).fontSize)};
+  });
+}"""
+
+# The data of every ColumnDataSource having all the given columns: [{column: [values]}].
+SOURCES_JS = """(columns) => {
+  const out = [];
+  for (const doc of Bokeh.documents) {
+    for (const model of doc.all_models) {
+      if (model.constructor.__name__ !== "ColumnDataSource") continue;
+      const data = model.data instanceof Map ? Object.fromEntries(model.data) : model.data;
+      if (columns.every((c) => c in data)) {
+        out.push(Object.fromEntries(columns.map((c) => [c, Array.from(data[c])])));
+      }
+    }
+  }
+  return out;
+}"""
+
+
+def deep_query(page, selector: str) -> list[dict]:
+    return page.evaluate(DEEP_QUERY_JS, selector)
+
+
+def sources_with(page, *columns: str) -> list[dict]:
+    return page.evaluate(SOURCES_JS, list(columns))
+
+
+def server_errors(log: Path) -> list[str]:
+    """Tracebacks and errors in a server log, apart from Tornado reporting that a page closed by
+    a test went away while a message to it was in flight (a client leaving)."""
+    import re
+
+    entries = re.split(r"\n(?=\d{4}-\d\d-\d\d \d\d:\d\d:\d\d)", log.read_text())
+    return [
+        entry
+        for entry in entries
+        if ("Traceback" in entry or "ERROR" in entry)
+        and not ("WebSocketClosedError" in entry and "StreamClosedError" in entry)
+    ]

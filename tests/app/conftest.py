@@ -20,6 +20,7 @@ from apphelpers import (
     free_port,
     panel_serve,
     serve,
+    server_errors,
     wait_until_served,
 )
 
@@ -66,13 +67,10 @@ def browser():
 
 
 @pytest.fixture(autouse=True)
-def _no_traceback_in_the_server_log(request):
-    """Every test that uses the served app fails on a traceback the server logged meanwhile."""
-    if "app_server" not in request.fixturenames:
-        yield
-        return
-    _, log = request.getfixturevalue("app_server")
-    start = log.stat().st_size
+def server_log_stays_clean(request):
+    """Every test that uses the served app fails on an error or traceback in its log."""
     yield
-    new = log.read_bytes()[start:].decode(errors="replace")
-    assert "Traceback" not in new, new[-3000:]
+    if "app_server" in request.fixturenames:
+        _, log = request.getfixturevalue("app_server")
+        errors = server_errors(log)
+        assert errors == [], "the server logged:\n" + "\n".join(errors)

@@ -1,0 +1,169 @@
+"""Issue "the classroom explorer", each defect a teacher found, checked in Chromium.
+
+Combined into few pages (each Chromium page costs seconds); each assertion names the defect it
+guards. The server log is checked after every test (conftest.py).
+"""
+
+from __future__ import annotations
+
+import re
+from urllib.parse import parse_qs, urlparse
+
+import pytest
+from apphelpers import (
+    deep_query,
+    fingerprint,
+    open_page,
+    press_slider,
+    sources_with,
+    wait_for_change,
+)
+
+pytestmark = pytest.mark.browser
+
+RANGE_ENDS_JS = """() => [...Bokeh.documents[0].all_models]
+  .filter((m) => m.constructor.__name__ === "Range1d").map((m) => m.end)"""
+TITLES_JS = """() => [...Bokeh.documents[0].all_models]
+  .filter((m) => m.constructor.__name__ === "Title").map((m) => m.text)"""
+COLORBAR_TICKS_JS = """() => [...Bokeh.documents[0].all_models]
+  .filter((m) => m.constructor.__name__ === "ColorBar")
+  .map((m) => m.ticker.ticks ? Array.from(m.ticker.ticks) : [])"""
+
+
+def url_query(page) -> dict[str, str]:
+    return {k: v[-1] for k, v in parse_qs(urlparse(page.url).query).items()}
+
+
+def tab(page, title: str) -> None:
+    page.locator(".bk-tab", has_text=title).click()
+
+
+def text_input(page, label: str):
+    """The text box under ``label`` (CSS locators reach into Panel's shadow roots)."""
+    return page.locator(".bk-input-group", has_text=label).locator("input").first
+
+
+def test_opening_page_typed_values_and_messages(browser, app_server, artifacts):
+    """Defects 1, 7, 10, 12 (preset, plural, units in the URL)."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app")
+    try:
+        # 10: the page opens on a delayed rebound
+        page.get_by_text("delayed rebound (h2 > h1)").first.wait_for()
+        page.get_by_text("advanced").click()
+        before = fingerprint(page)
+        # 1: a valid H redraws the curves and reaches the URL, no server error (conftest)
+        height = text_input(page, "H (dimensionless drop height)")
+        height.fill("20000")
+        height.press("Enter")
+        wait_for_change(page, before)
+        page.get_by_text("drop height (dashed): 2000").wait_for()  # the summary follows
+        page.wait_for_function("() => location.search.includes('H=20000')", timeout=5000)
+        # 7: an error, then a valid value clears it
+        height.fill("abc")
+        height.press("Enter")
+        page.get_by_text("H: height must be").wait_for()
+        height.fill("30000")
+        height.press("Enter")
+        page.wait_for_timeout(800)
+        assert not page.get_by_text("H: height must be").is_visible()
+        # 7: in metres the message speaks metres
+        page.get_by_role("button", name="metres, seconds").click()
+        page.wait_for_timeout(500)
+        metres = text_input(page, "drop height [m]")
+        metres.fill("100000")
+        metres.press("Enter")
+        page.get_by_text(re.compile(r"100000 m is outside the explorer's range")).wait_for()
+        page.wait_for_timeout(800)
+        assert url_query(page)["units"] == "SI"  # 12: the units are in the URL
+        # 12: a preset is unselected once a slider changes its values
+        page.locator("select").first.select_option(label="Tennis ball on a basketball")
+        page.get_by_text("ITF Rules of Tennis").wait_for()
+        assert press_slider(page, "mu") > 0
+        page.wait_for_timeout(500)
+        assert page.locator("select").first.input_value() == "(custom)"
+        page.screenshot(path=artifacts / "typed_values.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_tab_switches_keep_plots_rescaling(browser, app_server, artifacts):
+    """Defects 2, 3, 5, 6, 11, 12 (plural) after switching tabs back and forth."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?eps=0.816&mu=0.05&tau_ratio=0.3")
+    try:
+        tab(page, "First collision")
+        page.get_by_text("floor contacts before the first apex").wait_for()  # 12: plural
+        # 3: the close-up spans the first collision (tau 141.4 to 144.6), not the flight after
+        for _ in range(100):
+            spans = [s["t"] for s in sources_with(page, "t", "f01", "f12") if s["t"]]
+            if spans:
+                break
+            page.wait_for_timeout(100)
+        assert spans and max(spans[0]) - min(spans[0]) < 5.0
+        tab(page, "Drop")
+        page.wait_for_timeout(500)
+        # 2: metres after a tab switch rescale the axes
+        before = fingerprint(page)
+        page.get_by_role("button", name="metres, seconds").click()
+        wait_for_change(page, before)
+        page.wait_for_timeout(500)
+        assert max(page.evaluate(RANGE_ENDS_JS)) < 10
+        # 5: the map's explanation is there the first time its tab opens
+        tab(page, "Delayed-rebound map")
+        page.get_by_text("Slice of the shipped cube").wait_for(timeout=30_000)
+        page.get_by_text("Black outlines").wait_for()
+        page.wait_for_timeout(1500)
+        # 6: the ratio's colour bar has numbers below 1
+        ticks = [t for bar in page.evaluate(COLORBAR_TICKS_JS) for t in bar]
+        assert any(0 < t < 1 for t in ticks), ticks
+        page.screenshot(path=artifacts / "map_after_tab_switch.png", full_page=True)
+        # 11: the balls are stacked (same x, upper above lower), the time has its unit
+        tab(page, "Drop")
+        page.wait_for_timeout(500)
+        balls = sources_with(page, "x", "y", "r")[0]
+        assert balls["x"][0] == balls["x"][1]
+        assert balls["y"][1] - balls["r"][1] >= balls["y"][0] + balls["r"][0] - 1e-9
+        assert balls["r"][1] < balls["r"][0]
+        titles = page.evaluate(TITLES_JS)
+        assert any(re.match(r"t = 0 s", t) for t in titles), titles  # the time with its unit
+        page.get_by_text("slow motion through the collision").wait_for()
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_url_markdown_is_shown_literally(browser, app_server, artifacts):
+    """Defects 8 and 12: a crafted URL value links nowhere, loads nothing, and a long one stays
+    inside the warning box."""
+    base, _ = app_server
+    crafted = "[click](https://example.invalid/x)![img](https://example.invalid/i.png)"
+    long_value = "9" * 500
+    context, page, errors = open_page(browser, f"{base}/app?eps={crafted}&mu={long_value}")
+    try:
+        page.get_by_text("URL eps:").wait_for()
+        links = [a for a in deep_query(page, "a") if "example.invalid" in (a["href"] or "")]
+        images = [i for i in deep_query(page, "img") if "example.invalid" in (i["src"] or "")]
+        assert links == [] and images == []
+        alerts = deep_query(page, ".alert")
+        assert alerts and all(a["right"] <= 400 for a in alerts)  # inside the sidebar
+        page.screenshot(path=artifacts / "crafted_url.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_a_phone_gets_a_page_of_its_width(browser, app_server, artifacts):
+    """Defect 4: viewport meta tag, no sideways scroll at 390x844, the plot fills the width."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app", viewport=(390, 844))
+    try:
+        assert page.locator('meta[name="viewport"]').count() == 1
+        assert page.evaluate("document.documentElement.scrollWidth") <= 390
+        canvases = [c for c in deep_query(page, "canvas") if c["width"] > 0]
+        assert max(c["width"] for c in canvases) > 300
+        page.screenshot(path=artifacts / "phone_drop.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
