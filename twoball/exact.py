@@ -66,6 +66,7 @@ STATUS_STUCK, STATUS_PHASES = int(Status.STUCK), int(Status.PHASE_LIMIT)
 MAX_STEPS_PER_PHASE = 100_000
 MAX_PHASES = 1_000_000
 ROUNDING = 16.0 * 2.220446049250313e-16  # tolerance in units of relative rounding
+SUBSPACE_SWEEPS = 4  # refinement sweeps of the both-contact mode split (see _split_modes)
 
 # Layout of the per-drop parameter vector passed to the kernel.
 P_MU, P_Z01, P_Z12, P_W2, P_F1, P_F2, P_NOISE = range(7)
@@ -137,6 +138,20 @@ def _column_basis(p):
 
 
 @njit
+def _orthonormal_pair(m):
+    """An orthonormal basis of the span of the two columns of m (Gram-Schmidt, twice)."""
+    first = np.ascontiguousarray(m[:, 0])
+    first = first / math.sqrt(first @ first)
+    second = np.ascontiguousarray(m[:, 1])
+    second = second - (first @ second) * first
+    second = second - (first @ second) * first
+    q = np.empty((4, 2))
+    q[:, 0] = first
+    q[:, 1] = second / math.sqrt(second @ second)
+    return q
+
+
+@njit
 def _split_modes(a):
     """A real X with X^-1 A X = diag(B0, B1), 2x2 blocks holding one eigenvalue pair each.
 
@@ -167,6 +182,24 @@ def _split_modes(a):
     # the column space of the other pair's polynomial is this pair's invariant subspace
     x[:, 0:2] = _column_basis(_pair_polynomial(a, lam[chosen[2]], lam[chosen[3]]))
     x[:, 2:4] = _column_basis(_pair_polynomial(a, lam[chosen[0]], lam[chosen[1]]))
+    # The pair polynomial cancels: for small mu |A|^2 ~ 1/mu^2 while the fast pair's share is
+    # ~1/mu, so its subspace is off by ~1/mu ulp and the ignored coupling blocks of X^-1 A X
+    # inject ~1e-13 relative per both-contact phase, which many contacts amplify (docs/accuracy.md).
+    # Subspace iteration refines both: the pair of larger modulus by A, the other by A^-1; each
+    # sweep shrinks the other subspace's share by the modulus ratio (at most 1/2 here).
+    low_pair, high_pair = (0, 2), (2, 0)
+    smaller = max(abs(lam[chosen[0]]), abs(lam[chosen[1]]))
+    larger = min(abs(lam[chosen[2]]), abs(lam[chosen[3]]))
+    if smaller > larger:
+        low_pair, high_pair = (2, 0), (0, 2)
+        smaller = max(abs(lam[chosen[2]]), abs(lam[chosen[3]]))
+        larger = min(abs(lam[chosen[0]]), abs(lam[chosen[1]]))
+    if smaller < 0.5 * larger:
+        a_inv = np.ascontiguousarray(np.linalg.inv(a))
+        lo, hi = low_pair[0], high_pair[0]
+        for _ in range(SUBSPACE_SWEEPS):
+            x[:, lo : lo + 2] = _orthonormal_pair(a_inv @ np.ascontiguousarray(x[:, lo : lo + 2]))
+            x[:, hi : hi + 2] = _orthonormal_pair(a @ np.ascontiguousarray(x[:, hi : hi + 2]))
     x_inv = np.linalg.inv(x)
     blocks = np.empty((2, 2, 2))
     full = x_inv @ a @ x
@@ -453,6 +486,7 @@ def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
     floor_on = (kind & 1) != 0
     ball_on = (kind & 2) != 0
     tau = 0.0
+    last_step = 0.0
     for _ in range(MAX_STEPS_PER_PHASE):
         y1, y2, w1, w2, a1, a2 = state_at(
             kind, tau, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest
@@ -487,10 +521,13 @@ def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
                 clock,
             )
             if value <= -tol or (value <= tol and rate < 0.0):
-                # At a root to rounding: one Newton correction, never past the certified step.
+                # At a root to rounding: one Newton correction, never past the certified step
+                # nor back before the last certified point. The certified steps aim at F = -tol,
+                # so without the backward correction every switch is placed up to tol/|F'| late,
+                # a bias that adds up over many contacts (docs/accuracy.md).
                 shift = 0.0
                 if rate < 0.0:
-                    shift = min(max(value, 0.0) / -rate, h)
+                    shift = min(max(value / -rate, -last_step), h)
                 if tau + shift < best:
                     best, event = tau + shift, contact
             else:
@@ -510,6 +547,7 @@ def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
         if not 0.0 < step < np.inf:
             break
         tau += step
+        last_step = step
     return EVENT_STUCK, tau, x1, x2, v1, v2
 
 
