@@ -81,7 +81,7 @@ def test_the_command_line_reports_a_failed_run_in_one_line_with_status_1(monkeyp
     captured = capsys.readouterr()
     lines = captured.err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("twoball: solver failed: exact failed")
-    assert lines[0].endswith("phase limit reached")
+    assert lines[0].endswith(Status.PHASE_LIMIT.message)
     assert captured.out == ""
 
 

@@ -11,6 +11,7 @@ import subprocess
 import sys
 import warnings
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -114,22 +115,93 @@ def test_rest_is_an_answer_not_a_failure():
     assert result.reason == "the upper ball came to rest on the lower one" and result.success
 
 
-# Drops inside the domain on which the exact solver fails, loudly (found by a random search
-# over the domain: about 2 in 100 000 drops). Strict: when the solver is fixed, these
-# turn red and move to the tests of right answers.
-KNOWN_FAILURES = [
-    pytest.param(0.02294046722074834, 0.00031392552790641373, 0.0, 42042.49414996337,
-                 id="stuck-root-finder-eps-0.023-mu-3e-4"),
-    pytest.param(1.0, 123655.02807555212, 0.0, 0.20806664471994354,
-                 id="phase-limit-elastic-heavy-upper-ball"),
-]  # fmt: skip
+# Two drops inside the domain that once failed loudly (found by a random search over the
+# domain, about 2 in 100 000 drops), now right; each checked against an independent method.
 
 
-@pytest.mark.parametrize(("eps", "mu", "tau_ratio", "height"), KNOWN_FAILURES)
-@pytest.mark.xfail(strict=True, raises=twoball.SolverError, reason="known solver limits")
-def test_known_solver_failures_are_loud(eps, mu, tau_ratio, height):
-    result = twoball.simulate(eps, mu, tau_ratio, height=height)
-    assert result.success
+def test_a_strongly_overdamped_drop_comes_to_rest_where_an_integrator_sees_no_switch():
+    """eps = 0.023: the slow overdamped mode's energy bound (which counts w^2 u'^2) was ~w/s too
+    loose, so the certified steps crawled and the root finder stalled before rest was proven;
+    the two-exponential bound (exact._overdamped_bound) proves rest at once."""
+    drop = dict(eps=0.02294046722074834, mu=0.00031392552790641373, tau_ratio=0.0)
+    height = 42042.49414996337
+    result = twoball.simulate(**drop, height=height)
+    assert result.status == Status.REST and result.h1 is None
+    integrated = twoball.simulate(**drop, height=height, until=400.0, method="LSODA",
+                                  rtol=1e-10, atol=1e-10)  # fmt: skip
+    assert {c.end for c in integrated.contacts} == {400.0}  # neither contact ever ends
+    starts = sorted(c.start for c in result.contacts)
+    assert starts == pytest.approx(sorted(c.start for c in integrated.contacts), abs=1e-4)
+
+
+def test_a_light_ball_under_a_heavy_one_conserves_energy_through_its_chatter():
+    """eps = 1, mu = 1.2e5, H = 0.2: the both-contact closed form works about the static rest
+    (~ -mu), whose rounding (~mu ulp) once switched the floor contact off and on in a Zeno loop
+    (phase limit). With nothing dissipated, the energy at each apex equals that at release
+    (docs/model.md, "Energy bound"), to the rounding of the static compression."""
+    mu, height = 123655.02807555212, 0.20806664471994354
+    result = twoball.simulate(1.0, mu, 0.0, height=height, dense_output=True)
+    assert result.success and len(result.apex_h) == 2
+    at = result.evaluate(np.array(result.apex_t))
+    kinetic = 0.5 * (at.v1**2 + mu * at.v2**2)
+    springs = 0.5 * np.minimum(at.x1, 0.0) ** 2 + 0.5 * np.minimum(at.x2 - at.x1, 0.0) ** 2
+    energy = kinetic + at.x1 + mu * at.x2 + springs
+    released = height * (1.0 + mu)
+    rounding = 2.2e-16 * (1.0 + mu) / height  # of the static compression, relative to H
+    assert energy == pytest.approx([released, released], rel=10 * rounding)
+
+
+@pytest.mark.slow
+def test_a_light_ball_under_a_heavy_one_agrees_with_the_40_digit_reference():
+    from twoball.studies.truth import solve_truth
+
+    mu, height = 123655.02807555212, 0.20806664471994354
+    result = twoball.simulate(1.0, mu, 0.0, height=height)
+    truth = solve_truth(1.0, mu, 0.0, height=height)
+    rounding = 2.2e-16 * (1.0 + mu) / height  # of the static compression, relative to H
+    assert result.h1 == pytest.approx(float(truth.h1), rel=10 * rounding)
+    assert result.h2 == pytest.approx(float(truth.h2), rel=10 * rounding)
+
+
+def test_the_overdamped_bound_holds_along_the_closed_form():
+    """The two-exponential bound on |eta''| and |g - g_rest| (exact._overdamped_bound, via
+    _curvature_bound and _at_rest's excursion) is never exceeded later in the phase."""
+    rng = np.random.default_rng(3)
+    for eps, mu in ((0.023, 3.1e-4), (0.05, 1e-3), (0.02, 0.5), (0.1, 30.0)):
+        drop = check_parameters(eps, mu, 0.01)
+        prepared = exact.prepare(drop.mu, drop.zeta01, drop.zeta12)
+        params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, rows = prepared
+        assert rates[:, 1].max() > 0.0  # at least one strongly overdamped mode
+        for _ in range(20):
+            state = y_rest + rng.normal(size=4) * np.array([1.0, 1.0, 3.0, 3.0])
+            y1, y2, w1, w2, a1, a2 = exact.state_at(exact.BOTH, 0.0, *state, params, x, x_inv,
+                                                    blocks, y_rest)  # fmt: skip
+            roots = exact._energy_roots(exact.BOTH, y1, y2, w1, w2, a1, a2, params, x_inv,
+                                        blocks, companions, y_rest)  # fmt: skip
+            modes = exact._block_states(y1, y2, w1, w2, x_inv, companions, y_rest)
+            bound = exact._curvature_bound(exact.BOTH, 1, 0, c0, c1, c2, roots, rates, rows, modes)
+            later = np.array(
+                [
+                    exact.state_at(exact.BOTH, tau, *state, params, x, x_inv, blocks, y_rest)
+                    for tau in np.linspace(0.0, 30.0, 3001)
+                ]
+            )
+            eta_curvature = np.abs(later[:, 5] - later[:, 4])
+            assert eta_curvature.max() <= bound * (1 + 1e-9) + 1e-12
+            z12 = params[exact.P_Z12]
+            g = (later[:, 1] - later[:, 0]) + 2 * z12 * (later[:, 3] - later[:, 2])
+            excursion = 0.0
+            for block in range(2):
+                energy_bound = rest[1, block] * roots[block]
+                if rates[block, 1] > 0.0:
+                    block_state = modes[2 * block], modes[2 * block + 1]
+                    tight = exact._overdamped_bound(
+                        rates[block], rows[1, 1, block], *block_state, 0
+                    )
+                    energy_bound = min(energy_bound, tight)
+                excursion += energy_bound
+            g_rest = y_rest[1] - y_rest[0]
+            assert np.abs(g - g_rest).max() <= excursion * (1 + 1e-9) + 1e-12
 
 
 @pytest.mark.parametrize(

@@ -47,7 +47,8 @@ _MESSAGES = {
     Status.DONE: "",
     Status.REST: "the upper ball came to rest on the lower one",
     Status.STUCK: "root finder made no progress (please report: this is a bug)",
-    Status.PHASE_LIMIT: "phase limit reached",
+    Status.PHASE_LIMIT: "phase or step limit reached: the contacts never settle (e.g. an "
+    "elastic floor, eps = 1, under a ball that never leaves), so no rest can be proven",
     Status.FAILED: "integrator failed",
     Status.NO_APEX: "no further apex before the integration horizon",
     Status.IMPOSSIBLE: "an apex that is not finite or above what the energy at release allows "

@@ -58,6 +58,7 @@ FREE, FLOOR, BALL, BOTH = 0, 1, 2, 3
 
 # Events returned by one phase.
 EVENT_FLOOR, EVENT_BALL, EVENT_APEX, EVENT_TIME, EVENT_REST, EVENT_STUCK = 0, 1, 2, 3, 4, 5
+EVENT_STEPS = 6  # MAX_STEPS_PER_PHASE used up: a phase too long to finish, not a stall
 
 # Status of a run (plain integers inside the kernel; twoball.errors.Status names them).
 STATUS_DONE, STATUS_REST = int(Status.DONE), int(Status.REST)
@@ -67,6 +68,8 @@ MAX_STEPS_PER_PHASE = 100_000
 MAX_PHASES = 1_000_000
 ROUNDING = 16.0 * 2.220446049250313e-16  # tolerance in units of relative rounding
 SUBSPACE_SWEEPS = 4  # refinement sweeps of the both-contact mode split (see _split_modes)
+OVERDAMPED_GAP = 0.1  # rates this far apart (relative) split a block into two exponentials
+OVERDAMPED_SAFETY = 1.0 + 1e-9  # covers the rounding of that split (relative ~ulp / gap)
 
 # Layout of the per-drop parameter vector passed to the kernel.
 P_MU, P_Z01, P_Z12, P_W2, P_F1, P_F2, P_NOISE = range(7)
@@ -247,13 +250,67 @@ def _block_coefficient(row, block, companion, power):
 
 
 @njit
+def _companion_row(row, companion):
+    """(alpha, beta) with row . z = alpha u + beta u' for (u, u') = R z."""
+    det = companion[0, 0] * companion[1, 1] - companion[0, 1] * companion[1, 0]
+    out = np.empty(2)
+    out[0] = (row[0] * companion[1, 1] - row[1] * companion[1, 0]) / det
+    out[1] = (row[1] * companion[0, 0] - row[0] * companion[0, 1]) / det
+    return out
+
+
+@njit
+def _overdamped_rates(block):
+    """Decay rates (slow, fast) of a strongly overdamped block, or (0, 0).
+
+    Used only when the rates differ by at least OVERDAMPED_GAP of the faster, so that splitting
+    a state into the two real exponentials loses little to cancellation.
+    """
+    b = -0.5 * (block[0, 0] + block[1, 1])
+    w2 = block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0]
+    d = b * b - w2
+    if d <= 0.0:
+        return np.zeros(2)
+    om = math.sqrt(d)
+    fast = b + om
+    slow = w2 / fast  # b - om without cancellation
+    if fast - slow < OVERDAMPED_GAP * fast:
+        return np.zeros(2)
+    out = np.empty(2)
+    out[0], out[1] = slow, fast
+    return out
+
+
+@njit
+def _overdamped_bound(rates, alpha_beta, u, du, power):
+    """Bound on |d^power/dt^power (alpha u + beta u')| for all later times of the phase.
+
+    In a block with real rates s < f, u = A e^{-s t} + B e^{-f t}, so the functional's
+    derivative is a sum of two decaying exponentials and never exceeds its terms' sizes now:
+    |A| s^p |alpha - beta s| + |B| f^p |alpha - beta f|. Far tighter than the energy bound for
+    a slow overdamped mode (whose energy also counts w^2 u'^2 >> s^2 u'^2). Inflated by
+    OVERDAMPED_SAFETY for the rounding of A and B.
+    """
+    slow, fast = rates[0], rates[1]
+    gap = fast - slow
+    a = (du + fast * u) / gap
+    b = -(du + slow * u) / gap
+    alpha, beta = alpha_beta[0], alpha_beta[1]
+    bound = abs(a) * slow**power * abs(alpha - beta * slow)
+    bound += abs(b) * fast**power * abs(alpha - beta * fast)
+    return bound * OVERDAMPED_SAFETY
+
+
+@njit
 def prepare(mu, z01, z12):
     """What the kernel needs for one drop, passed on whole to :func:`run` as ``prepared``.
 
-    Returns (params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest): c0[kind, contact,
-    part] + c1[...] sqrt(2 E_1) + c2[...] sqrt(2 E_2) bounds |F''| (part 0 is eta, part 1 is g);
-    rest[contact, block] bounds |g - g_rest| in the both-contact phase; x, blocks and companions
-    describe its two modes.
+    Returns (params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, mode_rows):
+    c0[kind, contact, part] + c1[...] sqrt(2 E_1) + c2[...] sqrt(2 E_2) bounds |F''| (part 0 is
+    eta, part 1 is g); rest[contact, block] bounds |g - g_rest| in the both-contact phase; x,
+    blocks and companions describe its two modes; rates[block] are the decay rates of a strongly
+    overdamped block (zeros otherwise) and mode_rows[contact, part, block] each functional's
+    coefficients on the block's (u, u'), for :func:`_overdamped_bound`.
     """
     w2 = (1.0 + mu) / mu
     nu2 = mu / (1.0 + mu)
@@ -289,11 +346,17 @@ def prepare(mu, z01, z12):
     functionals[1, 1, 0], functionals[1, 1, 1] = -1.0, 1.0
     functionals[1, 1, 2], functionals[1, 1, 3] = -2.0 * z12, 2.0 * z12
     rest = np.zeros((2, 2))
+    rates = np.zeros((2, 2))
+    for block in range(2):
+        rates[block] = _overdamped_rates(blocks[block])
+    mode_rows = np.zeros((2, 2, 2, 2))
     for contact in range(2):
         for part in range(2):
             row = functionals[contact, part] @ x
             c1[BOTH, contact, part] = _block_coefficient(row[0:2], blocks[0], companions[0], 2)
             c2[BOTH, contact, part] = _block_coefficient(row[2:4], blocks[1], companions[1], 2)
+            mode_rows[contact, part, 0] = _companion_row(row[0:2], companions[0])
+            mode_rows[contact, part, 1] = _companion_row(row[2:4], companions[1])
         row = functionals[contact, 1] @ x
         rest[contact, 0] = _block_coefficient(row[0:2], blocks[0], companions[0], 0)
         rest[contact, 1] = _block_coefficient(row[2:4], blocks[1], companions[1], 0)
@@ -304,7 +367,7 @@ def prepare(mu, z01, z12):
     # rounding growth of the both-contact state through x and x^-1 (1-norm condition)
     params[P_NOISE] = np.abs(x).sum(axis=0).max() * np.abs(x_inv).sum(axis=0).max()
     y_rest = np.array([-(1.0 + mu), -(1.0 + 2.0 * mu), 0.0, 0.0])
-    return params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest
+    return params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, mode_rows
 
 
 @njit
@@ -403,12 +466,34 @@ def _safe_step(f, fp, bound):
 
 
 @njit
+def _curvature_bound(kind, contact, part, c0, c1, c2, roots, rates, mode_rows, block_states):
+    """Bound on |F''| of one part (0: eta, 1: g) of a contact's switching function for the rest
+    of the phase: c0 + c1 sqrt(2 E_1) + c2 sqrt(2 E_2), where a strongly overdamped mode of the
+    both-contact phase takes the tighter of its energy bound and its two-exponential bound."""
+    first = c1[kind, contact, part] * roots[0]
+    second = c2[kind, contact, part] * roots[1]
+    if kind == BOTH:
+        if rates[0, 1] > 0.0:
+            tight = _overdamped_bound(
+                rates[0], mode_rows[contact, part, 0], block_states[0], block_states[1], 2
+            )
+            first = min(first, tight)
+        if rates[1, 1] > 0.0:
+            tight = _overdamped_bound(
+                rates[1], mode_rows[contact, part, 1], block_states[2], block_states[3], 2
+            )
+            second = min(second, tight)
+    return c0[kind, contact, part] + first + second
+
+
+@njit
 def _switching(
-    kind, contact, active, x1, x2, v1, v2, a1, a2, params, c0, c1, c2, roots, tol_state, clock
+    contact, active, x1, x2, v1, v2, a1, a2, params, bound_eta, bound_g, tol_state, clock
 ):
     """One contact's switching function: (F, F', tol, step certified above -tol).
 
-    tol is the rounding in F: that of the state, plus |F'| times the rounding of the clock.
+    bound_eta and bound_g bound |eta''| and |g''| for the rest of the phase; tol is the rounding
+    in F: that of the state, plus |F'| times the rounding of the clock.
     """
     if contact == 0:
         eta, deta = x1, v1
@@ -420,12 +505,6 @@ def _switching(
         dd = a2 - a1
     g = eta + 2.0 * zeta * deta
     dg = deta + 2.0 * zeta * dd
-    bound_eta = (
-        c0[kind, contact, 0] + c1[kind, contact, 0] * roots[0] + c2[kind, contact, 0] * roots[1]
-    )
-    bound_g = (
-        c0[kind, contact, 1] + c1[kind, contact, 1] * roots[0] + c2[kind, contact, 1] * roots[1]
-    )
     tol_g = tol_state + ROUNDING * abs(dg) * clock
     if active:
         value, rate = -g, -dg
@@ -463,12 +542,39 @@ def _energy_roots(kind, x1, x2, v1, v2, a1, a2, params, x_inv, blocks, companion
 
 
 @njit
-def _at_rest(roots, params, rest, tol):
+def _block_states(x1, x2, v1, v2, x_inv, companions, y_rest):
+    """(u, u') of each mode's oscillator in the both-contact phase: (u_1, u_1', u_2, u_2')."""
+    z0, z1, z2, z3 = _modes(x1, x2, v1, v2, x_inv, y_rest)
+    return (
+        companions[0, 0, 0] * z0 + companions[0, 0, 1] * z1,
+        companions[0, 1, 0] * z0 + companions[0, 1, 1] * z1,
+        companions[1, 0, 0] * z2 + companions[1, 0, 1] * z3,
+        companions[1, 1, 0] * z2 + companions[1, 1, 1] * z3,
+    )
+
+
+@njit
+def _at_rest(roots, params, rest, rates, mode_rows, block_states, tol):
     """True when neither contact of the both-contact phase can ever switch off again: the mode
-    energies are too small for -g to fall from its value at rest to zero."""
-    floor_margin = params[P_F1] - rest[0, 0] * roots[0] - rest[0, 1] * roots[1]
-    ball_margin = params[P_F2] - rest[1, 0] * roots[0] - rest[1, 1] * roots[1]
-    return floor_margin > tol and ball_margin > tol
+    energies (or, for a strongly overdamped mode, its two exponentials) are too small for -g to
+    fall from its value at rest to zero."""
+    for contact in range(2):
+        margin = params[P_F1] if contact == 0 else params[P_F2]
+        for block in range(2):
+            excursion = rest[contact, block] * roots[block]
+            if rates[block, 1] > 0.0:
+                tight = _overdamped_bound(
+                    rates[block],
+                    mode_rows[contact, 1, block],
+                    block_states[2 * block],
+                    block_states[2 * block + 1],
+                    0,
+                )
+                excursion = min(excursion, tight)
+            margin -= excursion
+        if not margin > tol:
+            return False
+    return True
 
 
 @njit
@@ -479,9 +585,13 @@ def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
     event time (apex or end of the run) with its event code; prepared is what :func:`prepare`
     returned.
     """
-    params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest = prepared
+    params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, mode_rows = prepared
     noise = params[P_NOISE] if kind == BOTH else 1.0
     size = 1.0 + abs(x1) + abs(x2)
+    if kind == BOTH:
+        # the closed form works about the static rest (y_rest ~ -mu for a heavy upper ball):
+        # its rounding scales with that offset too
+        size += abs(y_rest[0]) + abs(y_rest[1])
     speed = abs(v1) + abs(v2)
     floor_on = (kind & 1) != 0
     ball_on = (kind & 2) != 0
@@ -494,6 +604,9 @@ def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
         roots = _energy_roots(
             kind, y1, y2, w1, w2, a1, a2, params, x_inv, blocks, companions, y_rest
         )
+        block_states = (0.0, 0.0, 0.0, 0.0)
+        if kind == BOTH:
+            block_states = _block_states(y1, y2, w1, w2, x_inv, companions, y_rest)
         # rounding of the closed form at tau: its largest terms are x0, v0 tau and tau^2/2
         tol_state = ROUNDING * noise * (size + speed * (1.0 + tau) + tau * tau)
         clock = 1.0 + t + tau
@@ -502,8 +615,13 @@ def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
         best = np.inf
         for contact in range(2):
             active = floor_on if contact == 0 else ball_on
+            bound_eta = _curvature_bound(
+                kind, contact, 0, c0, c1, c2, roots, rates, mode_rows, block_states
+            )
+            bound_g = _curvature_bound(
+                kind, contact, 1, c0, c1, c2, roots, rates, mode_rows, block_states
+            )
             value, rate, tol, h = _switching(
-                kind,
                 contact,
                 active,
                 y1,
@@ -513,10 +631,8 @@ def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
                 a1,
                 a2,
                 params,
-                c0,
-                c1,
-                c2,
-                roots,
+                bound_eta,
+                bound_g,
                 tol_state,
                 clock,
             )
@@ -537,7 +653,9 @@ def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
                 kind, best, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest
             )
             return event, best, y1, y2, w1, w2
-        if kind == BOTH and _at_rest(roots, params, rest, tol_state):
+        if kind == BOTH and _at_rest(
+            roots, params, rest, rates, mode_rows, block_states, tol_state
+        ):
             return EVENT_REST, tau, y1, y2, w1, w2
         if tau + step >= horizon:
             y1, y2, w1, w2, _, _ = state_at(
@@ -545,10 +663,10 @@ def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
             )
             return horizon_event, horizon, y1, y2, w1, w2
         if not 0.0 < step < np.inf:
-            break
+            return EVENT_STUCK, tau, x1, x2, v1, v2
         tau += step
         last_step = step
-    return EVENT_STUCK, tau, x1, x2, v1, v2
+    return EVENT_STEPS, tau, x1, x2, v1, v2
 
 
 class RunOutcome(NamedTuple):
@@ -643,6 +761,9 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
         elif event == EVENT_REST:
             status = STATUS_REST
             break
+        elif event == EVENT_STEPS:
+            status = STATUS_PHASES
+            break
         else:
             status = STATUS_STUCK
             break
@@ -672,7 +793,7 @@ def sample(phases, times, prepared):
 
     Returns an array (len(times), 6): x1, x2, v1, v2, f01, f12.
     """
-    params, _, _, _, _, x, x_inv, blocks, _, y_rest = prepared
+    params, _, _, _, _, x, x_inv, blocks, _, y_rest, _, _ = prepared
     z01, z12 = params[P_Z01], params[P_Z12]
     out = np.empty((times.size, 6))
     starts = phases[:, 0]
