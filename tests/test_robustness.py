@@ -13,7 +13,7 @@ import warnings
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 import twoball
@@ -138,7 +138,8 @@ def test_a_light_ball_under_a_heavy_one_conserves_energy_through_its_chatter():
     """eps = 1, mu = 1.2e5, H = 0.2: the both-contact closed form works about the static rest
     (~ -mu), whose rounding (~mu ulp) once switched the floor contact off and on in a Zeno loop
     (phase limit). With nothing dissipated, the energy at each apex equals that at release
-    (docs/model.md, "Energy bound"), to the rounding of the static compression."""
+    (docs/model.md, "The domain double precision can carry": the energy bound), to the rounding
+    of the static compression."""
     mu, height = 123655.02807555212, 0.20806664471994354
     result = twoball.simulate(1.0, mu, 0.0, height=height, dense_output=True)
     assert result.success and len(result.apex_h) == 2
@@ -329,3 +330,115 @@ def test_the_axis_parser_gives_an_axis_or_a_clear_error(name, text):
         return
     values = axis.values()
     assert len(values) == axis.count and all(math.isfinite(v) for v in values)
+
+
+# Every other command under random argument lists. Tokens are drawn from each command's options,
+# numbers that are valid, out of range or not numbers, paths that exist, cannot exist or cannot
+# be written, and random text. sweep and report run for real (their valid grids here are at
+# most a few drops); the studies' measurements (minutes each; run for real by
+# test_precision.py, test_stability.py and `twoball bench` in docs/performance.md) are replaced
+# by a recorder of what the command line hands them, so the property is the command line's: one
+# line and status 2 for bad input, never a traceback, and in-range values passed on.
+NUMBERS = ["0", "1", "2", "-1", "0.5", "1/3", "1/0", "1e400", "nan", "inf", "-inf", "1e6",
+           "1001", "100001", "abc", "", " ", "0x10", "3.5", "0.9", "1e4"]  # fmt: skip
+PATHS = ["out", "cube.zarr", "/proc/nope", "/nonexistent/deeper", "/dev/null", "paper",
+         "contacts", "a file", "sub/dir", "a file/below"]  # fmt: skip
+AXES_ = ["0.9", "0.5:1:2", "0.5:1:2:log", "0.01:1:2:log", "0.9", "0.5:1:2", "1/3", "0.01",
+         "1:0.5:2", "0.5:1:0", "0.5:1", "0.5:1:2:cubic", "0:1:2:log", "0.5:1:100000", "x:y:z",
+         "2", "1e-12"]  # fmt: skip
+# Per command: (option, values it may take, required); a flag has no values.
+COMMAND_OPTIONS = {
+    "sweep": [("--eps", AXES_, True), ("--mu", AXES_, True), ("--tau-ratio", AXES_, True),
+              ("--height", NUMBERS, False), ("--eps12", NUMBERS, False),
+              ("--chunks", ["1,1,1", "1,2", "a,b,c", "0,1,1"], False),
+              ("--dtype", ["float32", "float64", "int8"], False), ("--workers", NUMBERS, False),
+              ("--quiet", None, False), ("--force", None, False)],
+    "report": [("--paper-cube", PATHS, False), ("--contacts-cube", PATHS, False)],
+    "precision": [("--out", PATHS, True), ("--repeats", NUMBERS, False),
+                  ("--budget", NUMBERS, False), ("--no-truth", None, False)],
+    "stability": [("--out", PATHS, True), ("--cap", NUMBERS, False),
+                  ("--workers", NUMBERS, False), ("--quick", None, False)],
+    "bench": [("--cases", NUMBERS, False), ("--seed", NUMBERS, False),
+              ("--repeats", NUMBERS, False)],
+}  # fmt: skip
+
+
+@st.composite
+def command_lines(draw):
+    """A command, most of its required options, some others, and now and then stray text."""
+    command = draw(st.sampled_from(sorted(COMMAND_OPTIONS)))
+    arguments = [command]
+    if command == "sweep":
+        arguments.append(draw(st.sampled_from(PATHS)))
+    for option, values, required in COMMAND_OPTIONS[command]:
+        if not draw(st.booleans()) and not (required and draw(st.integers(0, 9)) > 0):
+            continue
+        arguments.append(option)
+        if values is not None:
+            stray = draw(st.integers(0, 7)) == 0
+            arguments.append(draw(st.text(max_size=6) if stray else st.sampled_from(values)))
+    if draw(st.integers(0, 4)) == 0:
+        arguments.insert(draw(st.integers(1, len(arguments))), draw(st.text(max_size=6)))
+    return arguments
+
+
+@pytest.fixture
+def recorded_studies(monkeypatch):
+    """The studies' entry points, replaced by a recorder of their arguments."""
+    from twoball.studies import bench, precision, stability
+
+    calls = []
+
+    def record(name):
+        def recorder(*args, **kwargs):
+            calls.append((name, args, kwargs))
+            if name == "bench":
+                return dict.fromkeys(BENCH_FIGURES, 1.0) | {"worst_case": (0.9, 0.01, 0.01)}
+            os.makedirs(args[0], exist_ok=True)  # what the study does first with its --out
+            return None
+
+        return recorder
+
+    monkeypatch.setattr(bench, "benchmark", record("bench"))
+    monkeypatch.setattr(precision, "run_study", record("precision"))
+    monkeypatch.setattr(stability, "run_study", record("stability"))
+    return calls
+
+
+BENCH_FIGURES = ("exact_median_s", "lsoda_median_s", "speedup_median", "speedup_min",
+                 "exact_vs_dop853_max", "lsoda_vs_exact_median", "worst_exact_vs_truth",
+                 "worst_dop853_vs_truth")  # fmt: skip
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+          HealthCheck.function_scoped_fixture])  # fmt: skip
+@given(arguments=command_lines())
+@example(arguments=["sweep", "cube.zarr", "--eps", "0.9", "--mu", "0.5:1:2", "--tau-ratio", "1/3"])
+@example(arguments=["sweep", "out", "--eps", "0.5:1:2:log", "--mu", "0.01", "--tau-ratio", "0.01",
+          "--workers", "1", "--dtype", "float32", "--chunks", "1,1,1", "--quiet"])  # fmt: skip
+@example(arguments=["report"])
+@example(arguments=["bench", "--cases", "1", "--repeats", "1"])
+def test_every_command_gives_an_answer_or_one_line_never_a_traceback(arguments, recorded_studies):
+    import tempfile
+
+    command = arguments[0]
+    recorded_studies.clear()
+    with tempfile.TemporaryDirectory() as here, contextlib.chdir(here):
+        with open("a file", "w") as handle:
+            handle.write("not a store\n")
+        status, out, err = run_cli(*arguments)
+    event(f"{command} exit {status}")
+    assert "Traceback" not in err and "Traceback" not in out
+    assert status in (0, 1, 2), arguments
+    if status != 0:
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("twoball: "), (arguments, err)
+        return
+    for name, args, kwargs in recorded_studies:  # what the studies were handed is in range
+        if name == "bench":
+            cases, seed, repeats = args
+            assert 1 <= cases <= 100_000 and seed >= 0 and 1 <= repeats <= 1000
+        elif name == "precision":
+            assert 1 <= kwargs["repeats"] <= 1000 and 0 < kwargs["budget"] <= 86_400
+        else:
+            assert 0 < kwargs["cap"] <= 86_400 and 1 <= kwargs["workers"] <= 1024

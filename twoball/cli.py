@@ -1,32 +1,31 @@
-"""The ``twoball`` command line.
+"""The ``twoball`` command line: every command's arguments, checks and printing, in one place.
+
+The modules of the library compute (:func:`twoball.simulate`, :mod:`twoball.sweep`, the studies
+in :mod:`twoball.studies`); this module only parses, checks ranges and prints. A command's module
+is imported when the command runs, so that a command whose extra is not installed says which
+one, and the others work without it.
 
 Bad input never shows a traceback: a :class:`~twoball.errors.ParameterError` (or argparse's own
-complaint) prints one line on stderr and exits with status 2. A run that is no answer (a
-:class:`~twoball.errors.SolverError`: stuck root finder, phase limit) prints one line and exits
-with status 1. Any other exception is a bug and keeps its traceback.
-Each subcommand lives in the module of its idea, which adds its own parser with
-``add_parser(subparsers)`` and sets ``func`` to a function of the parsed arguments.
+complaint) prints one line on stderr and exits with status 2, as does a path that cannot be read
+or written. A run that is no answer (a :class:`~twoball.errors.SolverError`: stuck root finder,
+phase limit) prints one line and exits with status 1. Any other exception is a bug and keeps its
+traceback.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
+import math
+import os
 import sys
+from collections.abc import Callable
+from fractions import Fraction
 
 from twoball.errors import ParameterError, SolverError
-
-# The modules that contribute subcommands, in the order --help lists them.
-SUBCOMMAND_MODULES = (
-    "twoball.cli",
-    "twoball.studies.bench",
-    "twoball.sweep",
-    "twoball.studies.report",
-    "twoball.studies.precision",
-    "twoball.studies.stability",
-)
-
+from twoball.model import DEFAULT_HEIGHT, Parameters
+from twoball.sweep import DIMS as SWEEP_AXES
+from twoball.sweep import MAX_DROPS as MAX_SWEEP_DROPS
 
 # The optional dependencies, by the extra that installs them (pyproject.toml).
 EXTRAS = {
@@ -49,22 +48,72 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
-def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    """``twoball simulate``: one drop, its observables as text or JSON."""
+# Argument types: a number out of range is argparse's error, naming the option and the range.
+
+
+def _number(text: str) -> float:
+    """A number, written as a float or a fraction such as 1/3."""
+    try:
+        return float(Fraction(text.strip())) if "/" in text else float(text)
+    except (ValueError, ZeroDivisionError):
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+
+
+def _integer_in(low: int, high: int) -> Callable[[str], int]:
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"must be from {low:,} to {high:,}; got {value:,}")
+        return value
+
+    return parse
+
+
+def _seconds(text: str) -> float:
+    value = _number(text)
+    if not (math.isfinite(value) and 0 < value <= 86_400):
+        raise argparse.ArgumentTypeError(f"seconds in (0, 86400]; got {text!r}")
+    return value
+
+
+def _path(text: str) -> str:
+    """A file or directory name (the operating system refuses a NUL character in one)."""
+    if "\0" in text:
+        raise argparse.ArgumentTypeError(f"a path cannot contain a NUL character: {text!r}")
+    return text
+
+
+def _until(text: str) -> str | float:
+    """``--until``: "first", "second" or a number (argparse reports anything else)."""
+    if text in ("first", "second"):
+        return text
+    return _number(text)
+
+
+_WORKERS = _integer_in(1, 1024)
+
+
+# simulate
+
+
+def _add_simulate(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("simulate", help="simulate one drop and print its bounces")
-    parser.add_argument("--eps", type=float, required=True, help="restitution eps in (0, 1]")
-    parser.add_argument("--mu", type=float, required=True, help="mass ratio m2/m1 > 0")
-    parser.add_argument("--tau-ratio", type=float, required=True, help="tau_d/tau_f >= 0")
+    parser.add_argument("--eps", type=_number, required=True, help="restitution eps in (0, 1]")
+    parser.add_argument("--mu", type=_number, required=True, help="mass ratio m2/m1 > 0")
+    parser.add_argument("--tau-ratio", type=_number, required=True, help="tau_d/tau_f >= 0")
     parser.add_argument(
-        "--eps12", type=float, default=None, help="ball-ball restitution (default: eps)"
+        "--eps12", type=_number, default=None, help="ball-ball restitution (default: eps)"
     )
-    parser.add_argument("--height", type=float, default=1e4, help="dimensionless drop height H > 0")
+    parser.add_argument(
+        "--height", type=_number, default=DEFAULT_HEIGHT, help="dimensionless drop height H > 0"
+    )
     parser.add_argument(
         "--method", default="exact", help="exact, LSODA, Radau, BDF, DOP853, RK45 or odeint"
     )
-    parser.add_argument(
-        "--until", type=until_argument, default="second", help="first, second or a time"
-    )
+    parser.add_argument("--until", type=_until, default="second", help="first, second or a time")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.set_defaults(func=_simulate)
 
@@ -92,19 +141,206 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0
 
 
-def until_argument(text: str) -> str | float:
-    """``--until``: "first", "second" or a number (argparse reports anything else)."""
-    try:
-        return text if text in ("first", "second") else float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"first, second or a number; got {text!r}") from None
+# bench
+
+
+def _add_bench(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("bench", help="time the exact solver against LSODA (odeint)")
+    parser.add_argument(
+        "--cases", type=_integer_in(1, 100_000), default=50, help="random cases (default 50)"
+    )
+    parser.add_argument(
+        "--seed", type=_integer_in(0, 2**63 - 1), default=0, help="random seed (default 0)"
+    )
+    parser.add_argument(
+        "--repeats", type=_integer_in(1, 1000), default=5, help="timed repeats per case"
+    )
+    parser.set_defaults(func=_bench)
+
+
+def _bench(args: argparse.Namespace) -> int:
+    from twoball.studies.bench import benchmark
+
+    figures = benchmark(args.cases, args.seed, args.repeats)
+    print(f"{args.cases} random cases of the paper's cube, H = 1e4, to the second apex")
+    print(f"exact solver      median {figures['exact_median_s'] * 1e3:9.3f} ms per case")
+    print(
+        f"LSODA (odeint)    median {figures['lsoda_median_s'] * 1e3:9.3f} ms per case "
+        "(rtol = atol = 1e-8, grid step 0.01)"
+    )
+    print(
+        f"speed-up          median {figures['speedup_median']:9.1f} x, "
+        f"slowest case {figures['speedup_min']:.1f} x"
+    )
+    print(
+        f"exact vs DOP853 (rtol = atol = 1e-12): max relative difference in h1, h2 "
+        f"{figures['exact_vs_dop853_max']:.2e}"
+    )
+    print(
+        f"LSODA (odeint) vs exact: median relative error in h1, h2 "
+        f"{figures['lsoda_vs_exact_median']:.2e}"
+    )
+    eps, mu, tau_ratio = figures["worst_case"]
+    print(
+        f"where exact and DOP853 differ most (eps {eps:.4g}, mu {mu:.4g}, tau_ratio "
+        f"{tau_ratio:.4g}), relative error against the 40-digit reference (twoball.studies.truth): "
+        f"exact {figures['worst_exact_vs_truth']:.1e}, "
+        f"DOP853 {figures['worst_dop853_vs_truth']:.1e}"
+    )
+    return 0
+
+
+# sweep
+
+
+def _add_sweep(subparsers: argparse._SubParsersAction) -> None:
+    axis_help = "VALUE or START:STOP:COUNT[:linear|log], end points included; {}"
+    parser = subparsers.add_parser(
+        "sweep",
+        help="compute h1, h2, contacts and ratios over a grid into a resumable Zarr store",
+        description="Sweep the exact solver over a grid of (eps, mu, tau_ratio). A run that is "
+        "stopped (even by kill -9) resumes when started again with the same arguments.",
+    )
+    parser.add_argument("store", type=_path, help="output Zarr directory (e.g. cube.zarr)")
+    for name in SWEEP_AXES:
+        doc = Parameters.param[name].doc
+        parser.add_argument(
+            f"--{name.replace('_', '-')}", required=True, help=axis_help.format(doc)
+        )
+    parser.add_argument(
+        "--height", type=_number, default=DEFAULT_HEIGHT, help="drop height H (1e4)"
+    )
+    parser.add_argument(
+        "--eps12", type=_number, default=None, help="ball-ball restitution (default: eps)"
+    )
+    parser.add_argument("--chunks", default=None, help="chunk sizes E,M,T (default 1,all,all)")
+    parser.add_argument(
+        "--dtype", choices=("float64", "float32"), default="float64", help="stored floats"
+    )
+    parser.add_argument("--workers", type=_WORKERS, help="local processes (default: all cores)")
+    parser.add_argument("--scheduler", default=None, help="Dask distributed scheduler address")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument(
+        "--force", action="store_true", help=f"undertake more than {MAX_SWEEP_DROPS:,} drops"
+    )
+    parser.set_defaults(func=_sweep)
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    from twoball.sweep import Grid, parse_axis, plan, sweep
+
+    axes = [parse_axis(name, getattr(args, name)) for name in SWEEP_AXES]
+    chunks = None
+    if args.chunks is not None:
+        try:
+            chunks = tuple(int(part) for part in args.chunks.split(","))
+        except ValueError:
+            raise ParameterError(
+                f"chunks must be three integers E,M,T; got {args.chunks!r}"
+            ) from None
+    grid = Grid(*axes, height=args.height, eps12=args.eps12, chunks=chunks, dtype=args.dtype)
+    undertaking = plan(grid, args.workers or os.cpu_count() or 1)
+    if grid.size > MAX_SWEEP_DROPS and not args.force:
+        raise ParameterError(
+            f"refusing {undertaking}: more than {MAX_SWEEP_DROPS:,} drops needs --force"
+        )
+    print(f"sweep {args.store}: {undertaking}", flush=True)  # on stdout: --quiet keeps it
+    sweep(grid, args.store, scheduler=args.scheduler, workers=args.workers, progress=not args.quiet)
+    print(f"{args.store}: {grid.size} cases, {len(grid.chunk_slices())} chunks, complete")
+    return 0
+
+
+# report
+
+
+def _add_report(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "report", help="the paper's headline numbers beside ours (from the shipped cubes)"
+    )
+    parser.add_argument(
+        "--paper-cube", type=_path, default="paper", help="cube name or .zarr path (paper)"
+    )
+    parser.add_argument(
+        "--contacts-cube", type=_path, default="contacts", help="cube name or .zarr path (contacts)"
+    )
+    parser.set_defaults(func=_report)
+
+
+def _report(args: argparse.Namespace) -> int:
+    from twoball.studies.report import markdown, paper_table
+
+    print(markdown(paper_table(args.paper_cube, args.contacts_cube)))
+    return 0
+
+
+# precision
+
+
+def _add_precision(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "precision", help="error against run time of every method (work-precision diagram)"
+    )
+    parser.add_argument("--out", type=_path, required=True, help="directory for the CSV and PNG")
+    parser.add_argument(
+        "--repeats", type=_integer_in(1, 1000), default=3, help="timed repeats per run (median)"
+    )
+    parser.add_argument(
+        "--budget",
+        type=_seconds,
+        default=20.0,
+        help="seconds: a method slower than this at one tolerance skips the tighter ones",
+    )
+    parser.add_argument(
+        "--no-truth", action="store_true", help="skip the 40-digit check of the exact solver"
+    )
+    parser.set_defaults(func=_precision)
+
+
+def _precision(args: argparse.Namespace) -> int:
+    from twoball.studies.precision import run_study
+
+    run_study(args.out, repeats=args.repeats, budget=args.budget, truth=not args.no_truth)
+    return 0
+
+
+# stability
+
+
+def _add_stability(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "stability", help="every method on stiff and extreme cases, and the H-convergence"
+    )
+    parser.add_argument("--out", type=_path, required=True, help="directory for the CSVs and PNGs")
+    parser.add_argument(
+        "--cap", type=_seconds, default=10.0, help="seconds per run before 'too slow'"
+    )
+    parser.add_argument("--workers", type=_WORKERS, default=2, help="worker processes (default 2)")
+    parser.add_argument("--quick", action="store_true", help="base case sweeps only, no corners")
+    parser.set_defaults(func=_stability)
+
+
+def _stability(args: argparse.Namespace) -> int:
+    from twoball.studies.stability import run_study
+
+    run_study(args.out, cap=args.cap, workers=args.workers, quick=args.quick)
+    return 0
+
+
+# The commands, in the order --help lists them.
+COMMANDS = (_add_simulate, _add_bench, _add_sweep, _add_report, _add_precision, _add_stability)
+
+
+def _one_line(text: object) -> str:
+    """The text with line breaks and other unprintable characters escaped, as repr would."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(text))
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``twoball`` parser with every command."""
     parser = _Parser(prog="twoball", description="The two-ball bounce, solved exactly.")
     subparsers = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    for name in SUBCOMMAND_MODULES:
-        importlib.import_module(name).add_parser(subparsers)
+    for add in COMMANDS:
+        add(subparsers)
     return parser
 
 
@@ -114,15 +350,16 @@ def main(argv: list[str] | None = None) -> int:
         args = build_parser().parse_args(argv)
         return args.func(args)
     except ParameterError as error:
-        print(f"twoball: error: {error}", file=sys.stderr)
+        print(f"twoball: error: {_one_line(error)}", file=sys.stderr)
         return 2
     except OSError as error:
         if error.filename is None:  # not about a path: a real fault, keep its traceback
             raise
-        print(f"twoball: error: {error.filename}: {error.strerror or error}", file=sys.stderr)
+        where, what = _one_line(error.filename), _one_line(error.strerror or error)
+        print(f"twoball: error: {where}: {what}", file=sys.stderr)
         return 2
     except SolverError as error:  # a known way for a run to fail: said in one line, status 1
-        print(f"twoball: solver failed: {error}", file=sys.stderr)
+        print(f"twoball: solver failed: {_one_line(error)}", file=sys.stderr)
         return 1
     except ModuleNotFoundError as error:
         extra = EXTRAS.get((error.name or "").partition(".")[0])

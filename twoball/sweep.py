@@ -14,7 +14,6 @@ simply computed and written again, so the finished cube is the same as an uninte
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
@@ -36,7 +35,6 @@ from twoball.errors import ParameterError
 from twoball.exact import STATUS_DONE, STATUS_PHASES, STATUS_REST, STATUS_STUCK, prepare, run
 from twoball.model import (
     DEFAULT_HEIGHT,
-    Parameters,
     check_parameters,
     check_value,
     damping_ratios,
@@ -146,13 +144,6 @@ def parse_axis(name: str, text: str) -> Axis:
     spacing = parts[3] if len(parts) == 4 else "linear"
     start, stop = _parse_number(name, parts[0]), _parse_number(name, parts[1])
     return Axis(name, start, stop, count, spacing)
-
-
-def _height_argument(text: str) -> float:
-    try:
-        return _parse_number("height", text)
-    except ParameterError as error:
-        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def _parse_number(name: str, text: str) -> float:
@@ -570,61 +561,3 @@ def _connect(scheduler: str):
 
 def _cases(index: tuple[slice, slice, slice]) -> int:
     return math.prod(part.stop - part.start for part in index)
-
-
-def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    """``twoball sweep``: a cube of bounces over (eps, mu, tau_ratio) into a Zarr store."""
-    axis_help = "VALUE or START:STOP:COUNT[:linear|log], end points included; {}"
-    parser = subparsers.add_parser(
-        "sweep",
-        help="compute h1, h2, contacts and ratios over a grid into a resumable Zarr store",
-        description="Sweep the exact solver over a grid of (eps, mu, tau_ratio). A run that is "
-        "stopped (even by kill -9) resumes when started again with the same arguments.",
-    )
-    parser.add_argument("store", help="output Zarr directory (e.g. cube.zarr)")
-    for name in DIMS:
-        doc = Parameters.param[name].doc
-        parser.add_argument(
-            f"--{name.replace('_', '-')}", required=True, help=axis_help.format(doc)
-        )
-    parser.add_argument(
-        "--height", type=_height_argument, default=DEFAULT_HEIGHT, help="drop height H (1e4)"
-    )
-    parser.add_argument("--eps12", default=None, help="ball-ball restitution (default: eps)")
-    parser.add_argument("--chunks", default=None, help="chunk sizes E,M,T (default 1,all,all)")
-    parser.add_argument("--dtype", default="float64", help="stored floats: float64 or float32")
-    parser.add_argument(
-        "--workers", type=int, default=None, help="local processes (default: all cores)"
-    )
-    parser.add_argument("--scheduler", default=None, help="Dask distributed scheduler address")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
-    parser.add_argument(
-        "--force", action="store_true", help=f"undertake more than {MAX_DROPS:,} drops"
-    )
-    parser.set_defaults(func=_main)
-
-
-def _main(args: argparse.Namespace) -> int:
-    axes = [parse_axis(name, getattr(args, name)) for name in DIMS]
-    chunks = None
-    if args.chunks is not None:
-        try:
-            chunks = tuple(int(part) for part in args.chunks.split(","))
-        except ValueError:
-            raise ParameterError(
-                f"chunks must be three integers E,M,T; got {args.chunks!r}"
-            ) from None
-    grid = Grid(
-        *axes,
-        height=args.height,
-        eps12=None if args.eps12 is None else _parse_number("eps12", args.eps12),
-        chunks=chunks,
-        dtype=args.dtype,
-    )
-    undertaking = plan(grid, args.workers or os.cpu_count() or 1)
-    if grid.size > MAX_DROPS and not args.force:
-        raise ParameterError(f"refusing {undertaking}: more than {MAX_DROPS:,} drops needs --force")
-    print(f"sweep {args.store}: {undertaking}", flush=True)  # on stdout: --quiet keeps it
-    sweep(grid, args.store, scheduler=args.scheduler, workers=args.workers, progress=not args.quiet)
-    print(f"{args.store}: {grid.size} cases, {len(grid.chunk_slices())} chunks, complete")
-    return 0

@@ -12,12 +12,10 @@ of the two is off.
 
 from __future__ import annotations
 
-import argparse
 import statistics
 
 import numpy as np
 
-from twoball.errors import ParameterError
 from twoball.observables import relative_error
 from twoball.solve import simulate
 from twoball.studies.timing import median_seconds
@@ -94,43 +92,3 @@ def benchmark(count: int = 50, seed: int = 0, repeats: int = 5, height: float = 
         "exact_vs_dop853_max": max(row["exact_vs_dop853"] for row in rows),
         "lsoda_vs_exact_median": statistics.median(row["lsoda_vs_exact"] for row in rows),
     }
-
-
-def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("bench", help="time the exact solver against LSODA (odeint)")
-    parser.add_argument("--cases", type=int, default=50, help="random cases (default 50)")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    parser.add_argument("--repeats", type=int, default=5, help="timed repeats per case")
-    parser.set_defaults(func=_main)
-
-
-def _main(args: argparse.Namespace) -> int:
-    if args.cases < 1 or args.repeats < 1:
-        raise ParameterError("--cases and --repeats must be at least 1")
-    figures = benchmark(args.cases, args.seed, args.repeats)
-    print(f"{args.cases} random cases of the paper's cube, H = 1e4, to the second apex")
-    print(f"exact solver      median {figures['exact_median_s'] * 1e3:9.3f} ms per case")
-    print(
-        f"LSODA (odeint)    median {figures['lsoda_median_s'] * 1e3:9.3f} ms per case "
-        "(rtol = atol = 1e-8, grid step 0.01)"
-    )
-    print(
-        f"speed-up          median {figures['speedup_median']:9.1f} x, "
-        f"slowest case {figures['speedup_min']:.1f} x"
-    )
-    print(
-        f"exact vs DOP853 (rtol = atol = 1e-12): max relative difference in h1, h2 "
-        f"{figures['exact_vs_dop853_max']:.2e}"
-    )
-    print(
-        f"LSODA (odeint) vs exact: median relative error in h1, h2 "
-        f"{figures['lsoda_vs_exact_median']:.2e}"
-    )
-    eps, mu, tau_ratio = figures["worst_case"]
-    print(
-        f"where exact and DOP853 differ most (eps {eps:.4g}, mu {mu:.4g}, tau_ratio "
-        f"{tau_ratio:.4g}), relative error against the 40-digit reference (twoball.studies.truth): "
-        f"exact {figures['worst_exact_vs_truth']:.1e}, "
-        f"DOP853 {figures['worst_dop853_vs_truth']:.1e}"
-    )
-    return 0

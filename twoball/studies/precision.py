@@ -12,7 +12,6 @@ tolerances and writes ``DIR/work_precision.csv`` and ``DIR/work_precision.png``.
 
 from __future__ import annotations
 
-import argparse
 import csv
 import math
 import textwrap
@@ -327,33 +326,16 @@ def _digits(value) -> str:
     return "" if value is None else mpmath.nstr(value, 25)
 
 
-def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    """``twoball precision``: error against run time of every method on the documented cases."""
-    parser = subparsers.add_parser(
-        "precision", help="error against run time of every method (work-precision diagram)"
-    )
-    parser.add_argument("--out", required=True, help="directory for the CSV and PNG")
-    parser.add_argument("--repeats", type=int, default=3, help="timed repeats per run (median)")
-    parser.add_argument(
-        "--budget",
-        type=float,
-        default=20.0,
-        help="seconds: a method slower than this at one tolerance skips the tighter ones",
-    )
-    parser.add_argument(
-        "--no-truth", action="store_true", help="skip the 40-digit check of the exact solver"
-    )
-    parser.set_defaults(func=_main)
-
-
-def _main(args: argparse.Namespace) -> int:
-    if args.repeats < 1:
-        raise ParameterError(f"--repeats must be at least 1; got {args.repeats!r}")
-    if not args.budget > 0:
-        raise ParameterError(f"--budget must be a number of seconds > 0; got {args.budget!r}")
-    out = Path(args.out)
+def run_study(out: Path, *, repeats: int = 3, budget: float = 20.0, truth: bool = True) -> None:
+    """The work-precision study (``twoball precision``): measure every method on the documented
+    cases, write work_precision.csv and .png (and exact_vs_truth.csv with ``truth``) into out."""
+    if repeats < 1:
+        raise ParameterError(f"repeats must be at least 1; got {repeats!r}")
+    if not budget > 0:
+        raise ParameterError(f"budget must be a number of seconds > 0; got {budget!r}")
+    out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    truth_rows = [] if args.no_truth else exact_against_truth(CASES)
+    truth_rows = exact_against_truth(CASES) if truth else []
     established = {row["case"]: row for row in truth_rows}
     rows = []
     for case, (eps, mu, tau_ratio) in CASES.items():
@@ -364,8 +346,8 @@ def _main(args: argparse.Namespace) -> int:
             mu,
             tau_ratio,
             tolerances=FULL_TOLERANCES,
-            repeats=args.repeats,
-            budget=args.budget,
+            repeats=repeats,
+            budget=budget,
         )
         for row in case_rows:  # the exact solver's own error, where it was established
             if row["method"] == "exact" and case in established:
@@ -384,4 +366,3 @@ def _main(args: argparse.Namespace) -> int:
         worst = max(max(r["rel_err_h1"], r["rel_err_h2"]) for r in truth_rows)
         print(f"exact solver against the 40-digit reference: largest relative error {worst:.1e}")
     print(f"wrote {', '.join(str(out / name) for name in written)}")
-    return 0

@@ -8,7 +8,6 @@ between the paper's number and ours (H, grid spacing, definitions).
 
 from __future__ import annotations
 
-import argparse
 from dataclasses import dataclass
 
 import numpy as np
@@ -153,20 +152,3 @@ def markdown(rows: list[Row]) -> str:
     lines = ["| claim in the paper | paper | ours | what differs |", "| --- | --- | --- | --- |"]
     lines += [f"| {r.claim} | {r.paper} | {r.ours} | {r.note} |" for r in rows]
     return "\n".join(lines)
-
-
-def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    """``twoball report``: the paper's numbers beside ours from the shipped cubes."""
-    parser = subparsers.add_parser(
-        "report", help="the paper's headline numbers beside ours (from the shipped cubes)"
-    )
-    parser.add_argument("--paper-cube", default="paper", help="cube name or .zarr path (paper)")
-    parser.add_argument(
-        "--contacts-cube", default="contacts", help="cube name or .zarr path (contacts)"
-    )
-    parser.set_defaults(func=_main)
-
-
-def _main(args: argparse.Namespace) -> int:
-    print(markdown(paper_table(args.paper_cube, args.contacts_cube)))
-    return 0

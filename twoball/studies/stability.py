@@ -24,7 +24,6 @@ trajectory and against the exact solver:
 
 from __future__ import annotations
 
-import argparse
 import csv
 import math
 import multiprocessing
@@ -569,28 +568,19 @@ def h_convergence_figure(rows: Sequence[dict]) -> Figure:
     return figure
 
 
-def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    """``twoball stability``: the study, its CSVs and pictures."""
-    parser = subparsers.add_parser(
-        "stability", help="every method on stiff and extreme cases, and the H-convergence"
-    )
-    parser.add_argument("--out", required=True, help="directory for the CSVs and PNGs")
-    parser.add_argument("--cap", type=float, default=10.0, help="seconds per run before 'too slow'")
-    parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
-    parser.add_argument("--quick", action="store_true", help="base case sweeps only, no corners")
-    parser.set_defaults(func=_main)
-
-
-def _main(args: argparse.Namespace) -> int:
-    if not (math.isfinite(args.cap) and args.cap > 0):
-        raise ParameterError(f"--cap must be a number of seconds > 0; got {args.cap!r}")
-    if args.workers < 1:
-        raise ParameterError(f"--workers must be at least 1; got {args.workers!r}")
-    out = Path(args.out)
+def run_study(out: Path, *, cap: float = 10.0, workers: int = 2, quick: bool = False) -> None:
+    """The stability study (``twoball stability``): every method on the stiff and extreme cases
+    and the H-convergence; writes stability.csv/.png and h_convergence.csv/.png into out.
+    ``quick`` runs the base case sweeps only, without the corners."""
+    if not (math.isfinite(cap) and cap > 0):
+        raise ParameterError(f"cap must be a number of seconds > 0; got {cap!r}")
+    if workers < 1:
+        raise ParameterError(f"workers must be at least 1; got {workers!r}")
+    out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     subset = scipy_cases()
     cases = grid_cases()
-    if args.quick:
+    if quick:
         subset = subset[: -len(CORNERS)]
         cases = subset
     else:
@@ -604,9 +594,7 @@ def _main(args: argparse.Namespace) -> int:
             print(f"  {done[0]}/{total} runs", flush=True)
 
     started = time.perf_counter()
-    rows = study(
-        cases, subset, cap=args.cap, workers=args.workers, check=CONTACT_CHECK, progress=progress
-    )
+    rows = study(cases, subset, cap=cap, workers=workers, check=CONTACT_CHECK, progress=progress)
     write_csv(rows, out / "stability.csv")
     stability_figure(rows).savefig(out / "stability.png", dpi=110)
     convergence = h_convergence()
@@ -623,4 +611,3 @@ def _main(args: argparse.Namespace) -> int:
         mine = [r for r in rows if r["method"] == method]
         counts = {v: sum(1 for r in mine if r["verdict"] == v) for v in VERDICT_COLOURS}
         print(f"  {method:12s} " + ", ".join(f"{k} {n}" for k, n in counts.items()))
-    return 0
