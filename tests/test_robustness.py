@@ -134,22 +134,43 @@ def test_a_strongly_overdamped_drop_comes_to_rest_where_an_integrator_sees_no_sw
     assert starts == pytest.approx(sorted(c.start for c in integrated.contacts), abs=1e-4)
 
 
-def test_a_light_ball_under_a_heavy_one_conserves_energy_through_its_chatter():
-    """eps = 1, mu = 1.2e5, H = 0.2: the both-contact closed form works about the static rest
+@pytest.mark.parametrize(
+    ("mu", "tau_ratio", "height"),
+    [(123655.02807555212, 0.0, 0.20806664471994354), (58021.76443278749, 1.064e-4, 0.0297)],
+)
+def test_a_light_ball_under_a_heavy_one_conserves_energy_through_its_chatter(mu, tau_ratio, height):
+    """eps = 1, mu ~ 1e5, H << 1: the both-contact closed form works about the static rest
     (~ -mu), whose rounding (~mu ulp) once switched the floor contact off and on in a Zeno loop
-    (phase limit). With nothing dissipated, the energy at each apex equals that at release
+    (phase limit), and, carried out of that phase, closed the ball contact again as soon as it
+    opened. With nothing dissipated, the energy at each apex equals that at release
     (docs/model.md, "The domain double precision can carry": the energy bound), to the rounding
     of the static compression."""
-    mu, height = 123655.02807555212, 0.20806664471994354
-    result = twoball.simulate(1.0, mu, 0.0, height=height, dense_output=True)
+    result = twoball.simulate(1.0, mu, tau_ratio, height=height, dense_output=True)
     assert result.success and len(result.apex_h) == 2
     at = result.evaluate(np.array(result.apex_t))
     kinetic = 0.5 * (at.v1**2 + mu * at.v2**2)
     springs = 0.5 * np.minimum(at.x1, 0.0) ** 2 + 0.5 * np.minimum(at.x2 - at.x1, 0.0) ** 2
     energy = kinetic + at.x1 + mu * at.x2 + springs
-    released = height * (1.0 + mu)
+    drop = check_parameters(1.0, mu, tau_ratio, height=height)
+    released = drop.x1_0 + mu * drop.x2_0
     rounding = 2.2e-16 * (1.0 + mu) / height  # of the static compression, relative to H
     assert energy == pytest.approx([released, released], rel=10 * rounding)
+
+
+@pytest.mark.parametrize(
+    ("mu", "eps12", "height"),
+    [(0.12119256473510784, 1.0, 0.005609283337078332), (5.51e-07, 0.3045, 0.03288729371966847),
+     (3.4948096897157004e-05, 0.8479920444051827, 4674.361844541514)],
+)  # fmt: skip
+def test_balls_touching_at_release_on_an_elastic_floor_agree_with_dop853(mu, eps12, height):
+    """tau_ratio = 0 and eps = 1: both contacts start together with F, F' and F'' zero, where
+    rounding once switched a contact off and on for ever (exact.advance_phase's ``fresh``)."""
+    result = twoball.simulate(1.0, mu, 0.0, eps12=eps12, height=height)
+    integrated = twoball.simulate(1.0, mu, 0.0, eps12=eps12, height=height, method="DOP853",
+                                  rtol=1e-12, atol=1e-14)  # fmt: skip
+    assert result.success and len(result.contacts) == len(integrated.contacts)
+    assert result.h1 == pytest.approx(integrated.h1, rel=1e-8)
+    assert result.h2 == pytest.approx(integrated.h2, rel=1e-8)
 
 
 @pytest.mark.slow

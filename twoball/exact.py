@@ -578,7 +578,9 @@ def _at_rest(roots, params, rest, rates, mode_rows, block_states, tol):
 
 
 @njit
-def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
+def advance_phase(
+    kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared, entered_by=-1, carried=0.0
+):
     """Advance one phase, started at time t, to its first event.
 
     Returns (event, tau, x1, x2, v1, v2) with tau the time into the phase. horizon is a known
@@ -588,6 +590,10 @@ def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
     params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, mode_rows = prepared
     noise = params[P_NOISE] if kind == BOTH else 1.0
     size = 1.0 + abs(x1) + abs(x2)
+    # Without the ball contact the lower ball moves on its own, so the floor contact's rounding
+    # is that of the lower ball alone (an upper ball far above must not blunt it).
+    lower_alone = (kind & 2) == 0
+    size_lower, speed_lower = 1.0 + abs(x1), abs(v1)
     if kind == BOTH:
         # the closed form works about the static rest (y_rest ~ -mu for a heavy upper ball):
         # its rounding scales with that offset too
@@ -608,7 +614,10 @@ def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
         if kind == BOTH:
             block_states = _block_states(y1, y2, w1, w2, x_inv, companions, y_rest)
         # rounding of the closed form at tau: its largest terms are x0, v0 tau and tau^2/2
-        tol_state = ROUNDING * noise * (size + speed * (1.0 + tau) + tau * tau)
+        tol_state = ROUNDING * noise * (size + speed * (1.0 + tau) + tau * tau) + carried
+        tol_lower = tol_state
+        if lower_alone:
+            tol_lower = ROUNDING * (size_lower + speed_lower * (1.0 + tau) + tau * tau) + carried
         clock = 1.0 + t + tau
         step = horizon - tau
         event = -1
@@ -633,10 +642,16 @@ def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
                 params,
                 bound_eta,
                 bound_g,
-                tol_state,
+                tol_lower if contact == 0 else tol_state,
                 clock,
             )
-            if value <= -tol or (value <= tol and rate < 0.0):
+            # The contact whose switch began this phase starts it at F = 0 with a rate of the
+            # right sign; only at a tangency (F, F' and F'' all zero, as when both balls touch
+            # at release and meet an elastic floor together) can rounding give the rate the
+            # wrong sign, which would switch it straight back, for ever. So at the phase's
+            # first point it switches back only from clearly past its root.
+            fresh = contact == entered_by and tau == 0.0
+            if value <= -tol or (value <= tol and rate < 0.0 and not fresh):
                 # At a root to rounding: one Newton correction, never past the certified step
                 # nor back before the last certified point. The certified steps aim at F = -tol,
                 # so without the backward correction every switch is placed up to tol/|F'| late,
@@ -644,6 +659,8 @@ def advance_phase(kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared):
                 shift = 0.0
                 if rate < 0.0:
                     shift = min(max(value / -rate, -last_step), h)
+                if contact == entered_by and tau + shift <= 0.0:
+                    shift = 0.0  # not back to where it switched (see fresh above)
                 if tau + shift < best:
                     best, event = tau + shift, contact
             else:
@@ -715,6 +732,13 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
     phases = np.empty((64 if record_phases else 0, 6))
     n_phases = 0
     status = STATUS_PHASES
+    entered_by = -1  # the contact whose switch began the current phase
+    # A state that leaves the both-contact phase carries the rounding of its closed form about
+    # the static rest (~ mu ulp for a heavy upper ball); later phases must not take that for an
+    # overlap, or a contact that just opened closes again at once, for ever.
+    params, y_rest = prepared[0], prepared[9]
+    both_offset = ROUNDING * params[P_NOISE] * (abs(y_rest[0]) + abs(y_rest[1]))
+    carried = 0.0
     for _ in range(MAX_PHASES):
         if record_phases:
             phases = _room_for_one(phases, n_phases)
@@ -727,8 +751,11 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
             horizon = v2  # the upper ball flies freely: its apex is exactly v2 away
             horizon_event = EVENT_APEX
         event, tau, x1, x2, v1, v2 = advance_phase(
-            kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared
+            kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared, entered_by, carried
         )
+        if kind == BOTH:  # the state leaves it with the rounding of its offset (see below)
+            carried = both_offset
+        entered_by = event if event in (EVENT_FLOOR, EVENT_BALL) else -1
         t += tau
         if event in (EVENT_FLOOR, EVENT_BALL):
             bit = 1 << event

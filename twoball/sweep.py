@@ -19,14 +19,9 @@ import math
 import os
 import shutil
 import sys
-import threading
-import time
-from concurrent.futures import ProcessPoolExecutor
-from concurrent.futures import as_completed as local_as_completed
 from dataclasses import asdict, dataclass, field
 from fractions import Fraction
 from itertools import product
-from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
@@ -44,6 +39,7 @@ from twoball.model import (
     initial_gap_height,
 )
 from twoball.observables import ratios
+from twoball.workers import Workers
 
 DIMS = ("eps", "mu", "tau_ratio")
 SPACINGS = ("linear", "log")
@@ -450,17 +446,14 @@ def sweep(
                     _write_chunk(grid, store, futures[future], future.result())
                     bar.update(_cases(futures[future]))
             elif todo:
-                processes = workers or os.cpu_count() or 1
-                with ProcessPoolExecutor(
-                    processes,
-                    mp_context=get_context("spawn"),
-                    initializer=_exit_with_parent,
-                    initargs=(os.getpid(),),
-                ) as pool:
-                    futures = {pool.submit(compute_chunk, grid, index): index for index in todo}
-                    for future in local_as_completed(futures):
-                        _write_chunk(grid, store, futures[future], future.result())
-                        bar.update(_cases(futures[future]))
+                processes = min(workers or os.cpu_count() or 1, len(todo))
+                tasks = [(grid, index) for index in todo]
+                with Workers(processes, compute_chunk) as pool:
+                    for number, result, _ in pool.results(tasks):
+                        if result is None:
+                            raise RuntimeError(f"a sweep worker died on chunk {todo[number]}")
+                        _write_chunk(grid, store, todo[number], result)
+                        bar.update(_cases(todo[number]))
         import warnings
 
         import zarr
@@ -532,18 +525,6 @@ def _duration(seconds: float) -> str:
         if seconds >= size:
             return f"{seconds / size:,.1f} {unit}"
     return f"{seconds:.0f} s"
-
-
-def _exit_with_parent(parent: int) -> None:
-    """In a local worker: exit as soon as the sweep process is gone (even after kill -9, which
-    would otherwise leave the worker waiting for work for ever)."""
-
-    def watch() -> None:
-        while os.getppid() == parent:
-            time.sleep(0.5)
-        os._exit(1)
-
-    threading.Thread(target=watch, daemon=True).start()
 
 
 def _connect(scheduler: str):

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import csv
 import math
-import multiprocessing
 import time
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
@@ -40,6 +39,7 @@ from twoball.model import check_parameters
 from twoball.observables import relative_error
 from twoball.solve import METHODS, simulate
 from twoball.studies import precision
+from twoball.workers import Workers
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -288,79 +288,6 @@ def judge(row: dict, exact_row: dict) -> dict:
     return row
 
 
-def _worker(connection, function: Callable[..., dict]) -> None:
-    simulate(0.8, 0.1, 0.5)  # load the compiled kernel before any timing
-    connection.send("ready")
-    while True:
-        task = connection.recv()
-        if task is None:
-            return
-        connection.send(function(*task))
-
-
-class _Workers:
-    """Worker processes that run ``function`` (:func:`diagnose`); a task over the cap kills its
-    worker. Started with "spawn", as the sweep's are: no state is inherited, so ``function``
-    must be importable by name."""
-
-    def __init__(self, count: int, cap: float, function: Callable[..., dict]):
-        self.context = multiprocessing.get_context("spawn")
-        self.cap = cap
-        self.function = function
-        self.slots = [self._start() for _ in range(count)]
-
-    def _start(self):
-        parent, child = self.context.Pipe()
-        process = self.context.Process(target=_worker, args=(child, self.function), daemon=True)
-        process.start()
-        parent.recv()  # started and warmed up: the time cap counts from the first task
-        return process, parent
-
-    def run(self, tasks: Sequence[tuple], progress=None) -> list[dict]:
-        results: list[dict | None] = [None] * len(tasks)
-        pending = list(enumerate(tasks))
-        busy: dict[int, tuple[int, float]] = {}  # slot -> (task index, start time)
-        while pending or busy:
-            for slot in range(len(self.slots)):
-                if slot not in busy and pending:
-                    index, task = pending.pop(0)
-                    self.slots[slot][1].send(task)
-                    busy[slot] = (index, time.monotonic())
-            for slot, (index, started) in list(busy.items()):
-                process, connection = self.slots[slot]
-                if connection.poll(0.01):
-                    results[index] = connection.recv()
-                elif time.monotonic() - started > self.cap or not process.is_alive():
-                    process.kill()
-                    process.join()
-                    self.slots[slot] = self._start()
-                    eps, mu, tau_ratio, height, method, _ = tasks[index]
-                    results[index] = {
-                        "eps": eps,
-                        "mu": mu,
-                        "tau_ratio": tau_ratio,
-                        "height": height,
-                        "method": method,
-                        "finished": False,
-                        "seconds": time.monotonic() - started,
-                        "reason": f"killed after {self.cap:g} s",
-                        "problems": ["too slow"],
-                    }
-                else:
-                    continue
-                del busy[slot]
-                if progress is not None:
-                    progress(results[index])
-        return results  # type: ignore[return-value]
-
-    def close(self) -> None:
-        for process, connection in self.slots:
-            connection.send(None)
-            process.join(timeout=5)
-            if process.is_alive():
-                process.kill()
-
-
 def study(
     exact_cases: Iterable[tuple],
     scipy_subset: Iterable[tuple],
@@ -391,11 +318,25 @@ def study(
     checked = len(tasks)
     if check is not None:
         tasks += [(*case, *check) for case in scipy_subset]
-    pool = _Workers(workers, cap, diagnose if diagnose_one is None else diagnose_one)
-    try:
-        rows = pool.run(tasks, progress)
-    finally:
-        pool.close()
+    rows: list[dict] = [{}] * len(tasks)
+    with Workers(workers, diagnose if diagnose_one is None else diagnose_one, cap=cap) as pool:
+        for index, row, seconds in pool.results(tasks):
+            if row is None:  # killed over the cap
+                eps, mu, tau_ratio, height, method, _ = tasks[index]
+                row = {
+                    "eps": eps,
+                    "mu": mu,
+                    "tau_ratio": tau_ratio,
+                    "height": height,
+                    "method": method,
+                    "finished": False,
+                    "seconds": seconds,
+                    "reason": f"killed after {cap:g} s",
+                    "problems": ["too slow"],
+                }
+            rows[index] = row
+            if progress is not None:
+                progress(row)
     for row in rows[checked:]:
         row["method"] = f"{check[0]} {check[1]:g}"
     exact_rows = {
