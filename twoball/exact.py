@@ -79,7 +79,7 @@ P_MU, P_Z01, P_Z12, P_W2, P_F1, P_F2, P_NOISE = range(7)
 def _oscillator_bound(alpha, beta, b, omega):
     """c for s = alpha u + beta u' on u'' + 2 b u' + omega^2 u = 0: |s''| <= c sqrt(2 E_w),
     E_w the energy of w = u' (which obeys the same equation)."""
-    return abs(alpha - 2.0 * b * beta) + omega * abs(beta)
+    return math.hypot(alpha - 2.0 * b * beta, omega * beta)  # Cauchy-Schwarz on the energy
 
 
 @njit
@@ -246,7 +246,7 @@ def _block_coefficient(row, block, companion, power):
     ell1 = (ell[1] * companion[0, 0] - ell[0] * companion[0, 1]) / det
     ell = np.array([ell0, ell1])
     omega = math.sqrt(block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0])
-    return abs(ell[0]) / omega + abs(ell[1])
+    return math.hypot(ell[0] / omega, ell[1])  # Cauchy-Schwarz on the energy
 
 
 @njit
