@@ -11,7 +11,7 @@ import twoball
 from twoball.studies.truth import solve_truth
 
 CASES = [
-    pytest.param(0.9, 1e-3, 0.01, id="7-contacts"),
+    pytest.param(0.9, 1e-3, 0.01, id="7-contacts", marks=pytest.mark.slow),
     pytest.param(0.9, 2e-4, 0.005, id="14-contacts", marks=pytest.mark.slow),
 ]
 

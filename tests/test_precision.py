@@ -128,6 +128,7 @@ def test_exact_solver_against_truth(benign_truth):
     assert result.contacts_first == benign_truth.contacts_first == 1
 
 
+@pytest.mark.slow
 def test_truth_does_not_depend_on_its_step(monkeypatch):
     # H = 100 keeps it quick; halving every step must not move the answer beyond 1e-25
     from twoball.studies import truth
