@@ -19,9 +19,9 @@ import tempfile
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / "tests" / "app"))
+sys.path.insert(0, str(REPO / "tools"))
 
-from apphelpers import (  # noqa: E402
+from appdriver import (  # noqa: E402
     CHROMIUM,
     CHROMIUM_ARGS,
     free_port,

@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from apphelpers import (
+from appdriver import (
     ARTIFACTS,
     CHROMIUM,
     CHROMIUM_ARGS,

@@ -10,7 +10,7 @@ import re
 from urllib.parse import parse_qs, urlparse
 
 import pytest
-from apphelpers import (
+from appdriver import (
     fingerprint,
     open_page,
     press_slider,

@@ -18,7 +18,7 @@ import time
 
 import pytest
 import requests
-from apphelpers import REPO, free_port, open_page
+from appdriver import REPO, free_port, open_page
 
 pytestmark = pytest.mark.docker
 

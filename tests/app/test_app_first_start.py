@@ -10,7 +10,7 @@ import os
 import time
 
 import pytest
-from apphelpers import free_port, open_page, panel_serve, serve, wait_until_served
+from appdriver import free_port, open_page, panel_serve, serve, wait_until_served
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 

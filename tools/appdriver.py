@@ -1,4 +1,6 @@
-"""Serving the app and driving it in Chromium: what the app's tests and benchmarks share."""
+"""Serving the app and driving it in Chromium: what the app's tests (tests/app) and the benchmarks
+(benchmarks/) share. Neither imports the other; both find this module through tools/ on the path
+(pytest: pyproject's pythonpath; a benchmark: its first lines)."""
 
 from __future__ import annotations
 
@@ -10,7 +12,7 @@ from pathlib import Path
 
 import requests
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[1]
 ARTIFACTS = REPO / "test-artifacts"
 CHROMIUM = Path("/usr/bin/chromium")
 CHROMIUM_ARGS = [
