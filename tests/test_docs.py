@@ -65,5 +65,13 @@ def test_docstring_examples_run(name):
 
 
 def test_the_public_functions_show_an_example():
-    for function in (twoball.simulate, twoball.check_parameters, twoball.Result.evaluate):
+    from twoball import model, sweep
+
+    public = (
+        *(twoball.simulate, twoball.check_parameters, twoball.Result.evaluate, twoball.load_cube),
+        *(sweep.sweep, sweep.Grid, sweep.parse_axis, sweep.plan),
+        *(model.restitution, model.decay_ratio, model.floor_contact_time, model.icm_height),
+    )
+    for function in public:  # numpydoc: Parameters and Examples
         assert ">>>" in function.__doc__, function.__qualname__
+        assert "Parameters\n" in function.__doc__, function.__qualname__

@@ -27,9 +27,33 @@ def cube_path(name: str) -> Path:
 def load_cube(name: str | os.PathLike):
     """Open a sweep cube lazily as an ``xarray.Dataset`` (dims eps, mu, tau_ratio).
 
-    ``name`` is a shipped cube ("paper", "map", "contacts"), or the path of any ``twoball sweep``
-    store (a ``Path``, or a string ending in .zarr or holding a directory separator). Nothing is
-    read until a slice is asked for; one eps slice reads one chunk per variable.
+    Nothing is read until a slice is asked for; one eps slice reads one chunk per variable.
+
+    Parameters
+    ----------
+    name : str or path
+        A shipped cube ("paper", "map", "contacts"), or the path of any ``twoball sweep`` store
+        (a ``Path``, or a string ending in .zarr or holding a directory separator).
+
+    Returns
+    -------
+    xarray.Dataset
+        h1, h2, the contact counts and the ratios (docs/model.md, "What is measured") on the
+        cube's axes, with each variable's ``long_name`` and the sweep's arguments as attributes.
+
+    Raises
+    ------
+    ParameterError
+        If the store does not exist or is not a Zarr store.
+
+    Examples
+    --------
+    >>> import twoball
+    >>> cube = twoball.load_cube("map")
+    >>> dict(cube.sizes)
+    {'eps': 21, 'mu': 73, 'tau_ratio': 81}
+    >>> float(cube.h2_over_h1.sel(eps=0.816, method="nearest").max()) > 1  # a delayed rebound
+    True
     """
     import xarray as xr
 

@@ -225,9 +225,27 @@ def apex_bound(drop: Drop) -> float:
 
 
 def restitution(r: float) -> float:
-    """Coefficient of restitution of one clamped contact with decay ratio r = beta/w0
-    (docs/model.md,
-    "Restitution and damping"), on both branches; eps(1) = exp(-2)."""
+    """Coefficient of restitution of one clamped contact (docs/model.md, "Restitution and
+    damping"), on both damping branches.
+
+    Parameters
+    ----------
+    r : float
+        Decay ratio beta/w0 >= 0 (0 elastic, 1 critical damping).
+
+    Returns
+    -------
+    float
+        eps(r) in (0, 1]; eps(1) = exp(-2).
+
+    Examples
+    --------
+    >>> from twoball.model import decay_ratio, restitution
+    >>> restitution(0.0), round(restitution(1.0), 6)
+    (1.0, 0.135335)
+    >>> abs(restitution(decay_ratio(0.816)) - 0.816) < 1e-15
+    True
+    """
     if r < 0.0 or not math.isfinite(r):
         raise ParameterError(f"r must be a finite number in [0, inf); got {r!r}")
     if r < 1.0:
@@ -248,11 +266,27 @@ def _log_restitution(r: float) -> float:
 
 
 def decay_ratio(eps: float) -> float:
-    """The unique r = beta/w0 with restitution(r) = eps, for eps in (0, 1] (docs/model.md,
-    "Restitution and damping").
+    """The decay ratio that gives a restitution: the inverse of :func:`restitution`
+    (docs/model.md, "Restitution and damping").
 
     Solved on -log eps, which is increasing in r, by bisection to the last bit; the two branches
     join continuously at r = 1, so bisection is safe across the switch.
+
+    Parameters
+    ----------
+    eps : float
+        Restitution in (0, 1].
+
+    Returns
+    -------
+    float
+        The unique r = beta/w0 >= 0 with restitution(r) = eps.
+
+    Examples
+    --------
+    >>> from twoball.model import decay_ratio
+    >>> decay_ratio(1.0), round(decay_ratio(0.5), 6)
+    (0.0, 0.255276)
     """
     if not 0.0 < eps <= 1.0:
         raise ParameterError(f"a restitution must be a number in (0, 1]; got {eps!r}")
@@ -290,8 +324,26 @@ def damping_ratios(eps01: float, eps12: float, mu: float) -> tuple[float, float]
 
 
 def floor_contact_time(r: float) -> float:
-    """Duration tau_f of one floor contact with decay ratio r = zeta01 (docs/model.md, "Restitution
-    and damping")."""
+    """Duration tau_f of one floor contact (docs/model.md, "Restitution and damping").
+
+    Parameters
+    ----------
+    r : float
+        Decay ratio zeta01 >= 0 of the floor contact.
+
+    Returns
+    -------
+    float
+        tau_f in units of the lower ball's time scale: pi for an elastic floor, 2 at critical
+        damping.
+
+    Examples
+    --------
+    >>> import math
+    >>> from twoball.model import floor_contact_time
+    >>> floor_contact_time(0.0) == math.pi, floor_contact_time(1.0)
+    (True, 2.0)
+    """
     if r < 1.0:
         return math.acos(2.0 * r * r - 1.0) / math.sqrt(1.0 - r * r)
     if r == 1.0:
@@ -306,14 +358,38 @@ def initial_gap_height(height: float, tau_d: float) -> float:
 
 
 def icm_height(height: float, gap: float, eps01: float, eps12: float, mu: float) -> float:
-    """Apex of the upper ball in the independent contact model (docs/model.md, "What is measured";
-    paper section II).
+    """Apex of the upper ball in the independent contact model, the textbook prediction
+    (docs/model.md, "What is measured"; paper section II).
 
     The steps of the paper with eps01 at the floor and eps12 between the balls: the lower ball
     reaches the floor at v_i = sqrt(2H) and leaves at eps01 v_i; the balls meet at
     t_c = dH/(v_i (1 + eps01)); the upper ball leaves that collision at v2' and rises to
     z_c + v2'^2/2. With eps01 = eps12 = eps this is exactly
     (H (eps^2 + 2 eps - mu)^2 + dH (1 + mu)(mu - eps)) / (1 + mu)^2.
+
+    Parameters
+    ----------
+    height : float
+        Drop height H of the lower ball.
+    gap : float
+        dH = X2(0) - H, how much higher the upper ball starts.
+    eps01, eps12 : float
+        Restitution at the floor and between the balls.
+    mu : float
+        Mass ratio m2/m1.
+
+    Returns
+    -------
+    float
+        The apex height of the upper ball.
+
+    Examples
+    --------
+    Elastic balls and a very light upper ball: nine times the drop height.
+
+    >>> from twoball.model import icm_height
+    >>> round(icm_height(1.0, 0.0, 1.0, 1.0, 1e-12), 9)
+    9.0
     """
     v_i = math.sqrt(2.0 * height)
     t_c = gap / (v_i * (1.0 + eps01))

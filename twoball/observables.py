@@ -96,7 +96,16 @@ class Result:
     def evaluate(self, t: np.ndarray | float) -> Trajectory:
         """The state and forces at times ``t`` (exact at every t for the exact method).
 
-        Needs ``simulate(..., dense_output=True)``.
+        Parameters
+        ----------
+        t : float or array
+            Dimensionless times; the run must have been made with
+            ``simulate(..., dense_output=True)``.
+
+        Returns
+        -------
+        Trajectory
+            x1, x2, v1, v2 and the two contact forces at those times.
 
         Examples
         --------

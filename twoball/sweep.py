@@ -126,7 +126,33 @@ class Axis:
 
 
 def parse_axis(name: str, text: str) -> Axis:
-    """An axis from ``VALUE`` or ``START:STOP:COUNT[:linear|log]`` (fractions like 1/3 allowed)."""
+    """An axis of a sweep from its command-line text.
+
+    Parameters
+    ----------
+    name : str
+        The axis: "eps", "mu" or "tau_ratio".
+    text : str
+        ``VALUE`` (one point) or ``START:STOP:COUNT[:linear|log]``, end points included;
+        fractions such as 1/3 are allowed.
+
+    Returns
+    -------
+    Axis
+
+    Raises
+    ------
+    ParameterError
+        Naming the axis and what is wrong with the text.
+
+    Examples
+    --------
+    >>> from twoball.sweep import parse_axis
+    >>> parse_axis("mu", "0.01:1/3:3").values().round(4).tolist()
+    [0.01, 0.1717, 0.3333]
+    >>> parse_axis("eps", "0.5:1:3:log").spacing
+    'log'
+    """
     parts = text.split(":")
     if len(parts) == 1:
         value = _parse_number(name, parts[0])
@@ -151,8 +177,29 @@ def _parse_number(name: str, text: str) -> float:
 
 @dataclass(frozen=True)
 class Grid:
-    """What a sweep computes: three axes, the drop height H, eps12 (None: equal to eps), the
-    storage chunks (eps, mu, tau_ratio; None: one eps value per chunk) and the stored float type."""
+    """What a sweep computes.
+
+    Parameters
+    ----------
+    eps, mu, tau_ratio : Axis
+        The three axes (see :func:`parse_axis`).
+    height : float
+        The drop height H of every drop (1e4).
+    eps12 : float or None
+        The ball-ball restitution of every drop; None makes it equal to eps.
+    chunks : (int, int, int) or None
+        Storage chunks along (eps, mu, tau_ratio); None stores one eps value per chunk.
+    dtype : "float64" or "float32"
+        The stored float type.
+
+    Examples
+    --------
+    >>> from twoball.sweep import Grid, parse_axis
+    >>> grid = Grid(parse_axis("eps", "0.9"), parse_axis("mu", "0.01:0.1:2"),
+    ...             parse_axis("tau_ratio", "0.01:1:5:log"))
+    >>> grid.shape, grid.size
+    ((1, 2, 5), 10)
+    """
 
     eps: Axis
     mu: Axis
@@ -405,13 +452,47 @@ def sweep(
     workers: int | None = None,
     progress: bool = True,
 ):
-    """Compute ``grid`` into the Zarr ``store``, resuming from any chunks already finished there,
-    and return the finished cube, opened lazily (an ``xarray.Dataset``).
+    """Compute ``grid`` into a Zarr store, resuming from any chunks already finished there.
 
-    Chunks run on ``workers`` local processes (default: all cores), or on the Dask distributed
-    cluster at ``scheduler`` (an address such as tcp://127.0.0.1:8786): the workers compute, this
-    process writes, so they need no shared disk. Every finished chunk is written at once. A store
-    written with other arguments, or an unreachable scheduler, raises ValueError.
+    Every finished chunk is written at once, so a sweep stopped even by kill -9 resumes when
+    started again with the same arguments. A lock file beside the store keeps a second sweep
+    off it; the store's metadata is consolidated when it is complete.
+
+    Parameters
+    ----------
+    grid : Grid
+        What to compute.
+    store : str or path
+        The Zarr directory to write (created if absent).
+    scheduler : str, optional
+        Address of a Dask distributed scheduler (e.g. tcp://127.0.0.1:8786): its workers
+        compute, this process writes, so they need no shared disk.
+    workers : int, optional
+        Local processes when no scheduler is given (default: all cores).
+    progress : bool
+        Show a progress bar with the time left on stderr.
+
+    Returns
+    -------
+    xarray.Dataset
+        The finished cube, opened lazily (as :func:`twoball.load_cube` opens it).
+
+    Raises
+    ------
+    ParameterError
+        A store written with other arguments or being written by another sweep, bad workers,
+        an unreachable scheduler.
+
+    Examples
+    --------
+    >>> from twoball.sweep import Grid, parse_axis, sweep
+    >>> grid = Grid(parse_axis("eps", "0.816"), parse_axis("mu", "0.05"),
+    ...             parse_axis("tau_ratio", "0.3"))
+    >>> import pathlib, tempfile
+    >>> store = pathlib.Path(tempfile.mkdtemp()) / "cube.zarr"
+    >>> cube = sweep(grid, store, workers=1, progress=False)
+    >>> round(float(cube.h1.squeeze()), 3)  # docs/model.md's check value 26344.4166
+    26344.417
     """
     from tqdm import tqdm
 
@@ -508,7 +589,27 @@ def _lock(store: Path) -> Path:
 
 
 def plan(grid: Grid, workers: int) -> str:
-    """What a sweep undertakes: drops, estimated time on ``workers`` and the store's size."""
+    """What a sweep undertakes, in words: drops, estimated time on ``workers``, stored size.
+
+    Parameters
+    ----------
+    grid : Grid
+        The sweep.
+    workers : int
+        Processes it will run on.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> from twoball.sweep import Grid, parse_axis, plan
+    >>> grid = Grid(parse_axis("eps", "0.5:1:50"), parse_axis("mu", "0.01:1/3:50"),
+    ...             parse_axis("tau_ratio", "0.01:1:50"))
+    >>> plan(grid, 2).split(", about")[0]
+    '125,000 drops (50 x 50 x 50)'
+    """
     seconds = grid.size / (DROPS_PER_WORKER_SECOND * workers)
     stored = 4 if grid.dtype == "float32" else 8
     megabytes = grid.size * len(VARIABLES) * stored / 1e6
