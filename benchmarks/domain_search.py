@@ -15,6 +15,7 @@ import argparse
 import time
 
 import numpy as np
+from perfdoc import write_section
 
 import twoball
 from twoball.errors import ParameterError
@@ -48,15 +49,21 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=11)
     parser.add_argument("--drops", type=int, default=100_000)
     parser.add_argument("--eps", default="0.01:1", help="LOW:HIGH of eps")
+    parser.add_argument("--write", action="store_true", help="update docs/performance.md")
     args = parser.parse_args()
     low, high = (float(part) for part in args.eps.split(":"))
     twoball.simulate(0.9, 0.01, 0.01)  # compile outside the clock
     started = time.perf_counter()
     tried, failures = search(args.seed, args.drops, (low, high))
-    print(
+    seconds = time.perf_counter() - started
+    summary = (
         f"seed {args.seed}, eps in [{low}, {high}]: {tried} in-domain drops, "
-        f"{len(failures)} failed (stated), {time.perf_counter() - started:.0f} s"
+        f"{len(failures)} failed (stated), {seconds:.0f} s ({tried / seconds:,.0f} drops/s)"
     )
+    print(summary)
+    if args.write:
+        listed = "".join(f"\n- failed: {failure}" for failure in failures)
+        write_section(f"domain-eps-{low:g}-{high:g}", summary + listed)
 
 
 if __name__ == "__main__":

@@ -36,6 +36,7 @@ EXTRAS = {
     "tqdm": "sweep",
     "matplotlib": "studies",
     "mpmath": "studies",
+    "sksundae": "cvode",
 }
 
 
@@ -111,7 +112,7 @@ def _add_simulate(subparsers: argparse._SubParsersAction) -> None:
         "--height", type=_number, default=DEFAULT_HEIGHT, help="dimensionless drop height H > 0"
     )
     parser.add_argument(
-        "--method", default="exact", help="exact, LSODA, Radau, BDF, DOP853, RK45 or odeint"
+        "--method", default="exact", help="exact, LSODA, Radau, BDF, DOP853, RK45, odeint or CVODE"
     )
     parser.add_argument("--until", type=_until, default="second", help="first, second or a time")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
@@ -180,6 +181,13 @@ def _bench(args: argparse.Namespace) -> int:
         f"LSODA (odeint) vs exact: median relative error in h1, h2 "
         f"{figures['lsoda_vs_exact_median']:.2e}"
     )
+    if "cvode_median_s" in figures:
+        print(
+            f"CVODE (BDF)       median {figures['cvode_median_s'] * 1e3:9.3f} ms per case "
+            f"(rtol = atol = 1e-12): the exact solver is {figures['cvode_speedup_median']:.0f} x "
+            f"faster (median); CVODE's relative error in h1, h2: median "
+            f"{figures['cvode_vs_exact_median']:.1e}, largest {figures['cvode_vs_exact_max']:.1e}"
+        )
     eps, mu, tau_ratio = figures["worst_case"]
     print(
         f"where exact and DOP853 differ most (eps {eps:.4g}, mu {mu:.4g}, tau_ratio "
@@ -326,8 +334,38 @@ def _stability(args: argparse.Namespace) -> int:
     return 0
 
 
+# many-contacts
+
+
+def _add_many_contacts(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "many-contacts", help="the exact solver against the 40-digit reference on many contacts"
+    )
+    parser.add_argument("--out", type=_path, required=True, help="directory for many_contacts.csv")
+    parser.add_argument(
+        "--count", type=_integer_in(1, 1000), default=20, help="drops in the sample (20)"
+    )
+    parser.add_argument("--workers", type=_WORKERS, default=2, help="worker processes (2)")
+    parser.set_defaults(func=_many_contacts)
+
+
+def _many_contacts(args: argparse.Namespace) -> int:
+    from twoball.studies.many_contacts import run_study
+
+    run_study(args.out, count=args.count, workers=args.workers)
+    return 0
+
+
 # The commands, in the order --help lists them.
-COMMANDS = (_add_simulate, _add_bench, _add_sweep, _add_report, _add_precision, _add_stability)
+COMMANDS = (
+    _add_simulate,
+    _add_bench,
+    _add_sweep,
+    _add_report,
+    _add_precision,
+    _add_stability,
+    _add_many_contacts,
+)
 
 
 def _one_line(text: object) -> str:

@@ -165,6 +165,34 @@ def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense_output):
             apex_t.append(t0)
             apex_h.append(float(y0[1]))
         y0[3] = min(y0[3], 0.0)  # below the event's zero, so it does not fire again at once
+    outcome = outcome_from_events(drop, apex_t, apex_h, events, t0, apexes, t_end, horizon, failure)
+    if dense_output:
+
+        def evaluate(times: np.ndarray) -> np.ndarray:
+            states = _evaluate_pieces(pieces, np.asarray(times, dtype=float))
+            f01, f12 = forces(states, z01, z12)
+            return np.column_stack([states.T, f01, f12])
+
+        plot_times = np.linspace(0.0, outcome.end_time, 4001)
+        outcome = outcome._replace(evaluate=evaluate, plot_times=plot_times)
+    return outcome
+
+
+def outcome_from_events(
+    drop: Drop,
+    apex_t: list[float],
+    apex_h: list[float],
+    events: tuple[list, list],
+    t0: float,
+    apexes: int,
+    t_end: float,
+    horizon: float,
+    failure: str | None,
+) -> Outcome:
+    """The :class:`~twoball.observables.Outcome` of an event-driven integration: contact
+    intervals and counts from the zeros of each contact's switching function (``events[contact]``
+    holds (t, state) pairs), the run's end, its status and reason. ``t0`` is where the
+    integration stopped; ``failure`` the integrator's complaint, if any."""
     end = apex_t[-1] if len(apex_t) == apexes else t0
     contacts = []
     counts = [0, 0]
@@ -188,19 +216,8 @@ def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense_output):
     if reason is None and len(apex_t) < apexes and t_end > horizon:
         status = Status.NO_APEX
         reason = f"no apex {len(apex_t) + 1} before t = {horizon:.6g}"
-    evaluate = plot_times = None
-    if dense_output:
-
-        def evaluate(times: np.ndarray) -> np.ndarray:
-            states = _evaluate_pieces(pieces, np.asarray(times, dtype=float))
-            f01, f12 = forces(states, z01, z12)
-            return np.column_stack([states.T, f01, f12])
-
-        plot_times = np.linspace(0.0, end, 4001)
     rows = np.array(contacts, dtype=float).reshape(-1, 3)
-    return Outcome(
-        apex_t, apex_h, rows, end, status, reason, counts[1], counts[0], evaluate, plot_times
-    )
+    return Outcome(apex_t, apex_h, rows, end, status, reason, counts[1], counts[0], None, None)
 
 
 def _evaluate_pieces(pieces, times: np.ndarray) -> np.ndarray:

@@ -12,7 +12,7 @@ from twoball.errors import ParameterError, SolverError, Status
 from twoball.model import DEFAULT_HEIGHT, apex_bound, check_parameters
 from twoball.observables import Result, contact_intervals, trajectory_of
 
-METHODS = ("exact", *reference.METHODS)
+METHODS = ("exact", *reference.METHODS, "CVODE")  # CVODE needs the cvode extra
 UNTIL = {"first": 1, "second": 2}
 # A run "until a time" wants no apex limit; the kernel's apex table grows with what it finds.
 NO_APEX_LIMIT = 2**62
@@ -50,10 +50,11 @@ def simulate(
         The apex of the upper ball to run to, or a dimensionless time. A run also ends early
         when the upper ball comes to rest on the lower one (``Result.status`` is ``REST``).
     method : str
-        "exact" (closed form, the default), or a scipy reference: "LSODA", "Radau", "BDF",
-        "DOP853", "RK45" (solve_ivp with events), "odeint" (the paper's fixed grid).
+        "exact" (closed form, the default), or a reference: "LSODA", "Radau", "BDF",
+        "DOP853", "RK45" (solve_ivp with events), "odeint" (the paper's fixed grid), "CVODE"
+        (SUNDIALS BDF with root finding; the ``cvode`` extra, no dense output).
     rtol, atol : float, optional
-        Tolerances of the scipy methods only (default 1e-8).
+        Tolerances of the reference methods only (default 1e-8).
     t_eval : array_like, optional
         Times at which ``Result.trajectory`` samples the state and the forces.
     dense_output : bool
@@ -107,6 +108,13 @@ def simulate(
         if rtol is not None or atol is not None:
             raise ParameterError("rtol and atol apply to the scipy methods only, not to 'exact'")
         outcome = exact.solve(drop, apexes, t_end, dense_output=keep)
+    elif method == "CVODE":
+        if keep:
+            raise ParameterError("CVODE gives no dense output here (t_eval, dense_output)")
+        from twoball import cvode
+
+        tolerances = (rtol or reference.DEFAULT_TOL, atol or reference.DEFAULT_TOL)
+        outcome = cvode.solve(drop, apexes, t_end, *tolerances)
     else:
         outcome = reference.solve(drop, method, apexes, t_end, rtol, atol, keep)
     failure = _failure(outcome.message, outcome.apex_h, drop)

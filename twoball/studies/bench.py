@@ -18,7 +18,10 @@ import numpy as np
 
 from twoball.observables import relative_error
 from twoball.solve import simulate
+from twoball.studies.precision import CVODE_INSTALLED
 from twoball.studies.timing import median_seconds
+
+CVODE_TOLERANCE = 1e-12  # rtol = atol: CVODE's closest approach to the exact solver's error
 
 PAPER_CUBE = {"eps": (0.5, 1.0), "mu": (0.01, 1.0 / 3.0), "tau_ratio": (0.01, 1.0)}
 
@@ -45,8 +48,25 @@ def benchmark(count: int = 50, seed: int = 0, repeats: int = 5, height: float = 
         exact = exact_run()
         lsoda = lsoda_run()
         check = simulate(eps, mu, tau_ratio, height=height, method="DOP853", rtol=1e-12, atol=1e-12)
+        peer = {}
+        if CVODE_INSTALLED:  # the strongest general peer, at its tightest useful tolerance
+
+            def cvode_run(eps=eps, mu=mu, tau_ratio=tau_ratio):
+                return simulate(
+                    eps, mu, tau_ratio, height=height, method="CVODE",
+                    rtol=CVODE_TOLERANCE, atol=CVODE_TOLERANCE, throw=False,
+                )  # fmt: skip
+
+            cvode = cvode_run()
+            peer = {
+                "cvode_s": median_seconds(cvode_run, max(1, repeats // 2)),
+                "cvode_vs_exact": max(
+                    relative_error(cvode.h1, exact.h1), relative_error(cvode.h2, exact.h2)
+                ),
+            }
         rows.append(
             {
+                **peer,
                 "eps": eps,
                 "mu": mu,
                 "tau_ratio": tau_ratio,
@@ -91,4 +111,18 @@ def benchmark(count: int = 50, seed: int = 0, repeats: int = 5, height: float = 
         "speedup_min": min(ratios),
         "exact_vs_dop853_max": max(row["exact_vs_dop853"] for row in rows),
         "lsoda_vs_exact_median": statistics.median(row["lsoda_vs_exact"] for row in rows),
+        **_cvode_figures(rows),
+    }
+
+
+def _cvode_figures(rows: list[dict]) -> dict:
+    """CVODE's median time, its time over the exact solver's, and its error (empty without
+    the cvode extra)."""
+    if not CVODE_INSTALLED:
+        return {}
+    return {
+        "cvode_median_s": statistics.median(row["cvode_s"] for row in rows),
+        "cvode_speedup_median": statistics.median(r["cvode_s"] / r["exact_s"] for r in rows),
+        "cvode_vs_exact_median": statistics.median(row["cvode_vs_exact"] for row in rows),
+        "cvode_vs_exact_max": max(row["cvode_vs_exact"] for row in rows),
     }

@@ -13,6 +13,7 @@ tolerances and writes ``DIR/work_precision.csv`` and ``DIR/work_precision.png``.
 from __future__ import annotations
 
 import csv
+import importlib.util
 import math
 import textwrap
 import time
@@ -30,7 +31,9 @@ from twoball.studies.timing import median_seconds
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-METHODS = ("exact", *reference.IVP_METHODS)
+# CVODE (the cvode extra) joins the study where it is installed (not in the app's image)
+CVODE_INSTALLED = importlib.util.find_spec("sksundae") is not None
+METHODS = ("exact", *reference.IVP_METHODS, *(("CVODE",) if CVODE_INSTALLED else ()))
 # Cheap enough for the app (a few seconds on benign cases); the command line uses FULL_TOLERANCES.
 APP_TOLERANCES = (1e-3, 1e-6, 1e-9)
 FULL_TOLERANCES = tuple(10.0**-k for k in range(3, 13))
@@ -186,7 +189,7 @@ def work_precision_figure(rows: Sequence[dict], title: str | None = None) -> Fig
 
     figure = Figure(figsize=(width, 4.2 * lines + 0.8), layout="constrained")
     axes = figure.subplots(lines, columns, squeeze=False).ravel()
-    markers = dict(zip(METHODS, "*osD^v", strict=True))
+    markers = dict(zip(METHODS, "*osD^vP", strict=False))
     for axis, case in zip(axes, cases, strict=False):
         for index, method in enumerate(methods):
             mine = [r for r in rows if r["case"] == case and r["method"] == method]
