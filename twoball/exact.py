@@ -814,6 +814,29 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
     )
 
 
+@njit(nogil=True)
+def run_block(mu, zeta01, zeta12, x2_0, height, apex_h, apex_t, contacts, status):
+    """Run every drop of a block to its second apex, compiled, with the GIL released (the batch
+    path of the sweep; docs/model.md, "What is measured").
+
+    mu (nm), zeta01 (ne), zeta12 (ne, nm), x2_0 (ne, nt); outputs (ne, nm, nt): apex_h and
+    apex_t with a leading axis of 2, pre-filled with NaN; contacts (ball contacts before the
+    first apex, NaN without one) and status (int8, :class:`twoball.errors.Status`). One
+    :func:`prepare` serves a whole row of tau_ratio; nothing but apexes and counts is recorded.
+    """
+    for i in range(x2_0.shape[0]):
+        for j in range(mu.shape[0]):
+            prepared = prepare(mu[j], zeta01[i], zeta12[i, j])
+            for k in range(x2_0.shape[1]):
+                outcome = run(height, x2_0[i, k], 2, np.inf, prepared, False, False)
+                n_apex = outcome.apex_t.size
+                for a in range(n_apex):
+                    apex_t[a, i, j, k] = outcome.apex_t[a]
+                    apex_h[a, i, j, k] = outcome.apex_h[a]
+                contacts[i, j, k] = outcome.ball_contacts_first if n_apex > 0 else np.nan
+                status[i, j, k] = outcome.status
+
+
 @njit
 def sample(phases, times, prepared):
     """Exact state and forces at the given times from the recorded phases.
@@ -847,16 +870,27 @@ def sample(phases, times, prepared):
     return out
 
 
+@njit
+def run_drop(mu, z01, z12, x1, x2, apexes_wanted, t_end):
+    """:func:`prepare` and :func:`run` (contacts recorded, no phases) in one compiled call, so
+    that nothing of the preparation crosses into Python (``simulate``'s common path)."""
+    return run(x1, x2, apexes_wanted, t_end, prepare(mu, z01, z12), True, False)
+
+
 def solve(drop: Drop, apexes: int, t_end: float, *, dense_output: bool = False) -> Outcome:
     """Run the exact solver on a validated drop; see :func:`twoball.simulate`.
 
     With ``dense_output`` the phases are recorded, and the outcome's ``evaluate`` gives the exact
     state at any times.
     """
-    prepared = prepare(drop.mu, drop.zeta01, drop.zeta12)
-    out = run(drop.x1_0, drop.x2_0, max(apexes, 1), t_end, prepared, True, dense_output)
     evaluate = plot_times = None
-    if dense_output:
+    if not dense_output:
+        out = run_drop(
+            drop.mu, drop.zeta01, drop.zeta12, drop.x1_0, drop.x2_0, max(apexes, 1), t_end
+        )
+    else:
+        prepared = prepare(drop.mu, drop.zeta01, drop.zeta12)
+        out = run(drop.x1_0, drop.x2_0, max(apexes, 1), t_end, prepared, True, True)
         phases = out.phases
 
         def evaluate(times: np.ndarray) -> np.ndarray:

@@ -86,9 +86,12 @@ if isinstance(CACHE_DIR, Path):
     _numba_config.CACHE_DIR = str(CACHE_DIR)
 
 
-def njit(function: Callable) -> Callable:
-    """``numba.njit`` with the disk cache wherever one can be written (see the module)."""
-    return numba.njit(cache=CACHING)(function)
+def njit(function: Callable | None = None, *, nogil: bool = False) -> Callable:
+    """``numba.njit`` with the disk cache wherever one can be written (see the module);
+    ``nogil`` releases the GIL while the compiled function runs (threads then run in parallel)."""
+    if function is None:
+        return lambda wrapped: njit(wrapped, nogil=nogil)
+    return numba.njit(cache=CACHING, nogil=nogil)(function)
 
 
 _dispatchers: dict[str, dict[str, CPUDispatcher]] = {}
@@ -127,6 +130,9 @@ def warm_up() -> None:
     from twoball.solve import simulate
 
     simulate(0.9, 0.01, 0.01, until="second", dense_output=True)
+    from twoball.sweep import compute_block  # the batch path (twoball.exact.run_block)
+
+    compute_block([0.9], [0.01], [0.01])
 
 
 def compile_in_background(done: Callable[[], None] | None = None) -> threading.Thread:

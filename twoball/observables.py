@@ -250,5 +250,5 @@ def trajectory_of(times: np.ndarray, values: np.ndarray) -> Trajectory:
 def contact_intervals(rows: np.ndarray) -> list[ContactInterval]:
     """Contact intervals from rows (contact, start, end), sorted by start."""
     names = {FLOOR_CONTACT: "floor", BALL_CONTACT: "ball"}
-    intervals = [ContactInterval(names[int(c)], float(s), float(e)) for c, s, e in rows]
+    intervals = [ContactInterval(names[int(c)], s, e) for c, s, e in np.asarray(rows).tolist()]
     return sorted(intervals, key=lambda interval: interval.start)

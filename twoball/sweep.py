@@ -19,6 +19,8 @@ import math
 import os
 import shutil
 import sys
+from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import as_completed as threads_completed
 from dataclasses import asdict, dataclass, field
 from fractions import Fraction
 from itertools import product
@@ -26,8 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
+from twoball import exact
 from twoball.errors import ParameterError
-from twoball.exact import STATUS_DONE, STATUS_PHASES, STATUS_REST, STATUS_STUCK, prepare, run
+from twoball.exact import STATUS_DONE, STATUS_PHASES, STATUS_REST, STATUS_STUCK
 from twoball.model import (
     DEFAULT_HEIGHT,
     check_parameters,
@@ -39,7 +42,6 @@ from twoball.model import (
     initial_gap_height,
 )
 from twoball.observables import ratios
-from twoball.workers import Workers
 
 DIMS = ("eps", "mu", "tau_ratio")
 SPACINGS = ("linear", "log")
@@ -273,28 +275,6 @@ class Grid:
         return " ".join(words)
 
 
-def _bounce_block(mu, zeta01, zeta12, x2_0, height, apex_h, apex_t, contacts, status) -> None:
-    """Run every case of a block to its second apex (docs/model.md, "What is measured").
-
-    mu (nm), zeta01 (ne), zeta12 (ne, nm), x2_0 (ne, nt); outputs (ne, nm, nt), apex arrays with
-    a leading axis of 2, pre-filled with NaN. Nothing but apexes and counts is recorded.
-
-    The loop is Python around the compiled kernel: a cached numba loop here would inline
-    ``exact.run``, and numba's cache does not notice when another module changes (stale machine
-    code, a segfault); docs/performance.md has what the loop costs.
-    """
-    for i in range(x2_0.shape[0]):
-        for j in range(mu.shape[0]):
-            prepared = prepare(mu[j], zeta01[i], zeta12[i, j])
-            for k in range(x2_0.shape[1]):
-                outcome = run(height, x2_0[i, k], 2, np.inf, prepared, False, False)
-                n_apex = outcome.apex_t.size
-                apex_t[:n_apex, i, j, k] = outcome.apex_t
-                apex_h[:n_apex, i, j, k] = outcome.apex_h
-                contacts[i, j, k] = outcome.ball_contacts_first if n_apex > 0 else np.nan
-                status[i, j, k] = outcome.status
-
-
 def compute_block(
     eps: np.ndarray,
     mu: np.ndarray,
@@ -318,7 +298,7 @@ def compute_block(
     apex_t = np.full((2, *shape), np.nan)
     contacts = np.full(shape, np.nan)
     status = np.zeros(shape, dtype=np.int8)
-    _bounce_block(mu, zeta01, zeta12, x2_0_plane, height, apex_h, apex_t, contacts, status)
+    exact.run_block(mu, zeta01, zeta12, x2_0_plane, height, apex_h, apex_t, contacts, status)
     x2_0 = np.broadcast_to(x2_0_plane[:, None, :], shape)
     eps01 = eps[:, None, None]
     h_icm = icm_height(
@@ -527,14 +507,14 @@ def sweep(
                     _write_chunk(grid, store, futures[future], future.result())
                     bar.update(_cases(futures[future]))
             elif todo:
-                processes = min(workers or os.cpu_count() or 1, len(todo))
-                tasks = [(grid, index) for index in todo]
-                with Workers(processes, compute_chunk) as pool:
-                    for number, result, _ in pool.results(tasks):
-                        if result is None:
-                            raise RuntimeError(f"a sweep worker died on chunk {todo[number]}")
-                        _write_chunk(grid, store, todo[number], result)
-                        bar.update(_cases(todo[number]))
+                # Threads, not processes: the batch path (exact.run_block) runs compiled with
+                # the GIL released, so threads compute in parallel with no start-up cost.
+                threads = min(workers or os.cpu_count() or 1, len(todo))
+                with ThreadPoolExecutor(threads) as pool:
+                    futures = {pool.submit(compute_chunk, grid, index): index for index in todo}
+                    for future in threads_completed(futures):
+                        _write_chunk(grid, store, futures[future], future.result())
+                        bar.update(_cases(futures[future]))
         import warnings
 
         import zarr
