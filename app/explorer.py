@@ -15,6 +15,7 @@ from .closeup import CloseUpScene
 from .controls import Controls
 from .delayed_map import MapScene
 from .drop import DropScene
+from .lesson import Lesson
 from .scene import MODEL_PARAMETERS
 from .state import SCENES, ExplorerState, read_query, url_query
 
@@ -60,6 +61,7 @@ class Explorer(pn.viewable.Viewer):
         values, messages = read_query(query or {}, self.state)
         self.state.param.update(**values)
         self.controls = Controls(state=self.state, messages=messages)
+        self.lesson = Lesson(state=self.state)
         self.scenes = {name: SCENE_CLASSES[name](state=self.state) for name in SCENES}
         self.tabs = pn.Tabs(
             *((TITLES[name], scene) for name, scene in self.scenes.items()),
@@ -103,7 +105,7 @@ class Explorer(pn.viewable.Viewer):
                 pending = True
                 document.add_timeout_callback(write, URL_DELAY_MS)
 
-        self.state.param.watch(changed, [*MODEL_PARAMETERS, "scene", "units"])
+        self.state.param.watch(changed, [*MODEL_PARAMETERS, "scene", "units", "step"])
         pn.state.onload(write)  # once the browser has reported its own URL
 
     @staticmethod
@@ -119,7 +121,9 @@ class Explorer(pn.viewable.Viewer):
 
     def sidebar(self) -> pn.Column:
         """The controls (and a note while the solver compiles), for the page's sidebar."""
-        return pn.Column(*self._compiling_notice(), self.controls, sizing_mode="stretch_width")
+        return pn.Column(
+            *self._compiling_notice(), self.lesson, self.controls, sizing_mode="stretch_width"
+        )
 
     def __panel__(self) -> pn.viewable.Viewable:
         """The scenes (the controls go into the page's sidebar, :meth:`page`)."""

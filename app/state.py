@@ -46,6 +46,9 @@ class ExplorerState(Parameters):
         doc="Show dimensionless X and tau, or metres and seconds (basketball, presets.py).",
     )
 
+    step = param.Integer(
+        default=0, bounds=(0, None), doc="The lesson's step on screen, 0 without the lesson."
+    )
     presentation = param.Boolean(
         default=False, doc="Large text and plots for a projector (URL: present=1)."
     )
@@ -100,7 +103,18 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
                 f"URL units: must be one of {', '.join(UNITS)}; got {query['units']!r}. "
                 f"Using {defaults.units}."
             )
-    if "scene" in query:
+    if "step" in query:
+        from .lesson import STEPS  # the lesson's steps set the drop and the scene
+
+        text = query["step"]
+        if text.isdigit() and 1 <= int(text) <= len(STEPS):
+            shown = STEPS[int(text) - 1]
+            values |= {**shown.drop, "scene": shown.scene, "step": int(text)}
+        else:
+            messages.append(
+                f"URL step: must be a lesson step from 1 to {len(STEPS)}; got {text[:40]!r}."
+            )
+    if "scene" in query and "step" not in values:
         if query["scene"] in SCENES:
             values["scene"] = query["scene"]
         else:
@@ -119,6 +133,8 @@ def url_query(state: ExplorerState) -> dict[str, str]:
         if getattr(state, name) is not None
     }
     query["scene"] = state.scene
+    if state.step:
+        query["step"] = str(state.step)
     if state.presentation:
         query["present"] = "1"
     if state.units != "dimensionless":

@@ -1,0 +1,107 @@
+"""The lesson (app/lesson.py): its quoted numbers are the solver's, and in Chromium every step
+sets its drop and scene, asks before it answers, and can be reached from the URL. Screenshots of
+every step at a projector's, a desktop's and a phone's size go to test-artifacts/lesson/."""
+
+from __future__ import annotations
+
+from urllib.parse import parse_qs, urlparse
+
+import pytest
+from appdriver import open_page
+from playwright.sync_api import expect
+
+import twoball
+from app.lesson import STEPS
+from app.state import ExplorerState, read_query
+
+SIZES = {"projector": (1366, 768), "desktop": (1920, 1080), "phone": (390, 844)}
+
+
+def _result(step):
+    drop = step.drop
+    return twoball.simulate(
+        drop["eps"], drop["mu"], drop["tau_ratio"], eps12=drop["eps12"], height=drop["height"]
+    )
+
+
+def test_the_answers_quote_the_solver():
+    """Each number an answer states is what simulate gives for that step's drop."""
+    textbook, tennis, ping_pong, close_up = (_result(step) for step in STEPS[:4])
+    assert 8.0 < textbook.h1_over_drop < 9.0 and "8.5 times" in STEPS[0].explanation
+    assert round(tennis.h1_over_drop, 1) == 3.7 and "3.7 times" in STEPS[1].explanation
+    assert abs(tennis.summary()["h1_over_icm"] - 1) < 0.05  # "just what the textbook says"
+    assert ping_pong.delayed_rebound and round(ping_pong.h2_over_h1) == 5
+    assert ping_pong.h1_over_drop < 1  # "does not even reach the drop height"
+    icm_ratio = ping_pong.h_icm / ping_pong.drop.x2_0
+    assert round(icm_ratio, 1) == 6.6 and "6.6 times" in STEPS[2].explanation
+    assert close_up.contacts_first == 4 and STEPS[3].choices[STEPS[3].answer] == "4 times"
+    map_drop = _result(STEPS[4])
+    assert map_drop.delayed_rebound and STEPS[4].drop["height"] == 1e4  # on the shipped map
+
+
+def test_a_step_in_the_url_sets_its_drop_and_scene():
+    for number, step in enumerate(STEPS, 1):
+        values, messages = read_query({"step": str(number)}, ExplorerState())
+        assert messages == [] and values["step"] == number and values["scene"] == step.scene
+        assert all(values[name] == value for name, value in step.drop.items())
+    for bad in ("0", str(len(STEPS) + 1), "two", "9" * 500):
+        values, messages = read_query({"step": bad}, ExplorerState())
+        assert "step" not in values and messages and len(messages[0]) < 200
+
+
+def _query(page) -> dict[str, str]:
+    return {k: v[-1] for k, v in parse_qs(urlparse(page.url).query).items()}
+
+
+@pytest.mark.browser
+def test_the_lesson_asks_before_it_answers_and_walks_the_scenes(browser, app_server, artifacts):
+    base, _ = app_server
+    shots = artifacts / "lesson"
+    shots.mkdir(exist_ok=True)
+    context, page, errors = open_page(browser, f"{base}/app", viewport=SIZES["projector"])
+    try:
+        page.get_by_role("button", name="Start the lesson").click()
+        for number, step in enumerate(STEPS, 1):
+            page.get_by_text(f"Step {number} of {len(STEPS)}: {step.title}").wait_for()
+            page.wait_for_function(f"() => location.search.includes('step={number}')")
+            query = _query(page)
+            assert query["scene"] == step.scene
+            assert float(query["mu"]) == pytest.approx(step.drop["mu"], rel=1e-11)
+            reveal = page.get_by_role("button", name="Reveal the answer")
+            expect(reveal).to_be_disabled()  # a prediction first
+            page.get_by_text(step.choices[step.answer], exact=True).click()
+            expect(reveal).to_be_enabled()
+            reveal.click()
+            page.get_by_text("Right.").wait_for()
+            page.wait_for_timeout(1500)  # the scene's plots follow the step's drop
+            page.screenshot(path=shots / f"step{number}-projector.png")
+            page.get_by_role(
+                "button", name="Next >" if number < len(STEPS) else "End the lesson"
+            ).click()
+        page.get_by_role("button", name="Start the lesson").wait_for()
+        assert errors == []
+    finally:
+        context.close()
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize("size", ["desktop", "phone"])
+def test_every_step_opens_from_its_url(browser, app_server, artifacts, size):
+    """A teacher sends the class to one step; each opens on its scene, at two more sizes."""
+    base, _ = app_server
+    shots = artifacts / "lesson"
+    shots.mkdir(exist_ok=True)
+    for number, step in enumerate(STEPS, 1):
+        context, page, errors = open_page(
+            browser, f"{base}/app?step={number}", viewport=SIZES[size]
+        )
+        try:
+            page.get_by_text(f"Step {number} of {len(STEPS)}").wait_for()
+            assert _query(page)["scene"] == step.scene
+            if size == "phone":  # nothing scrolls sideways
+                width = page.evaluate("() => document.documentElement.scrollWidth")
+                assert width <= SIZES["phone"][0] + 1
+            page.screenshot(path=shots / f"step{number}-{size}.png", full_page=size == "phone")
+            assert errors == []
+        finally:
+            context.close()
