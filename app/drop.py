@@ -93,8 +93,8 @@ class DropScene(Scene):
         self.animation = self._animation_figure()
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)
-        if self.state.presentation:  # fills a 1366x768 screen under the header and the tabs
-            self.heights.height = self.animation.height = 520
+        if self.state.presentation:  # 1366x768: under the header, tabs, caption and summary
+            self.heights.height = self.animation.height = 400
         self.param.watch(self._show_frame, "frame")
         self.param.watch(self._draw, "revision")
 
@@ -102,7 +102,7 @@ class DropScene(Scene):
         fig = figure(
             height=400,
             sizing_mode="stretch_width",
-            title="Heights from release to the second apex",
+            title="Heights to the second apex",
             y_range=Range1d(0.0, 1.0),  # set with every drop (auto-ranging ignores the lines)
             tools="pan,box_zoom,wheel_zoom,reset,save",
         )
@@ -254,16 +254,21 @@ class DropScene(Scene):
 
     def __panel__(self) -> pn.viewable.Viewable:
         self._draw()
-        return pn.Column(
-            self.summary,
-            pn.FlexBox(  # side by side on a wide screen, stacked on a phone
-                pn.pane.Bokeh(
-                    self.heights, sizing_mode="stretch_width", styles={"flex": "1 1 340px"}
-                ),
+        heights = pn.pane.Bokeh(
+            self.heights, sizing_mode="stretch_width", styles={"flex": "1 1 340px"}
+        )
+        if self.state.presentation:  # a projector is wide: side by side, never wrapped
+            plots = pn.Row(heights, pn.pane.Bokeh(self.animation), sizing_mode="stretch_width")
+        else:  # side by side on a wide screen, stacked on a phone
+            plots = pn.FlexBox(
+                heights,
                 pn.pane.Bokeh(self.animation),
                 sizing_mode="stretch_width",
                 flex_wrap="wrap",
-            ),
+            )
+        return pn.Column(
+            self.summary,
+            plots,
             pn.Row(self.player, self.trails, sizing_mode="stretch_width"),
             pn.pane.Markdown(PLAYER_HELP, sizing_mode="stretch_width"),
             sizing_mode="stretch_width",

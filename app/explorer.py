@@ -25,6 +25,17 @@ TITLES = {
     "map": "Delayed-rebound map",
     "accuracy": "Accuracy",
 }
+# What each scene shows and what to look for, above it (issue: scenes that explain themselves).
+CAPTIONS = {
+    "drop": "The heights of both balls from release to the small ball's second highest point. "
+    "Look for the orange peaks: a second one higher than the first is a delayed rebound.",
+    "closeup": "The first collision, slowed down: the floor's push on the big ball and the "
+    "push between the balls. Each separate hump of the ball force is one contact.",
+    "map": "Every mass ratio and gap at once: red where the second bounce is the higher one. "
+    "Click a point to drop those balls.",
+    "accuracy": "General-purpose ODE solvers on the same drop at several tolerances, against "
+    "the exact solver: how far off they are, and how long they take.",
+}
 URL_DELAY_MS = 300
 # a phone or a narrow window: the controls above the scenes, each the full width
 PAGE_CSS = """
@@ -64,7 +75,10 @@ class Explorer(pn.viewable.Viewer):
         self.lesson = Lesson(state=self.state)
         self.scenes = {name: SCENE_CLASSES[name](state=self.state) for name in SCENES}
         self.tabs = pn.Tabs(
-            *((TITLES[name], scene) for name, scene in self.scenes.items()),
+            *(
+                (TITLES[name], pn.Column(self._caption(name), scene, sizing_mode="stretch_width"))
+                for name, scene in self.scenes.items()
+            ),
             # all scenes stay rendered (only the one on screen computes): re-rendered tabs
             # (dynamic=True) left Bokeh ranges that no longer followed the units or a preset
             dynamic=False,
@@ -74,6 +88,12 @@ class Explorer(pn.viewable.Viewer):
         self.tabs.param.watch(self._tab_chosen, "active")
         self.state.param.watch(self._scene_chosen, "scene")
         self.scenes[self.state.scene].active = True
+
+    @staticmethod
+    def _caption(name: str) -> pn.pane.Markdown:
+        return pn.pane.Markdown(
+            CAPTIONS[name], sizing_mode="stretch_width", styles={"font-style": "italic"}
+        )
 
     def _tab_chosen(self, event: param.parameterized.Event) -> None:
         self.state.scene = SCENES[event.new]

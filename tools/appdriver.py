@@ -185,6 +185,7 @@ DEEP_QUERY_JS = """(selector) => {
     const box = el.getBoundingClientRect();
     return {text: el.innerText || "", href: el.getAttribute("href"), src: el.getAttribute("src"),
             width: box.width, height: box.height, left: box.left, right: box.right,
+            top: box.top, bottom: box.bottom, visible: el.checkVisibility(),
             font: parseFloat(getComputedStyle(el).fontSize)};
   });
 }"""

@@ -167,3 +167,37 @@ def test_a_phone_gets_a_page_of_its_width(browser, app_server, artifacts):
         assert errors == []
     finally:
         context.close()
+
+
+def test_presentation_mode_fits_a_projector(browser, app_server, artifacts):
+    """?present=1 at 1366x768: large text, tick labels of 16 pt, and the drop plot beside the
+    animation, both whole on the screen without scrolling."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?present=1", viewport=(1366, 768))
+    try:
+        page.wait_for_timeout(1000)
+        canvases = [
+            c
+            for c in deep_query(page, "canvas")
+            if c["visible"] and c["width"] > 100 and c["height"] > 100 and c["left"] > 300
+        ]
+        # (the other tabs' plots stay laid out underneath: the drop's are the animation, 220
+        # wide, and the widest canvas on its row)
+        animation = min(canvases, key=lambda c: c["width"])
+        beside = [c for c in canvases if abs(c["top"] - animation["top"]) < 5]
+        heights = max(beside, key=lambda c: c["width"])
+        shown = [(c["width"], c["height"], c["left"], c["top"]) for c in canvases]
+        assert heights["width"] > 600 and animation["width"] < 300, shown  # side by side
+        assert max(heights["bottom"], animation["bottom"]) <= 768
+        assert max(heights["right"], animation["right"]) <= 1366
+        sizes = page.evaluate(
+            """() => [...Bokeh.documents[0].all_models]
+              .filter((m) => m.constructor.__name__ === "LinearAxis")
+              .map((m) => m.major_label_text_font_size)"""
+        )
+        assert sizes and all(size == "16pt" for size in sizes), sizes
+        assert page.evaluate("parseFloat(getComputedStyle(document.body).fontSize)") >= 18
+        page.screenshot(path=artifacts / "presentation_drop.png")
+        assert errors == []
+    finally:
+        context.close()
