@@ -119,6 +119,23 @@ def test_map_shows_the_cube_slice_nearest_eps_as_the_solver_computes_it():
     assert scene.computations == before
 
 
+def test_the_map_of_another_drop_height_and_eps12_is_computed_and_said_so():
+    explorer = rendered({"eps": "0.9", "H": "2000", "eps12": "0.7", "scene": "map"})
+    scene = explorer.scenes["map"]
+    note = scene._note(scene.revision, True)
+    assert scene.computed and "Computed for this drop" in note and "H = 2000" in note
+    values = scene.slice["h2_over_h1"]
+    assert values.shape == (map_cube().sizes["mu"], map_cube().sizes["tau_ratio"])
+    for i, j in ((5, 70), (30, 10), (60, 45)):
+        mu, tau = float(values["mu"][i]), float(values["tau_ratio"][j])
+        direct = twoball.simulate(scene.slice_eps, mu, tau, height=2000.0, eps12=0.7)
+        assert float(values[i, j]) == pytest.approx(direct.h2_over_h1, rel=1e-12, nan_ok=True)
+    # back to the cube's drop: the shipped slice again
+    explorer.state.param.update(height=map_cube().attrs["height"], eps12=None)
+    scene.current()
+    assert not scene.computed and "Slice of the shipped cube" in scene._note(scene.revision, True)
+
+
 def test_a_click_on_the_map_sets_mu_and_tau_ratio_and_moves_the_sliders():
     explorer = rendered({"scene": "map"})
     scene = explorer.scenes["map"]
