@@ -81,7 +81,7 @@ def main() -> None:
     wall = _median(sweep_times)
     workers = args.workers or os.cpu_count()
     lines = [
-        f"paper grid {grid.size} cases (50 x 50 x 50, H = 1e4), {workers} worker processes",
+        f"paper grid {grid.size} cases (50 x 50 x 50, H = 1e4), {workers} threads",
         f"sweep, end to end     median {wall:7.2f} s of {args.repeats} "
         f"({', '.join(f'{t:.2f}' for t in sweep_times)}): {grid.size / wall:8.0f} cases/s",
         f"batch path, one core  {block_rate:8.0f} cases/s (compute_block, 3 eps slices)",

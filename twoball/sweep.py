@@ -52,7 +52,7 @@ PROGRESS_DIR = "_progress"  # a Zarr group holding one empty file per finished c
 # Drops a sweep undertakes without --force: about 2 h on 2 cores at the measured rate below.
 MAX_DROPS = 100_000_000
 # Drops per second one local worker computes (the paper's 50^3 cube: 15 600/s on 2 cores).
-DROPS_PER_WORKER_SECOND = 7_800
+DROPS_PER_WORKER_SECOND = 11_000  # end to end per thread (docs/performance.md)
 
 HEIGHT_UNITS = "m1 g / k (dimensionless height X = z k / (m1 g))"
 TIME_UNITS = "sqrt(m1 / k) (dimensionless time tau)"
