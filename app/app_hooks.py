@@ -9,6 +9,7 @@ opened once per server.
 from __future__ import annotations
 
 import logging
+import sys
 import time
 
 from twoball import jit
@@ -17,10 +18,16 @@ from .delayed_map import map_cube
 
 # under bokeh's logger, which `panel serve --log-level` shows (info by default)
 log = logging.getLogger("bokeh.twoball")
+# Panel parses every query value that looks like an integer with int(), which Python refuses
+# beyond 4300 digits (a traceback, and a page without its URL kept in step). Tornado refuses a
+# request whose headers exceed 64 kB, so no value has more digits than this, and int() of it
+# costs milliseconds.
+QUERY_DIGITS = 70_000
 
 
 def on_server_loaded(server_context) -> None:
     """Serve at once on the Python kernels, compile in the background; open the map cube."""
+    sys.set_int_max_str_digits(QUERY_DIGITS)
     started = time.monotonic()
     jit.compile_in_background(
         done=lambda: log.info("compiled kernels in use after %.1f s", time.monotonic() - started)
