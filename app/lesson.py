@@ -152,11 +152,11 @@ class Lesson(pn.viewable.Viewer):
         super().__init__(**params)
         self.heading = pn.pane.Markdown(sizing_mode="stretch_width", margin=(0, 10))
         self.choices = pn.widgets.RadioBoxGroup(options=[], value=None, sizing_mode="stretch_width")
-        self.reveal = pn.widgets.Button(name="Reveal the answer", button_type="primary")
+        self.reveal = pn.widgets.Button(label="Reveal the answer", color="primary")
         self.answer = pn.pane.Alert("", visible=False, sizing_mode="stretch_width")
-        self.previous = pn.widgets.Button(name="< Previous", width=110)
-        self.next = pn.widgets.Button(name="Next >", button_type="primary", width=110)
-        self.start = pn.widgets.Button(name="Start the lesson", button_type="primary")
+        self.previous = pn.widgets.Button(label="< Previous", width=110)
+        self.next = pn.widgets.Button(label="Next >", color="primary", width=110)
+        self.start = pn.widgets.Button(label="Start the lesson", color="primary")
         # a step changes the drop, and with it the scenes' Bokeh models: on the next tick,
         # as every change made from the browser (see scene.later)
         self.reveal.on_click(lambda _: later(self._reveal))
@@ -213,7 +213,7 @@ class Lesson(pn.viewable.Viewer):
         self.choices.param.update(options=list(shown.choices), value=None, disabled=False)
         self.reveal.disabled = True
         self.previous.disabled = step == 1
-        self.next.name = "Next >" if step < len(STEPS) else "End the lesson"
+        self.next.label = "Next >" if step < len(STEPS) else "End the lesson"
 
     def __panel__(self) -> pn.viewable.Viewable:
         return pn.Card(
