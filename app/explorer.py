@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from urllib.parse import urlencode
 
 import panel as pn
@@ -16,26 +17,48 @@ from .controls import Controls
 from .delayed_map import MapScene
 from .drop import DropScene
 from .lesson import Lesson
-from .scene import MODEL_PARAMETERS
+from .scene import MODEL_PARAMETERS, Scene
 from .state import SCENES, ExplorerState, read_query, url_query
 
-TITLES = {
-    "drop": "Drop",
-    "closeup": "First collision",
-    "map": "Delayed-rebound map",
-    "accuracy": "Accuracy",
+
+@dataclass(frozen=True)
+class SceneEntry:
+    """A scene of the explorer: its tab's title, the caption above it, its viewer class."""
+
+    title: str
+    caption: str  # what the scene shows and what to look for
+    viewer: type[Scene]
+
+
+# The one registry of scenes, in tab order (app/state.py's SCENES names them for the URL).
+SCENE_REGISTRY = {
+    "drop": SceneEntry(
+        "Drop",
+        "The heights of both balls from release to the small ball's second highest point. "
+        "Look for the orange peaks: a second one higher than the first is a delayed rebound.",
+        DropScene,
+    ),
+    "closeup": SceneEntry(
+        "First collision",
+        "The first collision, slowed down: the floor's push on the big ball and the push "
+        "between the balls. Each separate hump of the ball force is one contact.",
+        CloseUpScene,
+    ),
+    "map": SceneEntry(
+        "Delayed-rebound map",
+        "Every mass ratio and gap at once: red where the second bounce is the higher one. "
+        "Click a point to drop those balls.",
+        MapScene,
+    ),
+    "accuracy": SceneEntry(
+        "Accuracy",
+        "General-purpose ODE solvers on the same drop at several tolerances, against the "
+        "exact solver: how far off they are, and how long they take.",
+        AccuracyScene,
+    ),
 }
-# What each scene shows and what to look for, above it (issue: scenes that explain themselves).
-CAPTIONS = {
-    "drop": "The heights of both balls from release to the small ball's second highest point. "
-    "Look for the orange peaks: a second one higher than the first is a delayed rebound.",
-    "closeup": "The first collision, slowed down: the floor's push on the big ball and the "
-    "push between the balls. Each separate hump of the ball force is one contact.",
-    "map": "Every mass ratio and gap at once: red where the second bounce is the higher one. "
-    "Click a point to drop those balls.",
-    "accuracy": "General-purpose ODE solvers on the same drop at several tolerances, against "
-    "the exact solver: how far off they are, and how long they take.",
-}
+assert tuple(SCENE_REGISTRY) == SCENES
+
 URL_DELAY_MS = 300
 # a phone or a narrow window: the controls above the scenes, each the full width
 PAGE_CSS = """
@@ -53,12 +76,6 @@ PRESENTATION_CSS = """
 :root { --bokeh-font-size: 20px; --bokeh-base-font-size: 20px; --pn-font-size: 20px; }
 html, body { font-size: 20px; }
 """
-SCENE_CLASSES = {
-    "drop": DropScene,
-    "closeup": CloseUpScene,
-    "map": MapScene,
-    "accuracy": AccuracyScene,
-}
 
 
 class Explorer(pn.viewable.Viewer):
@@ -73,10 +90,15 @@ class Explorer(pn.viewable.Viewer):
         self.state.param.update(**values)
         self.controls = Controls(state=self.state, messages=messages)
         self.lesson = Lesson(state=self.state)
-        self.scenes = {name: SCENE_CLASSES[name](state=self.state) for name in SCENES}
+        self.scenes = {
+            name: entry.viewer(state=self.state) for name, entry in SCENE_REGISTRY.items()
+        }
         self.tabs = pn.Tabs(
             *(
-                (TITLES[name], pn.Column(self._caption(name), scene, sizing_mode="stretch_width"))
+                (
+                    SCENE_REGISTRY[name].title,
+                    pn.Column(self._caption(name), scene, sizing_mode="stretch_width"),
+                )
                 for name, scene in self.scenes.items()
             ),
             # all scenes stay rendered (only the one on screen computes): re-rendered tabs
@@ -92,7 +114,9 @@ class Explorer(pn.viewable.Viewer):
     @staticmethod
     def _caption(name: str) -> pn.pane.Markdown:
         return pn.pane.Markdown(
-            CAPTIONS[name], sizing_mode="stretch_width", styles={"font-style": "italic"}
+            SCENE_REGISTRY[name].caption,
+            sizing_mode="stretch_width",
+            styles={"font-style": "italic"},
         )
 
     def _tab_chosen(self, event: param.parameterized.Event) -> None:

@@ -19,17 +19,14 @@ from appdriver import (
     wait_for_change,
 )
 
+from app.explorer import SCENE_REGISTRY
+
 pytestmark = pytest.mark.browser
 
 PAPER = "eps=0.9&mu=0.01&tau_ratio=0.01"
 RANGE_ENDS_JS = """() => [...Bokeh.documents[0].all_models]
   .filter((m) => m.constructor.__name__ === "Range1d").map((m) => m.end)"""
-TAB_TITLES = {
-    "drop": "Drop",
-    "closeup": "First collision",
-    "map": "Delayed-rebound map",
-    "accuracy": "Accuracy",
-}
+TAB_TITLES = {name: entry.title for name, entry in SCENE_REGISTRY.items()}
 
 
 def active_tab(page) -> str:
