@@ -198,9 +198,8 @@ def test_the_overdamped_bound_holds_along_the_closed_form():
             state = y_rest + rng.normal(size=4) * np.array([1.0, 1.0, 3.0, 3.0])
             y1, y2, w1, w2, a1, a2 = exact.state_at(exact.BOTH, 0.0, *state, params, x, x_inv,
                                                     blocks, y_rest)  # fmt: skip
-            roots = exact._energy_roots(exact.BOTH, y1, y2, w1, w2, a1, a2, params, x_inv,
-                                        blocks, companions, y_rest)  # fmt: skip
             modes = exact._block_states(y1, y2, w1, w2, x_inv, companions, y_rest)
+            roots = exact._energy_roots(exact.BOTH, w1, w2, a1, a2, params, blocks, modes)
             bound = exact._curvature_bound(exact.BOTH, 1, 0, c0, c1, c2, roots, rates, rows, modes)
             later = np.array(
                 [

@@ -236,27 +236,24 @@ def _companion(block):
 
 
 @njit
-def _block_coefficient(row, block, companion, power):
-    """c with |row . B^power z| <= c sqrt(2 E) for the block's oscillator energy E."""
-    ell = row.copy()
-    for _ in range(power):
-        ell = ell @ block
-    det = companion[0, 0] * companion[1, 1] - companion[0, 1] * companion[1, 0]
-    ell0 = (ell[0] * companion[1, 1] - ell[1] * companion[1, 0]) / det  # ell @ companion^-1
-    ell1 = (ell[1] * companion[0, 0] - ell[0] * companion[0, 1]) / det
-    ell = np.array([ell0, ell1])
-    omega = math.sqrt(block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0])
-    return math.hypot(ell[0] / omega, ell[1])  # Cauchy-Schwarz on the energy
-
-
-@njit
 def _companion_row(row, companion):
-    """(alpha, beta) with row . z = alpha u + beta u' for (u, u') = R z."""
+    """(alpha, beta) with row . z = alpha u + beta u' for (u, u') = R z (row times R^-1)."""
     det = companion[0, 0] * companion[1, 1] - companion[0, 1] * companion[1, 0]
     out = np.empty(2)
     out[0] = (row[0] * companion[1, 1] - row[1] * companion[1, 0]) / det
     out[1] = (row[1] * companion[0, 0] - row[0] * companion[0, 1]) / det
     return out
+
+
+@njit
+def _block_coefficient(row, block, companion, power):
+    """c with |row . B^power z| <= c sqrt(2 E) for the block's oscillator energy E."""
+    ell = row.copy()
+    for _ in range(power):
+        ell = ell @ block
+    ell = _companion_row(ell, companion)
+    omega = math.sqrt(block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0])
+    return math.hypot(ell[0] / omega, ell[1])  # Cauchy-Schwarz on the energy
 
 
 @njit
@@ -389,15 +386,6 @@ def _modes(x1, x2, v1, v2, x_inv, y_rest):
 
 
 @njit
-def _block_energy_root(block, companion, z0, z1):
-    """sqrt(2 E) of a block's oscillator energy E = (u'^2 + det(B) u^2)/2, (u, u') = R z."""
-    u = companion[0, 0] * z0 + companion[0, 1] * z1
-    du = companion[1, 0] * z0 + companion[1, 1] * z1
-    det = block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0]
-    return math.sqrt(du * du + det * u * u)
-
-
-@njit
 def _block_flow(b, z0, z1, tau):
     """exp(B tau) z and B exp(B tau) z for a 2x2 block, exact on every damping branch:
     exp(B tau) = cos_part I + sin_part (B - tr(B)/2 I) with the oscillator's decay pair."""
@@ -524,19 +512,26 @@ def _switching(
 
 
 @njit
-def _energy_roots(kind, x1, x2, v1, v2, a1, a2, params, x_inv, blocks, companions, y_rest):
-    """sqrt(2 E) of each oscillator of the phase (of w = y' for one contact, of the modes for
-    both); each is non-increasing within the phase."""
+def _mode_energy_root(block, u, du):
+    """sqrt(2 E) of a mode's oscillator energy E = (u'^2 + det(B) u^2)/2."""
+    det = block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0]
+    return math.sqrt(du * du + det * u * u)
+
+
+@njit
+def _energy_roots(kind, v1, v2, a1, a2, params, blocks, block_states):
+    """sqrt(2 E) of each oscillator of the phase (of w = y' for one contact; for both contacts,
+    E = (u'^2 + det(B) u^2)/2 of each mode from its (u, u') in ``block_states``); each is
+    non-increasing within the phase."""
     if kind == FLOOR:
         return math.sqrt(a1 * a1 + v1 * v1), 0.0
     if kind == BALL:
         d, dd = v2 - v1, a2 - a1
         return math.sqrt(dd * dd + params[P_W2] * d * d), 0.0
     if kind == BOTH:
-        z0, z1, z2, z3 = _modes(x1, x2, v1, v2, x_inv, y_rest)
         return (
-            _block_energy_root(blocks[0], companions[0], z0, z1),
-            _block_energy_root(blocks[1], companions[1], z2, z3),
+            _mode_energy_root(blocks[0], block_states[0], block_states[1]),
+            _mode_energy_root(blocks[1], block_states[2], block_states[3]),
         )
     return 0.0, 0.0
 
@@ -607,12 +602,10 @@ def advance_phase(
         y1, y2, w1, w2, a1, a2 = state_at(
             kind, tau, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest
         )
-        roots = _energy_roots(
-            kind, y1, y2, w1, w2, a1, a2, params, x_inv, blocks, companions, y_rest
-        )
         block_states = (0.0, 0.0, 0.0, 0.0)
         if kind == BOTH:
             block_states = _block_states(y1, y2, w1, w2, x_inv, companions, y_rest)
+        roots = _energy_roots(kind, w1, w2, a1, a2, params, blocks, block_states)
         # rounding of the closed form at tau: its largest terms are x0, v0 tau and tau^2/2
         tol_state = ROUNDING * noise * (size + speed * (1.0 + tau) + tau * tau) + carried
         tol_lower = tol_state
