@@ -108,15 +108,17 @@ def simulate(
         if rtol is not None or atol is not None:
             raise ParameterError("rtol and atol apply to the scipy methods only, not to 'exact'")
         outcome = exact.solve(drop, apexes, t_end, dense_output=keep)
-    elif method == "CVODE":
-        if keep:
-            raise ParameterError("CVODE gives no dense output here (t_eval, dense_output)")
-        from twoball import cvode
+    else:  # a reference method: its tolerances, defaulted once here
+        rtol = reference.DEFAULT_TOL if rtol is None else rtol
+        atol = reference.DEFAULT_TOL if atol is None else atol
+        if method == "CVODE":
+            if keep:
+                raise ParameterError("CVODE gives no dense output here (t_eval, dense_output)")
+            from twoball import cvode
 
-        tolerances = (rtol or reference.DEFAULT_TOL, atol or reference.DEFAULT_TOL)
-        outcome = cvode.solve(drop, apexes, t_end, *tolerances)
-    else:
-        outcome = reference.solve(drop, method, apexes, t_end, rtol, atol, keep)
+            outcome = cvode.solve(drop, apexes, t_end, rtol, atol)
+        else:
+            outcome = reference.solve(drop, method, apexes, t_end, rtol, atol, keep)
     failure = _failure(outcome.message, outcome.apex_h, drop)
     if failure:
         outcome = outcome._replace(status=Status.IMPOSSIBLE, message=failure)
@@ -134,8 +136,8 @@ def simulate(
         reason=outcome.message,
         contacts_first=int(outcome.contacts_first),
         floor_contacts_first=int(outcome.floor_contacts_first),
-        rtol=None if method == "exact" else (rtol or reference.DEFAULT_TOL),
-        atol=None if method == "exact" else (atol or reference.DEFAULT_TOL),
+        rtol=rtol,
+        atol=atol,
         trajectory=trajectory,
         status=outcome.status,
         dense=outcome.evaluate if dense_output else None,
