@@ -20,12 +20,12 @@ import math
 import os
 import sys
 from collections.abc import Callable
-from fractions import Fraction
 
 from twoball.errors import ParameterError, SolverError
 from twoball.model import DEFAULT_HEIGHT, Parameters
 from twoball.sweep import DIMS as SWEEP_AXES
 from twoball.sweep import MAX_DROPS as MAX_SWEEP_DROPS
+from twoball.sweep import parse_number
 
 # The optional dependencies, by the extra that installs them (pyproject.toml).
 EXTRAS = {
@@ -53,11 +53,11 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _number(text: str) -> float:
-    """A number, written as a float or a fraction such as 1/3."""
+    """A number or a fraction such as 1/3 (:func:`twoball.sweep.parse_number`), for argparse."""
     try:
-        return float(Fraction(text.strip())) if "/" in text else float(text)
-    except (ValueError, ZeroDivisionError):
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+        return parse_number(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def _integer_in(low: int, high: int) -> Callable[[str], int]:

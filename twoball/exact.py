@@ -50,7 +50,7 @@ import numpy as np
 
 from twoball.errors import Status
 from twoball.jit import njit
-from twoball.model import Drop
+from twoball.model import MACHINE_EPSILON, Drop
 from twoball.observables import Outcome
 
 # Phase kinds: bit 0 floor contact active, bit 1 ball contact active.
@@ -66,7 +66,7 @@ STATUS_STUCK, STATUS_PHASES = int(Status.STUCK), int(Status.PHASE_LIMIT)
 
 MAX_STEPS_PER_PHASE = 100_000
 MAX_PHASES = 1_000_000
-ROUNDING = 16.0 * 2.220446049250313e-16  # tolerance in units of relative rounding
+ROUNDING = 16.0 * MACHINE_EPSILON  # tolerance in units of relative rounding
 SUBSPACE_SWEEPS = 4  # refinement sweeps of the both-contact mode split (see _split_modes)
 OVERDAMPED_GAP = 0.1  # rates this far apart (relative) split a block into two exponentials
 OVERDAMPED_SAFETY = 1.0 + 1e-9  # covers the rounding of that split (relative ~ulp / gap)

@@ -170,11 +170,20 @@ def parse_axis(name: str, text: str) -> Axis:
     return Axis(name, start, stop, count, spacing)
 
 
-def _parse_number(name: str, text: str) -> float:
+def parse_number(text: str) -> float:
+    """A number written as a float or a fraction such as 1/3 (the command line's numbers);
+    ValueError saying so otherwise."""
     try:
         return float(Fraction(text.strip())) if "/" in text else float(text)
     except (ValueError, ZeroDivisionError):
-        raise ParameterError(f"{name}: not a number: {text!r}") from None
+        raise ValueError(f"not a number: {text!r}") from None
+
+
+def _parse_number(name: str, text: str) -> float:
+    try:
+        return parse_number(text)
+    except ValueError as error:
+        raise ParameterError(f"{name}: {error}") from None
 
 
 @dataclass(frozen=True)
