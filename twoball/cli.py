@@ -225,7 +225,7 @@ def _add_sweep(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--dtype", choices=("float64", "float32"), default="float64", help="stored floats"
     )
-    parser.add_argument("--workers", type=_WORKERS, help="local processes (default: all cores)")
+    parser.add_argument("--workers", type=_WORKERS, help="local threads (default: all cores)")
     parser.add_argument("--scheduler", default=None, help="Dask distributed scheduler address")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.add_argument(

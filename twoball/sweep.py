@@ -49,10 +49,11 @@ DTYPES = ("float64", "float32")
 SOLVER = "exact"
 SCHEDULER_TIMEOUT = "10s"  # to connect to a Dask scheduler
 PROGRESS_DIR = "_progress"  # a Zarr group holding one empty file per finished chunk
-# Drops a sweep undertakes without --force: about 2 h on 2 cores at the measured rate below.
+# Drops a sweep undertakes without --force: over an hour on 2 cores at the rate below.
 MAX_DROPS = 100_000_000
-# Drops per second one local worker computes (the paper's 50^3 cube: 15 600/s on 2 cores).
-DROPS_PER_WORKER_SECOND = 11_000  # end to end per thread (docs/performance.md)
+# Drops per second one local thread computes, end to end (the paper's 50^3 cube: about
+# 22 000-25 000/s on 2 threads, docs/performance.md); the plan's estimate.
+DROPS_PER_WORKER_SECOND = 11_000
 
 HEIGHT_UNITS = "m1 g / k (dimensionless height X = z k / (m1 g))"
 TIME_UNITS = "sqrt(m1 / k) (dimensionless time tau)"
@@ -457,7 +458,8 @@ def sweep(
         Address of a Dask distributed scheduler (e.g. tcp://127.0.0.1:8786): its workers
         compute, this process writes, so they need no shared disk.
     workers : int, optional
-        Local processes when no scheduler is given (default: all cores).
+        Local threads when no scheduler is given (default: all cores; the batch path releases
+        the GIL).
     progress : bool
         Show a progress bar with the time left on stderr.
 
