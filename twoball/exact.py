@@ -478,21 +478,28 @@ def _curvature_bound(kind, contact, part, c0, c1, c2, roots, rates, mode_rows, b
 def _switching(
     contact, active, x1, x2, v1, v2, a1, a2, params, bound_eta, bound_g, tol_state, clock
 ):
-    """One contact's switching function: (F, F', tol, step certified above -tol).
+    """One contact's switching function: (F, F', tol, step certified above -tol); see
+    :func:`contact_switch`."""
+    if contact == 0:
+        return contact_switch(
+            active, x1, v1, a1, params[P_Z01], bound_eta, bound_g, tol_state, clock
+        )
+    return contact_switch(
+        active, x2 - x1, v2 - v1, a2 - a1, params[P_Z12], bound_eta, bound_g, tol_state, clock
+    )
+
+
+@njit
+def contact_switch(active, eta, deta, ddeta, zeta, bound_eta, bound_g, tol_state, clock):
+    """A contact's switching function from its overlap eta and two derivatives:
+    (F, F', tol, step certified above -tol).
 
     bound_eta and bound_g bound |eta''| and |g''| for the rest of the phase; tol is the rounding
-    in F: that of the state, plus |F'| times the rounding of the clock.
+    in F: that of the state, plus |F'| times the rounding of the clock. Shared with the N-ball
+    solver (twoball.stack).
     """
-    if contact == 0:
-        eta, deta = x1, v1
-        zeta = params[P_Z01]
-        dd = a1
-    else:
-        eta, deta = x2 - x1, v2 - v1
-        zeta = params[P_Z12]
-        dd = a2 - a1
     g = eta + 2.0 * zeta * deta
-    dg = deta + 2.0 * zeta * dd
+    dg = deta + 2.0 * zeta * ddeta
     tol_g = tol_state + ROUNDING * abs(dg) * clock
     if active:
         value, rate = -g, -dg
