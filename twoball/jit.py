@@ -1,7 +1,8 @@
 """How the kernels are compiled: numba's disk cache where it can be written, and the kernels'
 own Python functions standing in for them while the compiler runs.
 
-The kernels are the ``@njit`` functions of :mod:`twoball.model` and :mod:`twoball.exact`. numba
+The kernels are the ``@njit`` functions of :mod:`twoball.model`, :mod:`twoball.exact` and
+:mod:`twoball.stack`. numba
 compiles them on first call (15-40 s for the solver) and keeps the machine code on disk, beside
 the sources or in ``NUMBA_CACHE_DIR``. Two rules follow from how programs are deployed:
 
@@ -32,7 +33,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent
-KERNEL_MODULES = ("twoball.model", "twoball.exact")
+KERNEL_MODULES = ("twoball.model", "twoball.exact", "twoball.stack")
 # what compiles every kernel in a new process (the Dockerfile runs it too)
 WARM_UP = "from twoball import jit; jit.warm_up()"
 
@@ -133,6 +134,9 @@ def warm_up() -> None:
     from twoball.sweep import compute_block  # the batch path (twoball.exact.run_block)
 
     compute_block([0.9], [0.01], [0.01])
+    from twoball.stack import simulate_stack  # the N-ball solver (twoball.stack)
+
+    simulate_stack([0.2, 0.2], 0.9, 0.2, t_eval=[0.0, 1.0])
 
 
 def compile_in_background(done: Callable[[], None] | None = None) -> threading.Thread:

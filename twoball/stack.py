@@ -1,0 +1,888 @@
+"""Stacks of N balls with linear contacts, solved exactly phase by phase (docs/model.md, "Stacks
+of N balls").
+
+The two-ball solver of :mod:`twoball.exact`, generalised. In a phase a set of contacts is
+active; it splits the stack into *clusters*, runs of balls joined by active ball contacts. A
+cluster resting on the floor through an active floor contact is *grounded*.
+
+- A cluster's shape is given by the overlaps eta_c of its active contacts. They obey
+  eta'' = -W (eta - eta_rest + 2 Z eta') with W = D M^-1 D^T (D maps heights to overlaps, M is
+  diagonal in the masses, Z in the damping ratios): the state z = (eta - eta_rest, eta') of a
+  cluster with k active contacts satisfies z' = B z, B = [[0, I], [-W, -W 2Z]]. eta_rest is the
+  static compression under the weight above each contact (grounded) or zero (free clusters).
+- A free cluster's centre of mass is a parabola; a ball on its own is one.
+- z' = B z is solved in closed form through a real block-diagonal form
+  B = X diag(B_1..B_k) X^-1 with 2x2 blocks, each advanced exactly on every damping branch
+  (:func:`twoball.exact._block_flow`).
+  One contact: X = I. Two contacts: the refined mode split of the two-ball solver
+  (:func:`twoball.exact._split_modes`). More: eigenvectors, complex pairs as rotations and real
+  eigenvalues paired in order; a near-defective pair then costs accuracy in proportion to the
+  condition of X, which the tolerance carries.
+
+Why no contact can be missed: the certified steps of :mod:`twoball.exact`. The mechanical energy
+of a cluster, E(z) = (|z_1|^2 + z_2^T W^-1 z_2)/2 (springs, and kinetic energy of its shape),
+never rises, also for w = z' (which obeys the same equation). Every switching function is linear
+in the heights and velocities of at most two balls; its second derivative is a constant (from
+gravity, for balls of free clusters) plus a linear form in each involved cluster's w, bounded by
+Cauchy-Schwarz in that energy: |l.w| <= sqrt(l_1.l_1 + l_2^T W l_2) sqrt(2 E(w)). So each step
+keeps F + F' h - bound h^2/2 above -tol, and a root can be approached but not stepped over.
+
+A stack is at rest when every contact is active and the energy of z is too small for any contact
+force to fall from its static value (the weight above it) to zero.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+
+from twoball import exact
+from twoball.errors import ParameterError, SolverError, Status
+from twoball.exact import ROUNDING
+from twoball.jit import njit
+from twoball.model import DEFAULT_HEIGHT, check_value, decay_ratio, floor_contact_time
+
+MAX_BALLS = 16
+MAX_STEPS_PER_PHASE = 100_000
+MAX_PHASES = 1_000_000
+
+# Events of one phase.
+EV_SWITCH, EV_APEX, EV_TIME, EV_REST, EV_STUCK, EV_STEPS = 0, 1, 2, 3, 4, 5
+STATUS_DONE, STATUS_REST = int(Status.DONE), int(Status.REST)
+STATUS_STUCK, STATUS_PHASES = int(Status.STUCK), int(Status.PHASE_LIMIT)
+
+
+class Clusters(NamedTuple):
+    """Every cluster's closed form, built on first use (cluster id from :func:`_cluster_id`)."""
+
+    ready: np.ndarray  # (ids,) bool
+    contacts: np.ndarray  # (ids,) active contacts k
+    x: np.ndarray  # (ids, 2N, 2N) X of the block form (first 2k rows and columns)
+    x_inv: np.ndarray
+    blocks: np.ndarray  # (ids, N, 2, 2)
+    eta_rest: np.ndarray  # (ids, N) by local contact
+    kinetic: np.ndarray  # (ids, N, N) W^-1, the shape's mass matrix
+    shape: np.ndarray  # (ids, N, N) ball (local) height from z_1 (contact local)
+    offset: np.ndarray  # (ids, N) ball height at z = 0 (grounded), 0 for free clusters
+    c_x2: np.ndarray  # (ids, N) Cauchy-Schwarz constants of x'' of each ball, on w
+    c_g_low: np.ndarray  # of x'' + 2 zeta_below x''' (the ball's lower contact's g'')
+    c_g_up: np.ndarray  # of x'' + 2 zeta_above x'''
+    c_eta: np.ndarray  # (ids, N) of eta'' of each active contact
+    c_g: np.ndarray  # of g''
+    c_rest: np.ndarray  # of g - g_rest, on z
+    noise: np.ndarray  # (ids,) condition of X
+
+
+@njit
+def _cluster_id(lo, hi, grounded, n):
+    """Index of the cluster of balls lo..hi (grounded ones have lo = 0)."""
+    return n * n + hi if grounded else lo * n + hi
+
+
+@njit
+def new_clusters(n):
+    """Empty storage for every cluster of an n-ball stack."""
+    ids = n * n + n
+    d = 2 * n
+    return Clusters(
+        np.zeros(ids, dtype=np.bool_),
+        np.zeros(ids, dtype=np.int64),
+        np.zeros((ids, d, d)),
+        np.zeros((ids, d, d)),
+        np.zeros((ids, n, 2, 2)),
+        np.zeros((ids, n)),
+        np.zeros((ids, n, n)),
+        np.zeros((ids, n, n)),
+        np.zeros((ids, n)),
+        np.zeros((ids, n)),
+        np.zeros((ids, n)),
+        np.zeros((ids, n)),
+        np.zeros((ids, n)),
+        np.zeros((ids, n)),
+        np.zeros((ids, n)),
+        np.zeros(ids),
+    )
+
+
+@njit
+def _real_blocks(b, k):
+    """X, X^-1 and k 2x2 blocks with B = X diag(blocks) X^-1 (see the module docstring)."""
+    d = 2 * k
+    x = np.zeros((d, d))
+    blocks = np.zeros((k, 2, 2))
+    if k == 1:
+        x[0, 0] = x[1, 1] = 1.0
+        blocks[0] = b
+        return x, x.copy(), blocks
+    if k == 2:
+        x4, x4_inv, blocks2 = exact._split_modes(b)
+        return x4, x4_inv, blocks2
+    lam, vec = np.linalg.eig(b.astype(np.complex128))
+    scale = np.abs(lam).max()
+    used = np.zeros(d, dtype=np.bool_)
+    count = 0
+    for i in range(d):
+        if used[i] or abs(lam[i].imag) <= 1e-12 * scale:
+            continue
+        partner, gap = -1, np.inf
+        for j in range(d):
+            if j != i and not used[j] and abs(lam[j] - np.conj(lam[i])) < gap:
+                partner, gap = j, abs(lam[j] - np.conj(lam[i]))
+        used[i] = used[partner] = True
+        top = i if lam[i].imag > 0.0 else partner
+        x[:, 2 * count] = vec[:, top].real
+        x[:, 2 * count + 1] = vec[:, top].imag
+        re, im = lam[top].real, lam[top].imag
+        blocks[count, 0, 0], blocks[count, 0, 1] = re, im
+        blocks[count, 1, 0], blocks[count, 1, 1] = -im, re
+        count += 1
+    real_index = np.array([i for i in range(d) if not used[i]], dtype=np.int64)
+    order = real_index[np.argsort(lam[real_index].real)]
+    for p in range(0, order.size, 2):
+        for q in range(2):
+            v = vec[:, order[p + q]]
+            big = np.argmax(np.abs(v))
+            phase = np.conj(v[big]) / abs(v[big])  # a real eigenvector times a phase
+            x[:, 2 * count + q] = (v * phase).real
+        blocks[count, 0, 0] = lam[order[p]].real
+        blocks[count, 1, 1] = lam[order[p + 1]].real
+        count += 1
+    return x, np.linalg.inv(x), blocks
+
+
+@njit
+def _energy_constant(row_w, kinetic_inverse, k):
+    """c with |row . w| <= c sqrt(2 E(w)), E = (|w_1|^2 + w_2^T W^-1 w_2)/2 (Cauchy-Schwarz)."""
+    total = 0.0
+    for i in range(k):
+        total += row_w[i] * row_w[i]
+        for j in range(k):
+            total += row_w[k + i] * kinetic_inverse[i, j] * row_w[k + j]
+    return math.sqrt(max(total, 0.0))
+
+
+@njit
+def _build_cluster(store, cid, lo, hi, grounded, masses, zeta):
+    """Fill ``store`` at ``cid`` for the cluster of balls lo..hi (docs/model.md, "Stacks of N
+    balls")."""
+    n = masses.size
+    first = 0 if grounded else lo + 1  # its first active contact
+    k = hi - first + 1
+    balls = hi - lo + 1
+    store.contacts[cid] = k
+    if k == 0:
+        store.ready[cid] = True
+        store.noise[cid] = 1.0
+        return
+    # W = D M^-1 D^T on the active contacts (contact c joins balls c-1 and c)
+    w = np.zeros((k, k))
+    for i in range(k):
+        c = first + i
+        w[i, i] = 1.0 / masses[c] + (1.0 / masses[c - 1] if c >= 1 else 0.0)
+        if i + 1 < k:
+            w[i, i + 1] = w[i + 1, i] = -1.0 / masses[c]
+    b = np.zeros((2 * k, 2 * k))
+    for i in range(k):
+        b[i, k + i] = 1.0
+        for j in range(k):
+            b[k + i, j] = -w[i, j]
+            b[k + i, k + j] = -w[i, j] * 2.0 * zeta[first + j]
+    x, x_inv, blocks = _real_blocks(b, k)
+    store.x[cid, : 2 * k, : 2 * k] = x
+    store.x_inv[cid, : 2 * k, : 2 * k] = x_inv
+    store.blocks[cid, :k] = blocks
+    store.noise[cid] = np.abs(x).sum(axis=0).max() * np.abs(x_inv).sum(axis=0).max()
+    kinetic = np.linalg.inv(w)
+    store.kinetic[cid, :k, :k] = kinetic
+    # heights from the shape: x_j = offset_j + shape[j] . z_1 (+ centre of mass if free)
+    total = masses[lo : hi + 1].sum()
+    for jl in range(balls):
+        j = lo + jl
+        for i in range(k):
+            c = first + i
+            if grounded:
+                store.shape[cid, jl, i] = 1.0 if c <= j else 0.0
+            else:
+                above = masses[c : hi + 1].sum()
+                store.shape[cid, jl, i] = (1.0 if c <= j else 0.0) - above / total
+    if grounded:
+        for i in range(k):
+            store.eta_rest[cid, i] = -masses[i : hi + 1].sum()  # the weight above contact i
+        for jl in range(balls):
+            store.offset[cid, jl] = store.eta_rest[cid, : jl + 1].sum()
+    b2 = b @ b
+    for jl in range(balls):
+        j = lo + jl
+        row = np.zeros(2 * k)
+        row[:k] = store.shape[cid, jl, :k]
+        r1 = row @ b  # x'' = r1 . w
+        r2 = row @ b2  # x''' = r2 . w
+        store.c_x2[cid, jl] = _energy_constant(r1, w, k)
+        store.c_g_low[cid, jl] = _energy_constant(r1 + 2.0 * zeta[j] * r2, w, k)
+        above = zeta[j + 1] if j + 1 < n else 0.0
+        store.c_g_up[cid, jl] = _energy_constant(r1 + 2.0 * above * r2, w, k)
+    for i in range(k):
+        c = first + i
+        row = np.zeros(2 * k)
+        row[i] = 1.0
+        store.c_eta[cid, i] = _energy_constant(row @ b, w, k)
+        row[k + i] = 2.0 * zeta[c]
+        store.c_g[cid, i] = _energy_constant(row @ b, w, k)
+        store.c_rest[cid, i] = math.sqrt(1.0 + 4.0 * zeta[c] ** 2 * w[i, i])  # on E(z)
+    store.ready[cid] = True
+
+
+class Phase(NamedTuple):
+    """The clusters of one phase and their state at its start."""
+
+    count: int
+    lo: np.ndarray  # (N,) per phase cluster
+    hi: np.ndarray
+    cid: np.ndarray
+    grounded: np.ndarray
+    modes: np.ndarray  # (N, 2N) X^-1 z at the start
+    centre: np.ndarray  # (N, 2) centre of mass height and velocity (free clusters)
+    size: np.ndarray  # (N,) rounding scale of heights
+    speed: np.ndarray  # (N,) rounding scale of velocities
+    of_ball: np.ndarray  # (N,) the phase cluster of each ball
+
+
+@njit
+def _phase(active, x, v, store, masses, zeta):
+    """Split the stack into clusters for this set of active contacts; their modes at the start."""
+    n = masses.size
+    lo = np.zeros(n, dtype=np.int64)
+    hi = np.zeros(n, dtype=np.int64)
+    cid = np.zeros(n, dtype=np.int64)
+    grounded = np.zeros(n, dtype=np.bool_)
+    modes = np.zeros((n, 2 * n))
+    centre = np.zeros((n, 2))
+    size = np.zeros(n)
+    speed = np.zeros(n)
+    of_ball = np.zeros(n, dtype=np.int64)
+    count = 0
+    j = 0
+    while j < n:
+        start = j
+        while j + 1 < n and active[j + 1]:
+            j += 1
+        lo[count], hi[count] = start, j
+        grounded[count] = start == 0 and active[0]
+        cid[count] = _cluster_id(start, j, grounded[count], n)
+        if not store.ready[cid[count]]:
+            _build_cluster(store, cid[count], start, j, grounded[count], masses, zeta)
+        k = store.contacts[cid[count]]
+        first = 0 if grounded[count] else start + 1
+        total = masses[start : j + 1].sum()
+        centre[count, 0] = (masses[start : j + 1] * x[start : j + 1]).sum() / total
+        centre[count, 1] = (masses[start : j + 1] * v[start : j + 1]).sum() / total
+        size[count] = 1.0
+        for ball in range(start, j + 1):
+            of_ball[ball] = count
+            size[count] += abs(x[ball])
+            speed[count] += abs(v[ball])
+        z = np.zeros(2 * k)
+        for i in range(k):
+            c = first + i
+            below_x = x[c - 1] if c >= 1 else 0.0
+            below_v = v[c - 1] if c >= 1 else 0.0
+            z[i] = x[c] - below_x - store.eta_rest[cid[count], i]
+            z[k + i] = v[c] - below_v
+            size[count] += abs(store.eta_rest[cid[count], i])
+        if k > 0:
+            modes[count, : 2 * k] = (
+                np.ascontiguousarray(store.x_inv[cid[count], : 2 * k, : 2 * k]) @ z
+            )
+        count += 1
+        j += 1
+    return Phase(count, lo, hi, cid, grounded, modes, centre, size, speed, of_ball)
+
+
+@njit
+def _evaluate(tau, phase, store, n, x, v, a, shape_z, shape_w):
+    """Heights, velocities, accelerations of every ball at tau into the phase (into x, v, a), and
+    each phase cluster's z and w = z' (into shape_z, shape_w)."""
+    for p in range(phase.count):
+        cid = phase.cid[p]
+        k = store.contacts[cid]
+        d = 2 * k
+        shape_z[p, :d] = 0.0
+        shape_w[p, :d] = 0.0
+        for blk in range(k):
+            n0, n1, r0, r1 = exact._block_flow(
+                store.blocks[cid, blk], phase.modes[p, 2 * blk], phase.modes[p, 2 * blk + 1], tau
+            )
+            for row in range(d):  # z = X flow, w = X rate, without allocating
+                left, right = store.x[cid, row, 2 * blk], store.x[cid, row, 2 * blk + 1]
+                shape_z[p, row] += left * n0 + right * n1
+                shape_w[p, row] += left * r0 + right * r1
+        z = shape_z[p]
+        w = shape_w[p]
+        if phase.grounded[p]:
+            base_x = base_v = base_a = 0.0
+        else:
+            base_x = phase.centre[p, 0] + tau * (phase.centre[p, 1] - 0.5 * tau)
+            base_v = phase.centre[p, 1] - tau
+            base_a = -1.0
+        for ball in range(phase.lo[p], phase.hi[p] + 1):
+            jl = ball - phase.lo[p]
+            xs = vs = acc = 0.0
+            for i in range(k):
+                coefficient = store.shape[cid, jl, i]
+                xs += coefficient * z[i]
+                vs += coefficient * z[k + i]
+                acc += coefficient * w[k + i]
+            x[ball] = base_x + store.offset[cid, jl] + xs
+            v[ball] = base_v + vs
+            a[ball] = base_a + acc
+
+
+@njit
+def _energy_root(store, cid, vec):
+    """sqrt(2 E) of a cluster's shape state (z or w), E = (|v_1|^2 + v_2^T W^-1 v_2)/2."""
+    k = store.contacts[cid]
+    total = 0.0
+    for i in range(k):
+        total += vec[i] * vec[i]
+        for j in range(k):
+            total += vec[k + i] * store.kinetic[cid, i, j] * vec[k + j]
+    return math.sqrt(max(total, 0.0))
+
+
+@njit
+def advance_phase(
+    t, x0, v0, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried
+):
+    """Advance one phase, started at time t, to its first event.
+
+    Returns (event, index, tau, x, v): a contact switch (index the contact), an apex (index the
+    ball; horizon_ball's apex is ``horizon`` away, or -1 for the end of the run), the end, rest,
+    a stuck root finder or the step limit.
+    """
+    n = masses.size
+    phase = _phase(active, x0, v0, store, masses, zeta)
+    x = np.empty(n)
+    v = np.empty(n)
+    a = np.empty(n)
+    shape_z = np.zeros((n, 2 * n))
+    shape_w = np.zeros((n, 2 * n))
+    root_w = np.zeros(n)
+    everything = phase.count == 1 and phase.grounded[0] and store.contacts[phase.cid[0]] == n
+    tau = 0.0
+    last_step = 0.0
+    for _ in range(MAX_STEPS_PER_PHASE):
+        _evaluate(tau, phase, store, n, x, v, a, shape_z, shape_w)
+        for p in range(phase.count):
+            root_w[p] = _energy_root(store, phase.cid[p], shape_w[p])
+        clock = 1.0 + t + tau
+        step = horizon - tau
+        event, best = -1, np.inf
+        for c in range(n):
+            upper = phase.of_ball[c]
+            cid_u, jl_u = phase.cid[upper], c - phase.lo[upper]
+            noise_u = store.noise[cid_u]
+            tol_state = noise_u * (phase.size[upper] + phase.speed[upper] * (1.0 + tau) + tau * tau)
+            if active[c]:
+                i = c - (0 if phase.grounded[upper] else phase.lo[upper] + 1)
+                k = store.contacts[cid_u]
+                eta = store.eta_rest[cid_u, i] + shape_z[upper, i]
+                deta = shape_z[upper, k + i]
+                ddeta = shape_w[upper, k + i]
+                bound_eta = store.c_eta[cid_u, i] * root_w[upper]
+                bound_g = store.c_g[cid_u, i] * root_w[upper]
+            else:
+                rigid_u = 0.0 if phase.grounded[upper] else -1.0
+                bound_eta = store.c_x2[cid_u, jl_u] * root_w[upper]
+                bound_g = store.c_g_low[cid_u, jl_u] * root_w[upper]
+                if c == 0:
+                    eta, deta, ddeta = x[0], v[0], a[0]
+                    rigid = -rigid_u
+                else:
+                    lower = phase.of_ball[c - 1]
+                    cid_l, jl_l = phase.cid[lower], c - 1 - phase.lo[lower]
+                    eta, deta, ddeta = x[c] - x[c - 1], v[c] - v[c - 1], a[c] - a[c - 1]
+                    rigid_l = 0.0 if phase.grounded[lower] else -1.0
+                    rigid = abs(rigid_u - rigid_l)
+                    bound_eta += store.c_x2[cid_l, jl_l] * root_w[lower]
+                    bound_g += store.c_g_up[cid_l, jl_l] * root_w[lower]
+                    tol_state += store.noise[cid_l] * (
+                        phase.size[lower] + phase.speed[lower] * (1.0 + tau) + tau * tau
+                    )
+                bound_eta += rigid
+                bound_g += rigid
+            tol_state = ROUNDING * tol_state + carried
+            value, rate, tol, h = exact.contact_switch(
+                active[c], eta, deta, ddeta, zeta[c], bound_eta, bound_g, tol_state, clock
+            )
+            fresh = c == entered_by and tau == 0.0
+            if value <= -tol or (value <= tol and rate < 0.0 and not fresh):
+                shift = 0.0  # one Newton correction, as in twoball.exact.advance_phase
+                if rate < 0.0:
+                    shift = min(max(value / -rate, -last_step), h)
+                if c == entered_by and tau + shift <= 0.0:
+                    shift = 0.0
+                if tau + shift < best:
+                    best, event = tau + shift, c
+            else:
+                step = min(step, h)
+        if event >= 0:
+            _evaluate(best, phase, store, n, x, v, a, shape_z, shape_w)
+            return EV_SWITCH, event, best, x, v
+        if everything:
+            margin_ok = True
+            root_z = _energy_root(store, phase.cid[0], shape_z[0])
+            tol_rest = (
+                ROUNDING
+                * store.noise[phase.cid[0]]
+                * (phase.size[0] + phase.speed[0] * (1.0 + tau) + tau * tau)
+            )
+            for c in range(n):
+                margin = -store.eta_rest[phase.cid[0], c] - store.c_rest[phase.cid[0], c] * root_z
+                if not margin > tol_rest:
+                    margin_ok = False
+            if margin_ok:
+                return EV_REST, -1, tau, x, v
+        if tau + step >= horizon:
+            _evaluate(horizon, phase, store, n, x, v, a, shape_z, shape_w)
+            if horizon_ball >= 0:
+                return EV_APEX, horizon_ball, horizon, x, v
+            return EV_TIME, -1, horizon, x, v
+        if not 0.0 < step < np.inf:
+            return EV_STUCK, -1, tau, x0.copy(), v0.copy()
+        tau += step
+        last_step = step
+    return EV_STEPS, -1, tau, x0.copy(), v0.copy()
+
+
+class StackRun(NamedTuple):
+    """What :func:`run` returns."""
+
+    status: int
+    end_time: float
+    apexes: np.ndarray  # (n, 3): ball, t, height, in order
+    contacts: np.ndarray  # (n, 3): contact, start, end
+    contacts_first: np.ndarray  # (N,) intervals of each contact that start before h1
+    phases: np.ndarray  # (n, 2 + 2N): t, active bits, heights, velocities (if recorded)
+
+
+@njit
+def _grow(rows, count):
+    """``rows`` with room for one more row after ``count``."""
+    if count < rows.shape[0]:
+        return rows
+    grown = np.empty((max(2 * rows.shape[0], 8), rows.shape[1]))
+    grown[:count] = rows[:count]
+    return grown
+
+
+@njit
+def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases):
+    """Run a stack from rest at heights ``x_start`` until the top ball's ``apexes_wanted``-th
+    apex, ``t_end`` or rest (docs/model.md, "Stacks of N balls")."""
+    n = masses.size
+    store = new_clusters(n)
+    x = x_start.copy()
+    v = np.zeros(n)
+    active = np.zeros(n, dtype=np.bool_)
+    t = 0.0
+    apexes = np.empty((8, 3))
+    n_apex = 0
+    top_apexes = 0
+    contacts = np.empty((16, 3))
+    n_contacts = 0
+    opened = np.zeros(n)
+    first = np.zeros(n, dtype=np.int64)
+    phases = np.empty((16 if record_phases else 0, 2 + 2 * n))
+    n_phases = 0
+    status = STATUS_PHASES
+    entered_by = -1
+    carried = 0.0
+    for _ in range(MAX_PHASES):
+        if record_phases:
+            phases = _grow(phases, n_phases)
+            bits = 0
+            for c in range(n):
+                if active[c]:
+                    bits += 1 << c
+            phases[n_phases, 0], phases[n_phases, 1] = t, bits
+            phases[n_phases, 2 : 2 + n] = x
+            phases[n_phases, 2 + n :] = v
+            n_phases += 1
+        horizon, horizon_ball = t_end - t, -1
+        for ball in range(n):
+            free = not active[ball] and (ball == n - 1 or not active[ball + 1])
+            if free and 0.0 < v[ball] < horizon:
+                horizon, horizon_ball = v[ball], ball  # a free ball's apex is v away
+        event, index, tau, x, v = advance_phase(
+            t, x, v, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried
+        )
+        # A state that leaves a grounded cluster of several contacts carries the rounding of its
+        # closed form about the static rest (see twoball.exact.run).
+        grounded_top = 0
+        while active[0] and grounded_top + 1 < n and active[grounded_top + 1]:
+            grounded_top += 1
+        if grounded_top > 0:
+            cid = _cluster_id(0, grounded_top, True, n)
+            offset = np.abs(store.eta_rest[cid, : grounded_top + 1]).sum()
+            carried = max(carried, ROUNDING * store.noise[cid] * offset)
+        entered_by = index if event == EV_SWITCH else -1
+        t += tau
+        if event == EV_SWITCH:
+            if active[index]:
+                contacts = _grow(contacts, n_contacts)
+                contacts[n_contacts, 0], contacts[n_contacts, 1] = index, opened[index]
+                contacts[n_contacts, 2] = t
+                n_contacts += 1
+            else:
+                opened[index] = t
+                if top_apexes == 0:
+                    first[index] += 1
+            active[index] = not active[index]
+        elif event == EV_APEX:
+            v[index] = 0.0
+            apexes = _grow(apexes, n_apex)
+            apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, x[index]
+            n_apex += 1
+            if index == n - 1:
+                top_apexes += 1
+                if top_apexes == apexes_wanted:
+                    status = STATUS_DONE
+                    break
+        elif event == EV_TIME:
+            status = STATUS_DONE
+            break
+        elif event == EV_REST:
+            status = STATUS_REST
+            break
+        elif event == EV_STEPS:
+            status = STATUS_PHASES
+            break
+        else:
+            status = STATUS_STUCK
+            break
+    for c in range(n):  # contacts still open at the end end there
+        if active[c]:
+            contacts = _grow(contacts, n_contacts)
+            contacts[n_contacts, 0], contacts[n_contacts, 1], contacts[n_contacts, 2] = (
+                c,
+                opened[c],
+                t,
+            )
+            n_contacts += 1
+    return StackRun(
+        status, t, apexes[:n_apex].copy(), contacts[:n_contacts].copy(), first, phases[:n_phases]
+    )
+
+
+@njit
+def sample(phases, times, masses, zeta):
+    """Exact heights, velocities and contact forces at the given times from the recorded
+    phases: arrays (len(times), N) each."""
+    n = masses.size
+    store = new_clusters(n)
+    heights = np.empty((times.size, n))
+    speeds = np.empty((times.size, n))
+    forces = np.zeros((times.size, n))
+    x = np.empty(n)
+    v = np.empty(n)
+    a = np.empty(n)
+    shape_z = np.zeros((n, 2 * n))
+    shape_w = np.zeros((n, 2 * n))
+    active = np.zeros(n, dtype=np.bool_)
+    current = -1
+    phase = _phase(active, phases[0, 2 : 2 + n], phases[0, 2 + n :], store, masses, zeta)
+    for s in range(times.size):
+        index = max(np.searchsorted(phases[:, 0], times[s], side="right") - 1, 0)
+        bits = int(phases[index, 1])
+        for c in range(n):
+            active[c] = (bits >> c) & 1 == 1
+        if index != current:
+            phase = _phase(
+                active, phases[index, 2 : 2 + n], phases[index, 2 + n :], store, masses, zeta
+            )
+            current = index
+        _evaluate(times[s] - phases[index, 0], phase, store, n, x, v, a, shape_z, shape_w)
+        heights[s] = x
+        speeds[s] = v
+        for c in range(n):
+            if active[c]:
+                eta = x[c] - (x[c - 1] if c >= 1 else 0.0)
+                deta = v[c] - (v[c - 1] if c >= 1 else 0.0)
+                forces[s, c] = max(-(eta + 2.0 * zeta[c] * deta), 0.0)
+    return heights, speeds, forces
+
+
+# --- the public layer: validation, simulate_stack, the ICM chain -------------------------------
+
+FORCES = ("linear", "hertz")
+UNTIL = {"first": 1, "second": 2}
+NO_APEX_LIMIT = 2**62
+
+
+@dataclass(frozen=True)
+class Stack:
+    """A validated stack (docs/model.md, "Stacks of N balls"): masses relative to ball 0, the
+    restitution and damping ratio of each contact (floor first), the gaps, the floor contact
+    time and the heights at release."""
+
+    mass_ratios: tuple[float, ...]
+    eps: tuple[float, ...]
+    tau_ratios: tuple[float, ...]
+    height: float
+    masses: np.ndarray = field(repr=False)
+    zeta: np.ndarray = field(repr=False)
+    tau_f: float = field(repr=False)
+    x_start: np.ndarray = field(repr=False)
+
+    @property
+    def balls(self) -> int:
+        """N, the number of balls."""
+        return len(self.masses)
+
+
+def _values(name: str, values: object, count: int, what: str) -> list[float]:
+    """One value or ``count`` values of a declared parameter, checked."""
+    items = list(np.ravel(np.asarray(values, dtype=object)))
+    if len(items) == 1:
+        items = items * count
+    if len(items) != count:
+        raise ParameterError(f"{name} must hold one value or {count} ({what}); got {len(items)}")
+    return [check_value(name.rstrip("s") if name != "eps" else name, item) for item in items]
+
+
+def check_stack(
+    mass_ratios: object, eps: object, tau_ratios: object, *, height: float = DEFAULT_HEIGHT
+) -> Stack:
+    """Validate a stack's inputs with the two-ball model's ranges and derive the rest.
+
+    ``mass_ratios`` holds the N - 1 ratios m_i / m_(i-1) (each a ``mu``); ``eps`` one restitution
+    or N (the floor's, then each pair's); ``tau_ratios`` one gap or N - 1 (each a ``tau_ratio``,
+    the delay td_i over the floor contact time). Raises ``ParameterError`` (a ``ValueError``)
+    naming the parameter and its allowed range.
+    """
+    try:
+        ratios = list(np.ravel(np.asarray(mass_ratios, dtype=object)))
+    except (TypeError, ValueError):
+        ratios = [mass_ratios]
+    if not 1 <= len(ratios) <= MAX_BALLS - 1:
+        raise ParameterError(
+            f"mass_ratios must hold 1 to {MAX_BALLS - 1} values (N = 2 to {MAX_BALLS} balls); "
+            f"got {len(ratios)}"
+        )
+    ratios = [check_value("mu", value) for value in ratios]
+    balls = len(ratios) + 1
+    restitutions = _values("eps", eps, balls, "the floor's, then each pair's")
+    gaps = _values("tau_ratios", tau_ratios, balls - 1, "one per pair")
+    height = check_value("height", height)
+    masses = np.cumprod([1.0, *ratios])
+    if masses.min() < 1e-9 or masses.max() > 1e6:
+        raise ParameterError(
+            "the masses relative to ball 0 (products of mass_ratios) must lie in [1e-09, 1e+06]; "
+            f"got {masses.min():.3g} to {masses.max():.3g}"
+        )
+    zeta = np.empty(balls)
+    zeta[0] = decay_ratio(restitutions[0])
+    for i in range(1, balls):
+        reduced = masses[i - 1] * masses[i] / (masses[i - 1] + masses[i])
+        zeta[i] = decay_ratio(restitutions[i]) * math.sqrt(reduced)
+    tau_f = floor_contact_time(zeta[0])
+    x_start = np.empty(balls)
+    for i in range(balls):
+        x_start[i] = (math.sqrt(height) + sum(gaps[:i]) * tau_f / math.sqrt(2.0)) ** 2
+    return Stack(
+        tuple(ratios), tuple(restitutions), tuple(gaps), height, masses, zeta, tau_f, x_start
+    )
+
+
+@dataclass(frozen=True)
+class StackContact:
+    """One interval during which contact ``contact`` pushes (0: the floor, i: ball i on i-1)."""
+
+    contact: int
+    start: float
+    end: float
+
+
+@dataclass
+class StackTrajectory:
+    """Sampled heights, velocities (len(t), N) and contact forces (len(t), N; floor first)."""
+
+    t: np.ndarray
+    x: np.ndarray
+    v: np.ndarray
+    f: np.ndarray
+
+
+@dataclass
+class StackResult:
+    """The outcome of one stack drop: the top ball's apexes ``h1``, ``h2`` (as ``simulate``'s),
+    every ball's apexes in free flight, every contact interval, how the run ended."""
+
+    stack: Stack
+    force: str
+    apexes: list[list[tuple[float, float]]]  # per ball: (t, height) of each apex
+    contacts: list[StackContact]
+    contacts_first: list[int]  # intervals of each contact that start before h1
+    end_time: float
+    status: Status
+    trajectory: StackTrajectory | None = field(default=None, repr=False)
+
+    @property
+    def success(self) -> bool:
+        """True when the run reached what was asked or the stack came to rest."""
+        return self.status.success
+
+    @property
+    def h1(self) -> float | None:
+        """The top ball's first apex in free flight (None without one)."""
+        top = self.apexes[-1]
+        return top[0][1] if top else None
+
+    @property
+    def h2(self) -> float | None:
+        """The top ball's second apex (None without one)."""
+        top = self.apexes[-1]
+        return top[1][1] if len(top) > 1 else None
+
+    @property
+    def h_icm(self) -> float:
+        """The ICM chain's height for the top ball (:func:`icm_chain`)."""
+        return icm_chain(self.stack)[-1]
+
+
+def simulate_stack(
+    mass_ratios: object,
+    eps: object,
+    tau_ratios: object,
+    *,
+    height: float = DEFAULT_HEIGHT,
+    force: str = "linear",
+    until: str | float = "second",
+    t_eval: object = None,
+    throw: bool = True,
+) -> StackResult:
+    """Drop a stack of N balls and measure the top ball's bounces (docs/model.md, "Stacks of N
+    balls").
+
+    Parameters
+    ----------
+    mass_ratios : sequence of float
+        The N - 1 ratios m_i / m_(i-1), bottom up (for N = 2, ``[mu]``).
+    eps : float or sequence of float
+        One restitution for every contact, or N of them: the floor's, then each pair's.
+    tau_ratios : float or sequence of float
+        One gap or N - 1: ball i + 1 reaches its touching height td_i = tau_ratio_i * tau_f
+        after ball i would, in free fall.
+    height : float
+        Dimensionless drop height H of ball 0.
+    force : "linear" or "hertz"
+        The contact force: the linear spring-dashpot, solved exactly, or Hertz's with
+        Hunt-Crossley damping (:mod:`twoball.hertz`).
+    until : "first", "second" or float
+        The top ball's apex to run to, or a dimensionless time.
+    t_eval : array_like, optional
+        Times at which ``StackResult.trajectory`` samples heights, velocities and forces.
+    throw : bool
+        A run that fails raises :class:`~twoball.errors.SolverError`; with False the result says
+        so (``success``, ``status``).
+
+    Returns
+    -------
+    StackResult
+
+    Examples
+    --------
+    With two balls it is :func:`twoball.simulate`:
+
+    >>> import twoball
+    >>> from twoball.stack import simulate_stack
+    >>> pair = simulate_stack([0.01], 0.9, 0.01)
+    >>> single = twoball.simulate(0.9, 0.01, 0.01)
+    >>> bool(abs(pair.h2 - single.h2) < 1e-9 * single.h2), pair.contacts_first[1]
+    (True, 4)
+    """
+    stack = check_stack(mass_ratios, eps, tau_ratios, height=height)
+    if force not in FORCES:
+        raise ParameterError(f"force must be one of {', '.join(FORCES)}; got {force!r}")
+    apexes_wanted, t_end = _stop_rule(until)
+    times = None
+    if t_eval is not None:
+        times = np.atleast_1d(np.asarray(t_eval, dtype=float))
+        if times.ndim != 1 or not np.isfinite(times).all():
+            raise ParameterError("t_eval must be a one-dimensional array of finite times")
+    if force == "hertz":
+        from twoball import hertz
+
+        result = hertz.simulate(stack, apexes_wanted, t_end, times)
+    else:
+        out = run(stack.masses, stack.zeta, stack.x_start, apexes_wanted, t_end, times is not None)
+        apexes: list[list[tuple[float, float]]] = [[] for _ in range(stack.balls)]
+        for ball, when, where in out.apexes:
+            apexes[int(ball)].append((float(when), float(where)))
+        trajectory = None
+        if times is not None:
+            heights, speeds, forces = sample(out.phases, times, stack.masses, stack.zeta)
+            trajectory = StackTrajectory(times, heights, speeds, forces)
+        result = StackResult(
+            stack=stack,
+            force=force,
+            apexes=apexes,
+            contacts=[StackContact(int(c), float(s), float(e)) for c, s, e in out.contacts],
+            contacts_first=[int(count) for count in out.contacts_first],
+            end_time=float(out.end_time),
+            status=Status(out.status),
+            trajectory=trajectory,
+        )
+    bound = _apex_bound(stack)
+    top = [h for _, h in result.apexes[-1]]
+    if any(not math.isfinite(h) or h > bound * (1.0 + 1e-9) for h in top):
+        result.status = Status.IMPOSSIBLE
+    if throw and not result.success:
+        raise SolverError(f"the stack run failed on {stack}: {result.status.message}", result)
+    return result
+
+
+def _stop_rule(until: str | float) -> tuple[int, float]:
+    """(top-ball apexes wanted, end time) for an ``until`` argument."""
+    if isinstance(until, str):
+        if until not in UNTIL:
+            raise ParameterError(f"until must be 'first', 'second' or a time > 0; got {until!r}")
+        return UNTIL[until], math.inf
+    try:
+        t_end = float(until)
+    except (TypeError, ValueError):
+        raise ParameterError(
+            f"until must be 'first', 'second' or a time > 0; got {until!r}"
+        ) from None
+    if not (math.isfinite(t_end) and t_end > 0.0):
+        raise ParameterError(f"until must be 'first', 'second' or a finite time > 0; got {until!r}")
+    return NO_APEX_LIMIT, t_end
+
+
+def _apex_bound(stack: Stack) -> float:
+    """The highest the top ball can fly: all the energy at release in it (docs/model.md)."""
+    energy = float((stack.masses * stack.x_start).sum())
+    return energy / stack.masses[-1]
+
+
+def icm_chain(stack: Stack) -> list[float]:
+    """The textbook chain of independent collisions (docs/model.md, "Stacks of N balls").
+
+    Ball 0 hits the floor at sqrt(2H) and leaves with eps_0 times it; then ball i, still falling
+    at sqrt(2H), meets ball i - 1 going up, with restitution eps_i. Returns each ball's rebound
+    height above its contact point (v^2/2). For an elastic three-ball stack with vanishing mass
+    ratios the top ball leaves at 7 sqrt(2H): 49 times as high.
+    """
+    impact = math.sqrt(2.0 * stack.height)
+    up = stack.eps[0] * impact
+    heights = [up * up / 2.0]
+    for i in range(1, stack.balls):
+        below, mass = stack.masses[i - 1], stack.masses[i]
+        restitution = stack.eps[i]
+        # momentum and restitution: (u - u_below) = -eps (v - v_below), with v = -impact
+        up = (below * up - mass * impact + restitution * below * (up + impact)) / (below + mass)
+        heights.append(up * up / 2.0)
+    return heights
