@@ -2,9 +2,9 @@
 own Python functions standing in for them while the compiler runs.
 
 The kernels are the ``@njit`` functions of :mod:`twoball.model`, :mod:`twoball.exact` and
-:mod:`twoball.stack`. numba
-compiles them on first call (15-40 s for the solver) and keeps the machine code on disk, beside
-the sources or in ``NUMBA_CACHE_DIR``. Two rules follow from how programs are deployed:
+:mod:`twoball.stack`. numba compiles them on first call (15-40 s for the two-ball solver, about
+as long again for the N-ball one) and keeps the machine code on disk, beside the sources or in
+``NUMBA_CACHE_DIR``. Two rules follow from how programs are deployed:
 
 - A cache that cannot be written never stops a program. The location is chosen once, before
   any kernel is declared: ``NUMBA_CACHE_DIR`` if it can be written; if it cannot (a prebuilt

@@ -643,14 +643,25 @@ class Stack:
         return len(self.masses)
 
 
-def _values(name: str, values: object, count: int, what: str) -> list[float]:
+def _checked(declared: str, shown: str, value: object) -> float:
+    """``value`` checked against the declared range of ``declared``, errors naming ``shown``."""
+    try:
+        return check_value(declared, value)
+    except ParameterError as error:
+        raise ParameterError(str(error).replace(declared, shown, 1)) from None
+
+
+def _values(name: str, declared: str, values: object, count: int, what: str) -> list[float]:
     """One value or ``count`` values of a declared parameter, checked."""
-    items = list(np.ravel(np.asarray(values, dtype=object)))
+    try:
+        items = list(np.ravel(np.asarray(values, dtype=object)))
+    except (TypeError, ValueError):
+        items = [values]
     if len(items) == 1:
-        items = items * count
+        return [_checked(declared, name, items[0])] * count
     if len(items) != count:
         raise ParameterError(f"{name} must hold one value or {count} ({what}); got {len(items)}")
-    return [check_value(name.rstrip("s") if name != "eps" else name, item) for item in items]
+    return [_checked(declared, f"{name}[{i}]", item) for i, item in enumerate(items)]
 
 
 def check_stack(
@@ -672,10 +683,10 @@ def check_stack(
             f"mass_ratios must hold 1 to {MAX_BALLS - 1} values (N = 2 to {MAX_BALLS} balls); "
             f"got {len(ratios)}"
         )
-    ratios = [check_value("mu", value) for value in ratios]
+    ratios = [_checked("mu", f"mass_ratios[{i}]", value) for i, value in enumerate(ratios)]
     balls = len(ratios) + 1
-    restitutions = _values("eps", eps, balls, "the floor's, then each pair's")
-    gaps = _values("tau_ratios", tau_ratios, balls - 1, "one per pair")
+    restitutions = _values("eps", "eps", eps, balls, "the floor's, then each pair's")
+    gaps = _values("tau_ratios", "tau_ratio", tau_ratios, balls - 1, "one per pair")
     height = check_value("height", height)
     masses = np.cumprod([1.0, *ratios])
     if masses.min() < 1e-9 or masses.max() > 1e6:

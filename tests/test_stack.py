@@ -1,0 +1,211 @@
+"""The N-ball stack (twoball.stack) against independent computations: the two-ball solver, a
+DOP853 reference, energy, and the ICM chain (docs/model.md, "Stacks of N balls")."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from cases import BENIGN, CLOSE_UP, CLOSE_UP_CONTACTS
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from stack_reference import reference_stack
+
+import twoball
+from twoball.errors import ParameterError, SolverError, Status
+from twoball.stack import check_stack, icm_chain, simulate_stack
+
+
+def _energy(stack, trajectory) -> np.ndarray:
+    """Kinetic + gravity + the springs of every overlapping contact: never rises (docs/model.md,
+    "Stacks of N balls"; a clamped contact that overlaps stores no more than 1/2 eta^2, and its
+    overlap shrinks while the force is clamped)."""
+    masses = stack.masses
+    heights, speeds = trajectory.x, trajectory.v
+    eta = np.concatenate([heights[:, :1], np.diff(heights, axis=1)], axis=1)
+    springs = 0.5 * np.where(eta < 0.0, eta, 0.0) ** 2
+    return (
+        0.5 * (masses * speeds**2).sum(axis=1)
+        + (masses * heights).sum(axis=1)
+        + springs.sum(axis=1)
+    )
+
+
+@pytest.mark.parametrize("case", [CLOSE_UP, BENIGN])
+def test_two_balls_are_simulate(case):
+    pair = simulate_stack([case.mu], case.eps, case.tau_ratio)
+    assert pair.h1 == pytest.approx(case.h1, abs=1e-4)  # the digits printed in docs/model.md
+    assert pair.h2 == pytest.approx(case.h2, abs=1e-4)
+    single = twoball.simulate(*case.drop)
+    assert abs(pair.h1 - single.h1) <= 1e-12 * single.h1
+    assert abs(pair.h2 - single.h2) <= 1e-12 * single.h2
+    if case is CLOSE_UP:
+        assert pair.contacts_first[1] == CLOSE_UP_CONTACTS
+
+
+def test_two_balls_are_simulate_on_a_sample():
+    """20 seeded drops, eps 0.3-1 and eps12 apart, mu 1e-2 to 10, gaps 0 to 1.5."""
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        eps, eps12 = rng.uniform(0.3, 1.0, 2)
+        mu, tau_ratio = 10 ** rng.uniform(-2, 1), rng.uniform(0.0, 1.5)
+        single = twoball.simulate(eps, mu, tau_ratio, eps12=eps12)
+        pair = simulate_stack([mu], [eps, eps12], tau_ratio)
+        assert pair.contacts_first[1] == single.contacts_first
+        assert pair.contacts_first[0] == single.floor_contacts_first
+        theirs_all = list(zip(single.apex_t, single.apex_h, strict=True))
+        for mine, theirs in zip(pair.apexes[-1], theirs_all, strict=True):
+            assert abs(mine[1] - theirs[1]) <= 1e-12 * theirs[1], (eps, eps12, mu, tau_ratio)
+            assert mine[0] == pytest.approx(theirs[0], rel=1e-12)
+
+
+@pytest.mark.slow  # DOP853 with bounded steps: 5-10 s a drop
+@pytest.mark.parametrize(
+    "stack",
+    [([0.2, 0.2], 0.9, 0.2), ([0.3, 0.1], [0.8, 0.7, 0.9], [0.5, 0.1])],
+    ids=["paper-like", "three-eps"],
+)
+def test_three_balls_agree_with_dop853(stack):
+    result = simulate_stack(*stack)
+    made = result.stack
+    heights, first = reference_stack(made.masses, made.zeta, made.x_start)
+    assert first == result.contacts_first
+    assert heights[0] == pytest.approx(result.h1, rel=1e-9)
+    assert heights[1] == pytest.approx(result.h2, rel=1e-9)
+
+
+@pytest.mark.parametrize("stack", [([0.2, 0.2], 0.9, 0.2), ([0.5] * 5, 0.7, 0.3)])
+def test_energy_never_rises(stack):
+    first = simulate_stack(*stack)
+    times = np.unique(
+        np.concatenate(
+            [np.linspace(0.0, first.end_time, 4001)]
+            + [np.linspace(c.start, c.end, 9) for c in first.contacts]
+        )
+    )
+    result = simulate_stack(*stack, t_eval=times)
+    energy = _energy(result.stack, result.trajectory)
+    scale = energy[0]
+    assert np.diff(energy).max() <= 1e-11 * scale
+    assert energy[-1] < energy[0]  # damped contacts lose energy
+
+
+def test_elastic_stack_conserves_energy_between_contacts():
+    result = simulate_stack([0.2, 0.2], 1.0, 0.5, t_eval=np.linspace(0.0, 400.0, 2001))
+    energy = _energy(result.stack, result.trajectory)
+    assert np.ptp(energy) <= 1e-11 * energy[0]
+
+
+def test_light_elastic_stack_approaches_the_icm_chain():
+    """Tiny mass ratios, collisions far apart (big gaps, a drop high enough that they happen at
+    the floor): the top ball of three goes up 49 times as high, less O(mass ratio)."""
+    ratios = [1e-3, 1e-3]
+    result = simulate_stack(ratios, 1.0, [2.0, 2.0], height=1e8, until="first")
+    chain = icm_chain(result.stack)
+    assert chain[-1] / result.stack.height == pytest.approx(49.0, rel=2e-2)
+    firsts = [next(c for c in result.contacts if c.contact == i) for i in range(3)]
+    assert firsts[0].end < firsts[1].start and firsts[1].end < firsts[2].start  # independent
+    assert result.contacts_first[-1] == 1
+    assert result.h1 == pytest.approx(chain[-1], rel=2e-3)
+
+
+def test_icm_chain_is_the_two_ball_icm():
+    made = check_stack([0.05], 0.816, 0.0)
+    assert icm_chain(made)[-1] == pytest.approx(twoball.simulate(0.816, 0.05, 0.0).h_icm, rel=1e-12)
+
+
+def test_eight_balls_run_to_the_second_apex():
+    result = simulate_stack([0.6] * 7, 0.9, 0.3)
+    assert result.success and result.status is Status.DONE
+    assert len(result.apexes[-1]) == 2
+    assert all(count >= 1 for count in result.contacts_first)
+    assert 0 < result.h1 <= result.h_icm * 10
+
+
+def test_trajectory_is_the_apexes_and_forces_push():
+    result = simulate_stack([0.2, 0.2], 0.9, 0.2, until="first")
+    t1, h1 = result.apexes[-1][0]
+    times = np.array([0.0, t1])
+    sampled = simulate_stack([0.2, 0.2], 0.9, 0.2, until="first", t_eval=times).trajectory
+    assert sampled.x[0] == pytest.approx(result.stack.x_start, rel=1e-15)
+    assert sampled.x[1, -1] == pytest.approx(h1, rel=1e-12)
+    assert abs(sampled.v[1, -1]) <= 1e-9
+    forces = simulate_stack(
+        [0.2, 0.2], 0.9, 0.2, until="first", t_eval=np.linspace(0, t1, 3001)
+    ).trajectory.f
+    assert forces.min() >= 0.0 and forces.max() > 1.0
+
+
+def test_until_a_time_and_rest():
+    running = simulate_stack([0.2, 0.2], 0.9, 0.2, until=50.0)
+    assert running.end_time == pytest.approx(50.0) and running.status is Status.DONE
+    resting = simulate_stack([0.5, 0.5], 0.3, 0.0, height=10.0, until=1e5)
+    assert resting.status is Status.REST and resting.end_time < 1e5
+
+
+@pytest.mark.parametrize(
+    ("arguments", "words"),
+    [
+        (([], 0.9, 0.2), "mass_ratios must hold 1 to"),
+        (([0.2, -1.0], 0.9, 0.2), "mass_ratios[1] must be a finite number in [1e-09, 1e+06]"),
+        (([0.2, 0.2], [0.9, 0.8], 0.2), "eps must hold one value or 3"),
+        (([0.2, 0.2], 1.5, 0.2), "eps must be a finite number in [0.01, 1]"),
+        (([0.2, 0.2], 0.9, [0.1, 0.2, 0.3]), "tau_ratios must hold one value or 2"),
+        (([0.2, 0.2], [0.9, 0.9, 0.0], 0.2), "eps[2] must be a finite number in [0.01, 1]"),
+        (([0.2, 0.2], 0.9, float("nan")), "tau_ratios must be a finite number"),
+        (([1e-5, 1e-5], 0.9, 0.2), "masses relative to ball 0"),
+        (([0.2] * 16, 0.9, 0.2), "mass_ratios must hold 1 to 15"),
+    ],
+)
+def test_bad_input_names_the_parameter(arguments, words):
+    with pytest.raises(ParameterError) as caught:
+        simulate_stack(*arguments)
+    assert words in str(caught.value)
+
+
+def test_bad_options():
+    with pytest.raises(ParameterError, match="force must be one of linear, hertz"):
+        simulate_stack([0.2], 0.9, 0.2, force="spring")
+    with pytest.raises(ParameterError, match="until must be"):
+        simulate_stack([0.2], 0.9, 0.2, until="third")
+    with pytest.raises(ParameterError, match="height must be"):
+        simulate_stack([0.2], 0.9, 0.2, height=0.0)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    ratios=st.lists(st.floats(0.01, 10.0), min_size=1, max_size=4),
+    eps=st.floats(0.3, 1.0),
+    gap=st.floats(0.0, 1.0),
+    height=st.floats(10.0, 1e5),
+)
+def test_any_stack_reaches_an_honest_answer(ratios, eps, gap, height):
+    """Random stacks in the tested domain end as asked (second apex or rest), every contact
+    interval is ordered and the top ball never flies above what the energy at release allows."""
+    if math.prod(ratios) < 1e-9 or math.prod(ratios) > 1e6:
+        return
+    result = simulate_stack(ratios, eps, gap, height=height, throw=False)
+    assert result.success, result.status
+    energy = float((result.stack.masses * result.stack.x_start).sum())
+    for _, apex in result.apexes[-1]:
+        assert apex <= energy / result.stack.masses[-1] * (1 + 1e-9)
+    for contact in result.contacts:
+        assert contact.start <= contact.end
+
+
+def test_failure_is_loud(monkeypatch):
+    """A run cut off by the phase limit raises unless throw=False, as simulate does (run with
+    the kernels' Python functions, which read the limit when called)."""
+    from twoball import jit
+    from twoball import stack as stack_module
+
+    monkeypatch.setattr(stack_module, "MAX_PHASES", 3)
+    jit.use_python_kernels()
+    try:
+        with pytest.raises(SolverError, match="phase or step limit"):
+            simulate_stack([0.2, 0.2], 0.9, 0.2)
+        result = simulate_stack([0.2, 0.2], 0.9, 0.2, throw=False)
+    finally:
+        jit.use_compiled_kernels()
+    assert not result.success and result.status is Status.PHASE_LIMIT
