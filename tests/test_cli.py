@@ -56,3 +56,26 @@ def test_bad_input_exits_2_with_one_line(arguments, named):
 def test_unknown_command_exits_2():
     completed = _run("fly")
     assert completed.returncode == 2 and len(completed.stderr.strip().splitlines()) == 1
+
+
+def test_stack_json_matches_the_library():
+    from twoball.stack import simulate_stack
+
+    completed = _run(
+        "stack", "--mass-ratios", "0.3,0.1", "--eps", "0.8,0.7,0.9", "--tau-ratios", "0.5,0.1",
+        "--json",
+    )  # fmt: skip
+    assert completed.returncode == 0, completed.stderr
+    data = json.loads(completed.stdout)
+    result = simulate_stack([0.3, 0.1], [0.8, 0.7, 0.9], [0.5, 0.1])
+    assert (data["h1"], data["h2"]) == (result.h1, result.h2)
+    assert data["contacts_first"] == result.contacts_first and data["balls"] == 3
+    assert data["h1_over_icm"] == result.h1 / result.h_icm
+
+
+def test_stack_bad_input_exits_2_naming_it():
+    completed = _run("stack", "--mass-ratios", "0.3,0.1", "--eps", "0.8,0.7")
+    assert completed.returncode == 2
+    assert completed.stderr.strip() == (
+        "twoball: error: eps must hold one value or 3 (the floor's, then each pair's); got 2"
+    )

@@ -366,6 +366,8 @@ PATHS = ["out", "cube.zarr", "/proc/nope", "/nonexistent/deeper", "/dev/null", "
 AXES_ = ["0.9", "0.5:1:2", "0.5:1:2:log", "0.01:1:2:log", "0.9", "0.5:1:2", "1/3", "0.01",
          "1:0.5:2", "0.5:1:0", "0.5:1", "0.5:1:2:cubic", "0:1:2:log", "0.5:1:100000", "x:y:z",
          "2", "1e-12"]  # fmt: skip
+LISTS = ["0.2", "0.2,0.2", "0.5,0.5,0.5", "0.9,0.8", "0.9,0.8,0.7", "1e-5,1e-5", "a,b", "",
+         "0.2,,0.3", "1e6,1e6", "1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1", "nan", "0"]  # fmt: skip
 # Per command: (option, values it may take, required); a flag has no values.
 COMMAND_OPTIONS = {
     "sweep": [("--eps", AXES_, True), ("--mu", AXES_, True), ("--tau-ratio", AXES_, True),
@@ -380,6 +382,11 @@ COMMAND_OPTIONS = {
                   ("--workers", NUMBERS, False), ("--quick", None, False)],
     "bench": [("--cases", NUMBERS, False), ("--seed", NUMBERS, False),
               ("--repeats", NUMBERS, False)],
+    "stack": [("--mass-ratios", LISTS, True), ("--eps", LISTS, False),
+              ("--tau-ratios", LISTS, False), ("--height", NUMBERS, False),
+              ("--force", ["linear", "spring"], False),
+              ("--until", ["first", "second", "50", "-1", "third"], False),
+              ("--json", None, False)],
 }  # fmt: skip
 
 
@@ -438,6 +445,7 @@ BENCH_FIGURES = ("exact_median_s", "lsoda_median_s", "speedup_median", "speedup_
           "--workers", "1", "--dtype", "float32", "--chunks", "1,1,1", "--quiet"])  # fmt: skip
 @example(arguments=["report"])
 @example(arguments=["bench", "--cases", "1", "--repeats", "1"])
+@example(arguments=["stack", "--mass-ratios", "0.2,0.2", "--eps", "0.9,0.8,0.7", "--json"])
 def test_every_command_gives_an_answer_or_one_line_never_a_traceback(arguments, recorded_studies):
     import tempfile
 

@@ -142,6 +142,66 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+# stack
+
+
+def _numbers(text: str) -> list[float]:
+    """Comma-separated numbers (each as :func:`_number`), for argparse."""
+    return [_number(part.strip()) for part in text.split(",")]
+
+
+def _add_stack(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "stack", help="drop a stack of N balls and print the top ball's bounces"
+    )
+    parser.add_argument(
+        "--mass-ratios",
+        type=_numbers,
+        required=True,
+        help="m_i/m_(i-1) bottom up, comma-separated: N-1 values for N balls",
+    )
+    parser.add_argument(
+        "--eps", type=_numbers, default=[0.9], help="one restitution, or N: floor first"
+    )
+    parser.add_argument(
+        "--tau-ratios", type=_numbers, default=[0.0], help="one gap td/tau_f, or N-1"
+    )
+    parser.add_argument(
+        "--height", type=_number, default=DEFAULT_HEIGHT, help="dimensionless drop height H > 0"
+    )
+    parser.add_argument("--force", default="linear", help="linear (exact) or hertz")
+    parser.add_argument("--until", type=_until, default="second", help="first, second or a time")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.set_defaults(func=_stack)
+
+
+def _stack(args: argparse.Namespace) -> int:
+    from twoball.stack import simulate_stack
+
+    result = simulate_stack(
+        args.mass_ratios,
+        args.eps,
+        args.tau_ratios,
+        height=args.height,
+        force=args.force,
+        until=args.until,
+    )
+    summary = result.summary()
+    if args.json:
+        print(json.dumps(summary))
+        return 0
+    width = max(len(key) for key in summary)
+    for key, value in summary.items():
+        if isinstance(value, list):
+            shown = " ".join("-" if v is None else f"{v:.12g}" for v in value)
+        elif isinstance(value, float):
+            shown = f"{value:.12g}"
+        else:
+            shown = "-" if value is None else value
+        print(f"{key:<{width}}  {shown}")
+    return 0
+
+
 # bench
 
 
@@ -359,6 +419,7 @@ def _many_contacts(args: argparse.Namespace) -> int:
 # The commands, in the order --help lists them.
 COMMANDS = (
     _add_simulate,
+    _add_stack,
     _add_bench,
     _add_sweep,
     _add_report,

@@ -763,6 +763,27 @@ class StackResult:
         """The ICM chain's height for the top ball (:func:`icm_chain`)."""
         return icm_chain(self.stack)[-1]
 
+    def summary(self) -> dict[str, object]:
+        """The observables as plain values (JSON-ready: None where absent)."""
+        stack = self.stack
+        return {
+            "balls": stack.balls,
+            "mass_ratios": list(stack.mass_ratios),
+            "eps": list(stack.eps),
+            "tau_ratios": list(stack.tau_ratios),
+            "height": stack.height,
+            "force": self.force,
+            "h1": self.h1,
+            "h2": self.h2,
+            "h_icm_chain": self.h_icm,
+            "h1_over_icm": None if self.h1 is None else self.h1 / self.h_icm,
+            "h1_over_drop": None if self.h1 is None else self.h1 / stack.x_start[-1],
+            "h2_over_h1": None if self.h2 is None else self.h2 / self.h1,
+            "contacts_first": list(self.contacts_first),
+            "first_apexes": [apexes[0][1] if apexes else None for apexes in self.apexes],
+            "status": self.status.name,
+        }
+
 
 def simulate_stack(
     mass_ratios: object,
