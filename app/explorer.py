@@ -18,6 +18,7 @@ from .delayed_map import MapScene
 from .drop import DropScene
 from .lesson import Lesson
 from .scene import MODEL_PARAMETERS, Scene
+from .stack import StackScene
 from .state import SCENES, ExplorerState, read_query, url_query
 
 
@@ -55,6 +56,12 @@ SCENE_REGISTRY = {
         "General-purpose ODE solvers on the same drop at several tolerances, against the "
         "exact solver: how far off they are, and how long they take.",
         AccuracyScene,
+    ),
+    "stack": SceneEntry(
+        "Stack",
+        "Beyond the paper: a stack of 2 to 6 balls dropped together, each lighter than the one "
+        "below. Compare the top ball's bounce with the textbook chain of collisions.",
+        StackScene,
     ),
 }
 assert tuple(SCENE_REGISTRY) == SCENES
@@ -149,7 +156,8 @@ class Explorer(pn.viewable.Viewer):
                 pending = True
                 document.add_timeout_callback(write, URL_DELAY_MS)
 
-        self.state.param.watch(changed, [*MODEL_PARAMETERS, "scene", "units", "step"])
+        stack = ["balls", "stack_ratio", "stack_eps", "stack_gap", "force"]
+        self.state.param.watch(changed, [*MODEL_PARAMETERS, "scene", "units", "step", *stack])
         pn.state.onload(write)  # once the browser has reported its own URL
 
     @staticmethod

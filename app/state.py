@@ -14,7 +14,7 @@ import param
 
 from twoball.model import Parameters, check_value
 
-SCENES = ("drop", "closeup", "map", "accuracy")
+SCENES = ("drop", "closeup", "map", "accuracy", "stack")
 UNITS = ("dimensionless", "SI")
 
 # What the explorer's controls can show (inside the model's bounds): name -> (low, high).
@@ -27,6 +27,13 @@ APP_RANGES = {
 }
 # Query-string keys of the parameters that the URL carries.
 URL_KEYS = {"eps": "eps", "mu": "mu", "tau_ratio": "tau_ratio", "height": "H", "eps12": "eps12"}
+# The Stack scene's keys: checked against the bounds its parameters declare.
+STACK_URL_KEYS = {
+    "balls": "N",
+    "stack_ratio": "ratio",
+    "stack_eps": "stack_eps",
+    "stack_gap": "gap",
+}
 
 
 OPENING_DROP = {"eps": 0.9, "mu": 0.01, "tau_ratio": 0.01}  # the paper's: h2 = 5.4 h1
@@ -51,6 +58,18 @@ class ExplorerState(Parameters):
     )
     presentation = param.Boolean(
         default=False, doc="Large text and plots for a projector (URL: present=1)."
+    )
+    # the Stack scene's drop (twoball.stack): one mass ratio, restitution and gap for every pair
+    balls = param.Integer(default=3, bounds=(2, 6), doc="Balls in the stack.")
+    stack_ratio = param.Number(
+        default=0.2, bounds=(0.01, 1.0), doc="Each ball's mass over the one below it."
+    )
+    stack_eps = param.Number(default=0.9, bounds=(0.3, 1.0), doc="Restitution of every contact.")
+    stack_gap = param.Number(
+        default=0.2, bounds=(0.0, 2.0), doc="td/tau_f: how far apart the balls are at release."
+    )
+    force = param.Selector(
+        default="linear", objects=["linear", "hertz"], doc="The contact force of the stack."
     )
 
     def __init__(self, **params):
@@ -93,6 +112,21 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
         values[name] = value
         if message:
             messages.append(f"URL {key}: {message}")
+    for name, key in STACK_URL_KEYS.items():
+        if key in query:
+            value, message = _stack_value(name, query[key], getattr(defaults, name, None))
+            values[name] = value
+            if message:
+                messages.append(f"URL {key}: {message}")
+    if "force" in query:
+        forces = ExplorerState.param.force.objects
+        if query["force"] in forces:
+            values["force"] = query["force"]
+        else:
+            messages.append(
+                f"URL force: must be one of {', '.join(forces)}; got {query['force'][:40]!r}. "
+                "Using linear."
+            )
     if query.get("present") in ("1", "true", "yes"):
         values["presentation"] = True
     if "units" in query:
@@ -125,6 +159,24 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
     return values, messages
 
 
+def _stack_value(name: str, text: str, fallback: float) -> tuple[float, str | None]:
+    """A Stack scene value from the URL within its declared bounds, else the fallback and a
+    message (never raises)."""
+    declared = ExplorerState.param[name]
+    low, high = declared.bounds
+    try:
+        number = float(text)
+    except ValueError:
+        number = float("nan")
+    whole = name != "balls" or number.is_integer()
+    if not (low <= number <= high and whole):
+        kind = "a whole number" if name == "balls" else "a number"
+        return fallback, (
+            f"{name} must be {kind} in [{low:g}, {high:g}]; got {text[:40]!r}. Using {fallback:g}."
+        )
+    return (int(number) if name == "balls" else number), None
+
+
 def url_query(state: ExplorerState) -> dict[str, str]:
     """The query string that restores ``state`` (eps12 left out when equal to eps)."""
     query = {
@@ -133,6 +185,9 @@ def url_query(state: ExplorerState) -> dict[str, str]:
         if getattr(state, name) is not None
     }
     query["scene"] = state.scene
+    if state.scene == "stack":
+        query |= {key: f"{getattr(state, name):.12g}" for name, key in STACK_URL_KEYS.items()}
+        query["force"] = state.force
     if state.step:
         query["step"] = str(state.step)
     if state.presentation:

@@ -147,9 +147,13 @@ def wait_for_change(page, before: str, timeout: float = 20.0) -> str:
     raise AssertionError("the plotted data did not change")
 
 
-def press_slider(page, name: str, key: str = "ArrowRight", timeout_ms: float = 20000) -> float:
-    """Move a slider one step with the keyboard; ms until the plots changed (-1: they did not)."""
-    return page.evaluate(KEY_TO_PLOT_JS, [SLIDERS[name], key, timeout_ms])
+def press_slider(
+    page, name: str | int, key: str = "ArrowRight", timeout_ms: float = 20000
+) -> float:
+    """Move a slider one step with the keyboard; ms until the plots changed (-1: they did not).
+    ``name`` is one of :data:`SLIDERS` or a slider's index in the page."""
+    index = name if isinstance(name, int) else SLIDERS[name]
+    return page.evaluate(KEY_TO_PLOT_JS, [index, key, timeout_ms])
 
 
 def slider_titles(page) -> list[str]:

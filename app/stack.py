@@ -1,0 +1,251 @@
+"""The Stack scene: N balls dropped as one stack (the Astroblaster toy), the top ball's bounce
+against the textbook chain of independent collisions (docs/model.md, "Stacks of N balls").
+
+Drawn with Bokeh directly, like the drop scene. One mass ratio for every pair (each ball that
+much lighter than the one below, as in the toy), one restitution and one gap: the library and
+``twoball stack`` take a value per pair. Heights are dimensionless here whatever the units
+chosen for the two-ball scenes (the presets are for a basketball and one ball on it).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import panel as pn
+import param
+from bokeh.models import (
+    BoxAnnotation,
+    ColumnDataSource,
+    LabelSet,
+    Legend,
+    LegendItem,
+    Range1d,
+    Span,
+)
+from bokeh.plotting import figure
+
+from twoball.stack import StackResult, icm_chain, simulate_stack
+
+from .drop import frame_times
+from .scene import Scene, readable
+
+# Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first
+PALETTE = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9")
+BALL_RADIUS = 0.05  # the bottom ball, as a fraction of the plot's height
+SAMPLES = 1500  # plotted times over the drop, plus 9 through every contact
+CAPTION_HELP = (
+    "Each ball is *ratio* times as heavy as the one below it. The dotted green line is the "
+    "textbook chain of independent collisions (floor first, then each pair in turn): for three "
+    "elastic balls with a very light top ball, 49 times the drop height. Press play: the "
+    "animation slows down through each collision. The sliders in the side panel belong to the "
+    "two-ball scenes; the stack has its own, above, and shares only the drop height H "
+    "(advanced). Heights here are always dimensionless."
+)
+
+
+class StackScene(Scene):
+    """Every ball's height to the top ball's second apex, the ICM chain, an animation."""
+
+    watched = ("height", "balls", "stack_ratio", "stack_eps", "stack_gap", "force")
+    frame = param.Integer(default=0, bounds=(0, None), doc="Animation frame.")
+
+    def __init__(self, **params):
+        super().__init__(**params)
+        self.result: StackResult | None = None
+        self.times = np.zeros(1)
+        state = self.state.param
+        self.widgets = pn.Column(
+            pn.Row(
+                pn.widgets.IntSlider.from_param(state.balls, name="balls N"),
+                pn.widgets.FloatSlider.from_param(
+                    state.stack_ratio, name="mass ratio (each ball / the one below)", step=0.01
+                ),
+                sizing_mode="stretch_width",
+            ),
+            pn.Row(
+                pn.widgets.FloatSlider.from_param(state.stack_eps, name="eps", step=0.01),
+                pn.widgets.FloatSlider.from_param(state.stack_gap, name="gap td/tau_f", step=0.05),
+                pn.widgets.RadioButtonGroup.from_param(state.force, name="force"),
+                sizing_mode="stretch_width",
+            ),
+            sizing_mode="stretch_width",
+        )
+        self.player = pn.widgets.Player(
+            name="Animation",
+            start=0,
+            end=1,
+            value=0,
+            interval=40,
+            loop_policy="once",
+            show_loop_controls=False,
+            sizing_mode="stretch_width",
+            max_width=520,
+        )
+        self.player.link(self, value="frame")
+        self.summary = pn.pane.Markdown(sizing_mode="stretch_width")
+        self.curves = ColumnDataSource({"t": []})
+        self.apexes = ColumnDataSource({"t": [], "h": [], "text": []})
+        self.balls_drawn = ColumnDataSource({"x": [], "y": [], "r": [], "color": []})
+        self.icm_line = Span(
+            dimension="width", line_color="green", line_dash="dotted", line_width=2
+        )
+        self.cursor = Span(dimension="height", location=0.0, line_color="black", line_width=1)
+        self.heights = self._heights_figure()
+        self.animation = self._animation_figure()
+        for fig in (self.heights, self.animation):
+            readable(fig, self.state.presentation)
+        self.param.watch(self._show_frame, "frame")
+        self.param.watch(self._draw, "revision")
+
+    def _heights_figure(self):
+        fig = figure(
+            height=400,
+            sizing_mode="stretch_width",
+            title="Heights to the top ball's second apex",
+            y_range=Range1d(0.0, 1.0),
+            tools="pan,box_zoom,wheel_zoom,reset,save",
+            x_axis_label="time tau (dimensionless)",
+            y_axis_label="height X (dimensionless)",
+        )
+        fig.toolbar.autohide = True
+        items = []
+        for ball, color in enumerate(PALETTE):
+            self.curves.data[f"x{ball}"] = []
+            line = fig.line("t", f"x{ball}", source=self.curves, color=color, line_width=2)
+            items.append(LegendItem(label=f"ball {ball + 1}", renderers=[line]))
+        fig.scatter("t", "h", source=self.apexes, color="black", size=8)
+        fig.add_layout(
+            LabelSet(
+                x="t", y="h", text="text", source=self.apexes, text_font_size="10pt",
+                x_offset=-50, y_offset=6,
+            )
+        )  # fmt: skip
+        fig.add_layout(self.icm_line)
+        fig.add_layout(self.cursor)
+        self.legend = Legend(items=items, location="top_left", background_fill_alpha=0.7)
+        fig.add_layout(self.legend)
+        return fig
+
+    def _animation_figure(self):
+        fig = figure(
+            width=220,
+            height=400,
+            x_range=(-1, 1),
+            y_range=Range1d(0.0, 1.0),
+            tools="",
+            toolbar_location=None,
+            title="t = 0",
+        )
+        fig.add_layout(BoxAnnotation(top=0.0, fill_color="gray", fill_alpha=0.5))
+        fig.circle(
+            "x", "y", radius="r", radius_dimension="y", source=self.balls_drawn, color="color",
+            line_color="black",
+        )  # fmt: skip
+        fig.xaxis.visible = False
+        fig.xgrid.visible = False
+        return fig
+
+    def update(self) -> None:
+        s = self.state
+        arguments = ([s.stack_ratio] * (s.balls - 1), s.stack_eps, s.stack_gap)
+        options = {"height": s.height, "force": s.force, "throw": False}
+        first = simulate_stack(*arguments, **options)  # apexes and contacts only
+        times = np.unique(
+            np.concatenate(
+                [np.linspace(0.0, first.end_time, SAMPLES)]
+                + [np.linspace(c.start, c.end, 9) for c in first.contacts]
+            )
+        )
+        self.result = simulate_stack(*arguments, **options, until=first.end_time, t_eval=times)
+        self.result.apexes = first.apexes  # the run to a time stops at the same place
+        self.result.status = first.status
+        self.summary.object = self._summary_text()
+        self.times = frame_times(first.end_time, first.contacts)
+        self.player.end = len(self.times) - 1
+
+    def _draw(self, *events: param.parameterized.Event) -> None:
+        if not self.active:
+            return
+        self.current()
+        r = self.result
+        tr = r.trajectory
+        n = r.stack.balls
+        data = {"t": tr.t}
+        for ball in range(len(PALETTE)):
+            data[f"x{ball}"] = tr.x[:, ball] if ball < n else np.full(tr.t.size, np.nan)
+        self.curves.data = data
+        for ball, item in enumerate(self.legend.items):
+            item.visible = ball < n
+        top = r.apexes[-1]
+        self.apexes.data = {
+            "t": [t for t, _ in top],
+            "h": [h for _, h in top],
+            "text": [f"h{i + 1} = {h:.4g}" for i, (_, h) in enumerate(top)],
+        }
+        icm = icm_chain(r.stack)[-1]
+        self.icm_line.location = icm
+        highest = max(float(np.nanmax(tr.x)), icm)
+        low, high = -0.03 * highest, 1.12 * highest
+        self.heights.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
+        room = high / (1 - 2 * BALL_RADIUS * n)
+        self.animation.y_range.update(start=low, end=room, reset_start=low, reset_end=room)
+        self._show_frame()
+
+    def _show_frame(self, *events: param.parameterized.Event) -> None:
+        """Each ball drawn on its height, stacked: ball i stands on ball i-1 when X_i = X_(i-1)
+        (their overlap is the compression); radii follow the masses (equal density)."""
+        if self.result is None:
+            return
+        r = self.result
+        tr = r.trajectory
+        at = self.times[min(self.frame, len(self.times) - 1)]
+        span = self.animation.y_range.end - self.animation.y_range.start
+        radii = span * BALL_RADIUS * r.stack.masses ** (1 / 3)
+        heights = np.array([np.interp(at, tr.t, tr.x[:, ball]) for ball in range(r.stack.balls)])
+        below = np.concatenate([[0.0], np.cumsum(2 * radii)[:-1]])
+        self.balls_drawn.data = {
+            "x": [0.0] * r.stack.balls,
+            "y": list(heights + below + radii),
+            "r": list(radii),
+            "color": list(PALETTE[: r.stack.balls]),
+        }
+        self.cursor.location = at
+        self.animation.title.text = f"t = {at:.4g} tau"
+
+    def _summary_text(self) -> str:
+        r = self.result
+        s = self.state
+        if not r.success:
+            return f"**The solver could not finish this stack** ({r.status.message})."
+        icm = icm_chain(r.stack)[-1]
+        drop = r.stack.x_start[-1]
+        first = "no first bounce" if r.h1 is None else (
+            f"the top ball rises to **h1 = {r.h1:.4g}**, {r.h1 / drop:.3g} times its drop height"
+        )  # fmt: skip
+        second = "" if r.h2 is None else f"; then h2 = {r.h2:.4g} (h2/h1 = {r.h2 / r.h1:.3f})"
+        counts = ", ".join(
+            ("floor" if c == 0 else f"{c}-{c + 1}") + f": {k}"
+            for c, k in enumerate(r.contacts_first)
+        )
+        ratio = "" if r.h1 is None else f" (h1/chain = {r.h1 / icm:.3f})"
+        return (
+            f"{s.balls} balls, {s.force} force: {first}{second}.  \n"
+            f"Chain of independent collisions (dotted green): {icm:.4g}{ratio}. "
+            f"Contacts before h1 (floor, then each pair): {counts}."
+        )
+
+    def __panel__(self) -> pn.viewable.Viewable:
+        self._draw()
+        heights = pn.pane.Bokeh(
+            self.heights, sizing_mode="stretch_width", styles={"flex": "1 1 340px"}
+        )
+        plots = pn.FlexBox(
+            heights, pn.pane.Bokeh(self.animation), sizing_mode="stretch_width", flex_wrap="wrap"
+        )
+        return pn.Column(
+            self.widgets,
+            self.summary,
+            plots,
+            self.player,
+            pn.pane.Markdown(CAPTION_HELP, sizing_mode="stretch_width"),
+            sizing_mode="stretch_width",
+        )

@@ -1,0 +1,68 @@
+"""The Stack scene (app/stack.py) in Chromium: it shows the library's numbers, its sliders
+rerun the stack and write the URL, a bad URL value is reported, and a phone gets no sideways
+scroll. Screenshots go to test-artifacts/stack/."""
+
+from __future__ import annotations
+
+from urllib.parse import parse_qs, urlparse
+
+import pytest
+from appdriver import open_page, press_slider, slider_titles
+from playwright.sync_api import expect
+
+from twoball.stack import simulate_stack
+
+pytestmark = pytest.mark.browser
+
+
+def _query(page) -> dict[str, str]:
+    return {k: v[-1] for k, v in parse_qs(urlparse(page.url).query).items()}
+
+
+def test_the_stack_scene_shows_the_library_and_follows_its_sliders(browser, app_server, artifacts):
+    base, _ = app_server
+    folder = artifacts / "stack"
+    folder.mkdir(exist_ok=True)
+    context, page, errors = open_page(browser, f"{base}/app?scene=stack&N=3&ratio=0.2&gap=0.2")
+    try:
+        expected = simulate_stack([0.2, 0.2], 0.9, 0.2)
+        expect(page.get_by_text("3 balls, linear force")).to_be_visible(timeout=60_000)
+        expect(page.get_by_text(f"h1 = {expected.h1:.4g}").first).to_be_visible()
+        page.screenshot(path=folder / "three.png", full_page=True)
+        balls = next(i for i, t in enumerate(slider_titles(page)) if t.startswith("balls N"))
+        assert press_slider(page, balls) > 0, "the balls slider did not redraw the stack"
+        four = simulate_stack([0.2] * 3, 0.9, 0.2)
+        expect(page.get_by_text("4 balls, linear force")).to_be_visible()
+        expect(page.get_by_text(f"h1 = {four.h1:.4g}").first).to_be_visible()
+        page.wait_for_timeout(600)  # the URL is written shortly after a change
+        assert _query(page)["N"] == "4" and _query(page)["scene"] == "stack"
+        page.screenshot(path=folder / "four.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_a_bad_stack_value_in_the_url_is_reported(browser, app_server):
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?scene=stack&N=9&force=spring")
+    try:
+        expect(page.get_by_text("URL N: balls must be a whole number in [2, 6]")).to_be_visible(
+            timeout=60_000
+        )
+        expect(page.get_by_text("URL force: must be one of linear, hertz")).to_be_visible()
+        expect(page.get_by_text("3 balls, linear force")).to_be_visible()
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_the_stack_scene_fits_a_phone(browser, app_server, artifacts):
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?scene=stack", viewport=(390, 844))
+    try:
+        expect(page.get_by_text("3 balls, linear force")).to_be_visible(timeout=60_000)
+        assert page.evaluate("document.documentElement.scrollWidth") <= 390
+        page.screenshot(path=artifacts / "stack" / "phone.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
