@@ -446,6 +446,8 @@ BENCH_FIGURES = ("exact_median_s", "lsoda_median_s", "speedup_median", "speedup_
 @example(arguments=["report"])
 @example(arguments=["bench", "--cases", "1", "--repeats", "1"])
 @example(arguments=["stack", "--mass-ratios", "0.2,0.2", "--eps", "0.9,0.8,0.7", "--json"])
+@example(arguments=["stack", "--mass-ratios", "0.3", "--tau-ratios", "0.2", "--force", "hertz"])
+@example(arguments=["stack", "--mass-ratios", "0.3", "--eps", "0.01", "--force", "hertz"])
 def test_every_command_gives_an_answer_or_one_line_never_a_traceback(arguments, recorded_studies):
     import tempfile
 

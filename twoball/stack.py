@@ -700,12 +700,16 @@ def check_stack(
         reduced = masses[i - 1] * masses[i] / (masses[i - 1] + masses[i])
         zeta[i] = decay_ratio(restitutions[i]) * math.sqrt(reduced)
     tau_f = floor_contact_time(zeta[0])
-    x_start = np.empty(balls)
-    for i in range(balls):
-        x_start[i] = (math.sqrt(height) + sum(gaps[:i]) * tau_f / math.sqrt(2.0)) ** 2
+    x_start = release_heights(height, gaps, tau_f)
     return Stack(
         tuple(ratios), tuple(restitutions), tuple(gaps), height, masses, zeta, tau_f, x_start
     )
+
+
+def release_heights(height: float, tau_ratios: tuple[float, ...], tau_f: float) -> np.ndarray:
+    """X_i at release: (sqrt(H) + sum_(j<i) td_j / sqrt(2))^2 with td_j = tau_ratio_j tau_f."""
+    delays = np.concatenate([[0.0], np.cumsum(tau_ratios)]) * tau_f
+    return (math.sqrt(height) + delays / math.sqrt(2.0)) ** 2
 
 
 @dataclass(frozen=True)
@@ -848,7 +852,14 @@ def simulate_stack(
     if force == "hertz":
         from twoball import hertz
 
+        if min(stack.eps) < hertz.SMALLEST_RESTITUTION:
+            raise ParameterError(
+                f"eps must be at least {hertz.SMALLEST_RESTITUTION:g} with the hertz force "
+                f"(tested range [{hertz.SMALLEST_RESTITUTION:g}, 1]); got {min(stack.eps):g}"
+            )
+
         result = hertz.simulate(stack, apexes_wanted, t_end, times)
+        stack = result.stack  # its gaps are in units of the Hertz floor contact
     else:
         out = run(stack.masses, stack.zeta, stack.x_start, apexes_wanted, t_end, times is not None)
         apexes: list[list[tuple[float, float]]] = [[] for _ in range(stack.balls)]

@@ -1,0 +1,118 @@
+"""The Hertz force with Hunt-Crossley damping (twoball.hertz): restitution against an
+independent integration, energy, and the textbook limit."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.integrate import solve_ivp
+
+from twoball import hertz
+from twoball.stack import icm_chain, simulate_stack
+
+
+def _restitution_in_free_space(eps: float, mass1: float, mass2: float, speed: float) -> float:
+    """Two balls meeting at ``speed`` with no gravity, integrated here from the force law
+    f = delta^(3/2) (1 + lam delta'), never pulling, with lam = Lambda(eps) / speed."""
+    lam = hertz.damping_factor(eps) / speed
+    reduced = mass1 * mass2 / (mass1 + mass2)
+
+    def rhs(_t, y):
+        delta, rate = y
+        force = max(delta, 0.0) ** 1.5 * max(1.0 + lam * rate, 0.0)
+        return [rate, -force / reduced]
+
+    def separated(_t, y):
+        return y[0] if 1.0 + lam * y[1] > 0.0 else -1.0
+
+    separated.terminal, separated.direction = True, -1.0
+    solution = solve_ivp(
+        rhs, (0.0, 1e3), [0.0, speed], method="Radau", rtol=1e-12, atol=1e-14,
+        events=separated,
+    )  # fmt: skip
+    return -solution.y_events[0][0][1] / speed
+
+
+@pytest.mark.parametrize("eps", [0.3, 0.7, 0.95])
+@pytest.mark.parametrize(("mass1", "mass2", "speed"), [(1.0, 0.3, 7.3), (0.01, 5.0, 300.0)])
+def test_an_isolated_contact_gives_back_eps(eps, mass1, mass2, speed):
+    """The calibration holds for any masses and speed (the Hertz scaling, docs/stacks.md)."""
+    assert _restitution_in_free_space(eps, mass1, mass2, speed) == pytest.approx(eps, abs=1e-8)
+
+
+def test_the_floor_contact_in_a_stack_gives_back_eps():
+    """At a height where gravity during the contact is negligible (t_c / v ~ 4e-5), ball 0
+    leaves the floor at eps times its impact speed (ball 1 arrives after it left)."""
+    first = simulate_stack([0.5], 0.7, 3.0, height=1e8, force="hertz", until="first")
+    floor = next(c for c in first.contacts if c.contact == 0)
+    after = simulate_stack(
+        [0.5], 0.7, 3.0, height=1e8, force="hertz", until="first", t_eval=[floor.end]
+    )
+    assert after.trajectory.v[0, 0] / math.sqrt(2e8) == pytest.approx(0.7, rel=1e-4)
+
+
+def _energy(result) -> np.ndarray:
+    masses = result.stack.masses
+    x, v = result.trajectory.x, result.trajectory.v
+    eta = np.concatenate([x[:, :1], np.diff(x, axis=1)], axis=1)
+    delta = np.maximum(-eta, 0.0)
+    return 0.5 * (masses * v**2).sum(axis=1) + (masses * x).sum(axis=1) + 0.4 * (delta**2.5).sum(1)
+
+
+def _times(result) -> np.ndarray:
+    inside = [np.linspace(c.start, c.end, 25) for c in result.contacts]
+    return np.unique(np.concatenate([np.linspace(0.0, result.end_time, 2001), *inside]))
+
+
+def test_energy_never_rises():
+    first = simulate_stack([0.2, 0.2], 0.8, 0.2, force="hertz")
+    sampled = simulate_stack([0.2, 0.2], 0.8, 0.2, force="hertz", t_eval=_times(first))
+    energy = _energy(sampled)
+    assert np.diff(energy).max() <= 1e-9 * energy[0]
+    assert energy[-1] < 0.99 * energy[0]
+    assert (sampled.h1, sampled.h2) == (first.h1, first.h2)  # sampling changes nothing
+
+
+def test_elastic_contacts_conserve_energy():
+    first = simulate_stack([0.3], 1.0, 0.5, force="hertz")
+    energy = _energy(simulate_stack([0.3], 1.0, 0.5, force="hertz", t_eval=_times(first)))
+    assert np.ptp(energy) <= 1e-8 * energy[0]
+
+
+def test_light_elastic_ball_approaches_the_icm():
+    result = simulate_stack([1e-4], 1.0, 3.0, height=1e8, force="hertz", until="first")
+    assert result.h1 == pytest.approx(icm_chain(result.stack)[-1], rel=2e-3)
+    assert result.contacts_first[1] == 1
+
+
+def test_a_three_ball_stack_reaches_its_second_apex():
+    result = simulate_stack([0.2, 0.2], 0.9, 0.2, force="hertz")
+    assert result.success and len(result.apexes[-1]) == 2
+    assert all(count >= 1 for count in result.contacts_first)
+    assert result.stack.tau_f == pytest.approx(hertz.floor_contact_time(0.9, 1e4))
+
+
+def test_hertz_refuses_what_it_cannot_carry():
+    from twoball.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="eps must be at least 0.05 with the hertz force"):
+        simulate_stack([0.2], 0.01, 0.2, force="hertz")
+
+
+@pytest.mark.slow  # about 25 s
+@settings(max_examples=12, deadline=None)
+@given(
+    ratios=st.lists(st.floats(0.05, 5.0), min_size=1, max_size=3),
+    eps=st.floats(0.05, 1.0),
+    gap=st.floats(0.0, 1.0),
+)
+def test_any_hertz_stack_reaches_an_honest_answer(ratios, eps, gap):
+    result = simulate_stack(ratios, eps, gap, force="hertz", throw=False)
+    assert result.success, result.status
+    energy = float((result.stack.masses * result.stack.x_start).sum())
+    for _, apex in result.apexes[-1]:
+        assert apex <= energy / result.stack.masses[-1] * (1 + 1e-9)

@@ -1,0 +1,514 @@
+"""Stacks of N balls with the Hertz force and Hunt-Crossley damping (docs/model.md, "Stacks of
+N balls"; docs/stacks.md).
+
+**Model.** A contact compressed by delta = -eta > 0 pushes with
+
+    f = delta^(3/2) (1 + lam delta')      while delta > 0 and 1 + lam delta' > 0, else 0,
+
+Hertz's elastic law with the damping of Hunt and Crossley (1975), which vanishes with the
+compression, so the force is continuous at first touch (the linear dashpot's is not). It never
+pulls: when a contact separates faster than 1/lam the force is cut at zero (the clamp), as the
+linear model's is.
+
+**Units.** With a Hertz stiffness k_h (f = k_h delta^(3/2)), lengths are in
+L = (m_0 g / k_h)^(2/3), the static compression of ball 0 under its own weight, and times in
+sqrt(L / g); so H = h / L, and every contact has unit stiffness, as in the linear model. H enters
+only through the impact speed sqrt(2H): a Hertz contact lasts about 3.2 m^(2/5) v^(-1/5).
+
+**Restitution.** For Hunt-Crossley the restitution of an isolated contact depends on lam v only
+(scaling delta = A u, t = T s with A = v T, T = m^(2/5) v^(-1/5) removes m and v). So
+:func:`damping_factor` finds, once per eps, the Lambda with restitution(Lambda) = eps on the
+normalised contact u'' = -u^(3/2) (1 + Lambda u'), u(0) = 0, u'(0) = 1, and each contact gets
+lam = Lambda / v at its *calibration speed* v: the closing speed of its collision in the ICM
+chain (sqrt(2H) for the floor). A slower contact is bouncier (1 - e ~ lam v), as real balls
+are. The floor contact time tau_f, which sets the gaps, is that of the calibrated floor contact.
+
+**Solution.** Free flight is exact: with no contact active, every ball is a parabola and the
+next touch, clamp or apex is a root of a polynomial of degree at most two. A phase with a contact
+active is integrated with scipy's DOP853 (rtol 1e-12), whose every step is bounded so that no
+touch or release (a root of some overlap eta) can be stepped over: the energy never rises, so it
+bounds every overlap, speed and force over the whole run (:func:`_force_bounds`); with the
+contacts active in a phase, that bounds |eta''| <= M (:func:`_phase_bounds`);
+a step keeps eta + eta' h - M h^2 / 2 on its side (the certified step of twoball.exact). That
+part is proven for the exact solution (the integrator's error, ~1e-12 relative, is not part of
+the proof). The clamp (1 + lam delta' = 0) and the apexes are located by sign changes at the
+step's ends and 8 points of its dense output: estimated, not proven. A root is refined by
+Brent's method on the dense output.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+from scipy.integrate import DOP853, solve_ivp
+from scipy.optimize import brentq
+
+from twoball.errors import Status
+
+MAX_STEPS = 100_000  # about a minute and a half of steps
+SMALLEST_RESTITUTION = 0.05  # below it the clamp chatters (tested down to here)
+RTOL = 1e-12
+PROBES = 8  # dense-output points per step where the clamp and the apexes are looked for
+
+
+@functools.lru_cache(maxsize=256)
+def _normalised_contact(factor: float) -> tuple[float, float]:
+    """(restitution, duration) of u'' = -u^(3/2) (1 + factor u'), u(0) = 0, u'(0) = 1, the
+    contact ending when u returns to 0 or the force reaches zero (the clamp)."""
+
+    def rhs(_t, y):
+        u, du = y
+        return [du, -(max(u, 0.0) ** 1.5) * (1.0 + factor * du)]
+
+    def back_to_zero(_t, y):
+        return y[0]
+
+    def clamp(_t, y):
+        return 1.0 + factor * y[1]
+
+    back_to_zero.terminal, back_to_zero.direction = True, -1.0
+    clamp.terminal, clamp.direction = True, -1.0
+    solution = solve_ivp(
+        rhs, (0.0, 100.0), [1e-300, 1.0], method="DOP853", rtol=1e-13, atol=1e-15,
+        events=[back_to_zero, clamp], dense_output=False,
+    )  # fmt: skip
+    ends = [(e[0], k) for k, e in enumerate(solution.t_events) if len(e)]
+    end, which = min(ends)
+    speed = solution.y_events[which][0][1]
+    return -speed, end
+
+
+@functools.lru_cache(maxsize=256)
+def damping_factor(eps: float) -> float:
+    """Lambda = lam v with an isolated Hunt-Crossley contact's restitution equal to eps."""
+    if eps >= 1.0:
+        return 0.0
+    high = 1.0
+    while _normalised_contact(high)[0] > eps:
+        high *= 2.0
+    return brentq(lambda f: _normalised_contact(f)[0] - eps, 0.0, high, xtol=1e-14, rtol=1e-13)
+
+
+def calibration_speeds(masses: np.ndarray, eps: np.ndarray, height: float) -> np.ndarray:
+    """Each contact's closing speed in the ICM chain (the floor's: sqrt(2H))."""
+    impact = math.sqrt(2.0 * height)
+    speeds = np.empty(len(masses))
+    speeds[0] = impact
+    up = eps[0] * impact
+    for i in range(1, len(masses)):
+        speeds[i] = up + impact
+        below, mass = masses[i - 1], masses[i]
+        up = (below * up - mass * impact + eps[i] * below * (up + impact)) / (below + mass)
+    return speeds
+
+
+def floor_contact_time(eps0: float, height: float) -> float:
+    """tau_f of the calibrated floor contact of ball 0 (mass 1) at impact speed sqrt(2H)."""
+    speed = math.sqrt(2.0 * height)
+    return speed ** (-0.2) * _normalised_contact(damping_factor(eps0))[1]
+
+
+class _Stack:
+    """The Hertz stack's equations: overlaps, forces, accelerations."""
+
+    def __init__(self, masses: np.ndarray, lam: np.ndarray):
+        self.masses = masses
+        self.lam = lam
+        self.n = len(masses)
+        # eta = D x: eta_0 = x_0, eta_c = x_c - x_(c-1); ball j feels (D^T f)_j = f_j - f_(j+1)
+        self.difference = np.eye(self.n) - np.eye(self.n, k=-1)
+
+    def overlaps(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """eta and eta' of every contact (floor first)."""
+        n = self.n
+        return self.difference @ y[:n], self.difference @ y[n:]
+
+    def clamps(self, y: np.ndarray) -> np.ndarray:
+        """g = -(1 + lam delta') = lam eta' - 1: a compressed contact pushes while g < 0."""
+        return self.lam * (self.difference @ y[self.n :]) - 1.0
+
+    def forces(self, y: np.ndarray, active: np.ndarray) -> np.ndarray:
+        eta, deta = self.overlaps(y)
+        delta = np.maximum(-eta, 0.0)
+        return active * delta**1.5 * np.maximum(1.0 - self.lam * deta, 0.0)
+
+    def rhs(self, active: np.ndarray):
+        on = active.astype(float)
+        n, transposed, masses = self.n, self.difference.T.copy(), self.masses
+
+        def rhs(_t, y):
+            acceleration = transposed @ self.forces(y, on) / masses - 1.0
+            return np.concatenate([y[n:], acceleration])
+
+        return rhs
+
+    def energy(self, y: np.ndarray) -> float:
+        """Kinetic + gravity + the Hertz potential (2/5) delta^(5/2) of every overlap."""
+        n = self.n
+        eta = self.overlaps(y)[0]
+        delta = np.maximum(-eta, 0.0)
+        return float(
+            0.5 * (self.masses * y[n:] ** 2).sum()
+            + (self.masses * y[:n]).sum()
+            + 0.4 * (delta**2.5).sum()
+        )
+
+
+def _force_bounds(stack: _Stack, energy: float) -> np.ndarray:
+    """F_c >= f_c for the rest of the run, from the energy, which never rises.
+
+    Gravity's energy sum m_j x_j >= -sum_c W_c delta_c (W_c the weight above contact c), and
+    (2/5) d^(5/2) - W d >= -(3/5) W^(5/3), so each compression obeys
+    (2/5) delta_c^(5/2) - W_c delta_c <= E + sum_(k != c) (3/5) W_k^(5/3), and the kinetic
+    energy is at most E + sum_k (3/5) W_k^(5/3), which bounds every speed.
+    """
+    m = stack.masses
+    weights = np.cumsum(m[::-1])[::-1]
+    wells = 0.6 * weights ** (5.0 / 3.0)
+    kinetic = energy + wells.sum()
+    speed = np.sqrt(2.0 * kinetic / m)
+    force = np.empty(stack.n)
+    for c in range(stack.n):
+        room = energy + wells.sum() - wells[c]
+        delta = max(weights[c] ** (2.0 / 3.0), 1.0)
+        while 0.4 * delta**2.5 - weights[c] * delta <= room:
+            delta *= 1.5
+        closing = speed[c] + (speed[c - 1] if c >= 1 else 0.0)
+        force[c] = delta**1.5 * (1.0 + stack.lam[c] * closing)
+    return force
+
+
+def _phase_bounds(stack: _Stack, force: np.ndarray, active: np.ndarray) -> np.ndarray:
+    """M_c >= |eta_c''| while the phase lasts: only the forces of active contacts act, and
+    gravity cancels between two balls, so eta_c'' = f_c (1/m_c + 1/m_(c-1)) - f_(c+1)/m_c -
+    f_(c-1)/m_(c-1) (eta_0'' = -1 + (f_0 - f_1)/m_0)."""
+    m = stack.masses
+    acting = np.where(active, force, 0.0)
+    above = np.append(acting[1:], 0.0)
+    below = np.concatenate([[0.0], acting[:-1]])
+    bound = np.empty(stack.n)
+    bound[0] = 1.0 + (acting[0] + above[0]) / m[0]
+    bound[1:] = acting[1:] * (1.0 / m[1:] + 1.0 / m[:-1]) + above[1:] / m[1:] + below[1:] / m[:-1]
+    return np.maximum(bound, 1e-300)
+
+
+def solve(
+    masses: np.ndarray,
+    eps: np.ndarray,
+    x_start: np.ndarray,
+    height: float,
+    apexes_wanted: int,
+    t_end: float = math.inf,
+    t_eval: np.ndarray | None = None,
+):
+    """Run a Hertz stack from rest; returns (status, end time, apexes (ball, t, h) rows, contact
+    (contact, start, end) rows, contacts before the top ball's first apex, samples or None)."""
+    n = len(masses)
+    speeds = calibration_speeds(masses, eps, height)
+    lam = np.array([damping_factor(float(e)) for e in eps]) / speeds
+    stack = _Stack(masses, lam)
+    y = np.concatenate([x_start, np.zeros(n)])
+    force_bound = _force_bounds(stack, stack.energy(y))
+    active = np.zeros(n, dtype=bool)
+    t = 0.0
+    apexes: list[tuple[int, float, float]] = []
+    contacts: list[tuple[int, float, float]] = []
+    opened = np.zeros(n)
+    first = np.zeros(n, dtype=int)
+    top_apexes = 0
+    times = None if t_eval is None else np.sort(np.asarray(t_eval, dtype=float))
+    samples = None if times is None else np.full((len(times), 3 * n), np.nan)
+    next_sample = 0
+    status = Status.PHASE_LIMIT
+    steps = 0
+    fresh = -1  # the contact whose switch ended the last phase
+
+    def record(start: float, stop: float, state_at) -> None:
+        nonlocal next_sample
+        if times is None:
+            return
+        while next_sample < len(times) and times[next_sample] <= stop:
+            if times[next_sample] >= start:
+                state = state_at(times[next_sample])
+                samples[next_sample] = np.concatenate(
+                    [state, stack.forces(state, active_sampled(state))]
+                )
+            next_sample += 1
+
+    def active_sampled(_state):
+        return active
+
+    while steps < MAX_STEPS:
+        free = ~active & ~np.append(active[1:], False)
+        if not active.any():
+            event_t, kind, index = _next_in_flight(stack, y, t_end - t)
+            y0, t0 = y.copy(), t
+
+            def flight(when, y0=y0, t0=t0):
+                s = when - t0
+                return np.concatenate([y0[:n] + s * (y0[n:] - 0.5 * s), y0[n:] - s])
+
+            record(t0, t0 + event_t, flight)
+            y = flight(t0 + event_t)
+            t = t0 + event_t
+            steps += 1
+        else:
+            kind, index, t, y, steps = _contact_phase(
+                stack,
+                y,
+                t,
+                active,
+                free,
+                _phase_bounds(stack, force_bound, active),
+                t_end,
+                steps,
+                record,
+                fresh,
+            )
+        if kind == "time":
+            status = Status.DONE
+            break
+        if kind == "steps":
+            break
+        fresh = index if kind == "switch" else -1
+        if kind == "apex":
+            y[n + index] = 0.0
+            apexes.append((index, t, float(y[index])))
+            if index == n - 1:
+                top_apexes += 1
+                if top_apexes == apexes_wanted:
+                    status = Status.DONE
+                    break
+            continue
+        if kind == "rest":
+            status = Status.REST
+            break
+        # a switch: the contact's function fell through zero, so it toggles
+        if active[index]:
+            contacts.append((index, float(opened[index]), t))
+        else:
+            opened[index] = t
+            if top_apexes == 0:
+                first[index] += 1
+        active = active.copy()
+        active[index] = not active[index]
+    for c in range(n):
+        if active[c]:
+            contacts.append((c, float(opened[c]), t))
+    return status, t, apexes, contacts, first, samples
+
+
+def _first_fall(a: float, b: float, c: float) -> float:
+    """The first s >= 0 at which a s^2 + b s + c (a <= 0) falls through zero, 0 if it is not
+    positive and falling now, inf if never: where an inactive overlap closes."""
+    if c <= 0.0 and (b < 0.0 or (b == 0.0 and a < 0.0)):
+        return 0.0
+    if a == 0.0:
+        return -c / b if b < 0.0 else math.inf
+    disc = b * b - 4.0 * a * c
+    if disc < 0.0:
+        return math.inf
+    # the larger root of a concave parabola is where it falls through zero
+    q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+    roots = [q / a, c / q if q != 0.0 else -math.inf]
+    larger = max(roots)
+    return larger if larger > 0.0 else math.inf
+
+
+def _next_in_flight(stack: _Stack, y: np.ndarray, horizon: float) -> tuple[float, str, int]:
+    """Time to the next touch or apex with every ball in free flight (exact: parabolas)."""
+    n = stack.n
+    best, kind, index = horizon, "time", -1
+    eta, deta = stack.overlaps(y)
+    for c in range(n):
+        curvature = -0.5 if c == 0 else 0.0  # eta_0 = x_0 falls at 1; the others' relative
+        root = _first_fall(curvature, deta[c], eta[c])
+        if root < best:
+            best, kind, index = root, "switch", c
+    # a floor contact clamped while still compressed (leaving faster than 1/lam) pushes again
+    # once ball 0 slows below that: g_0 = lam (v_0 - s) - 1 falls to zero
+    if eta[0] < 0.0 and stack.lam[0] > 0.0:
+        again = y[n] - 1.0 / stack.lam[0]
+        if 0.0 < again < best:
+            best, kind, index = again, "switch", 0
+    for ball in range(n):
+        if 0.0 < y[n + ball] < best:
+            best, kind, index = y[n + ball], "apex", ball
+    return best, kind, index
+
+
+def _tolerances(stack: _Stack, y: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
+    """(eta, eta', tol) of every contact, tol the rounding of eta: 16 ulp of the heights plus
+    eta' times 16 ulp of the clock."""
+    eta, deta = stack.overlaps(y)
+    tol = 16e-16 * ((1.0 + np.abs(y[: stack.n]).sum()) + np.abs(deta) * (1.0 + abs(t)))
+    return eta, deta, tol
+
+
+def _step_for(stack: _Stack, y: np.ndarray, t: float, bound: np.ndarray, active) -> float:
+    """The largest h with every eta (or -eta, for a contact that pushes) kept above -tol by
+    eta + eta' h - M h^2 / 2, tol the rounding of the heights and of the clock: a root is then
+    either crossed (and seen at the step's end) or not reached, and a dip below zero and back
+    within one step is shallower than tol."""
+    eta, deta, tol = _tolerances(stack, y, t)
+    step = math.inf
+    for c in range(stack.n):
+        value, rate = (-eta[c], -deta[c]) if active[c] else (eta[c], deta[c])
+        value = max(value, 0.0) + tol[c]
+        root = math.sqrt(rate * rate + 2.0 * bound[c] * value)
+        h = (rate + root) / bound[c] if rate >= 0.0 else 2.0 * value / (root - rate)
+        step = min(step, h)
+    return step
+
+
+def _certified_step(stack: _Stack, y: np.ndarray, t: float, force_bound: np.ndarray, active):
+    """A step over which no overlap changes sign unseen (:func:`_step_for`), with the bound M
+    of the run's forces (:func:`_phase_bounds`), then doubled while a bound local to the step
+    still certifies it: over h, a compression is at most delta + |delta'| h + M h^2 / 2, which
+    bounds each force, hence a smaller M. (Near a first touch the forces are tiny, and the
+    run's bound alone would creep with steps of ~1e-9.)"""
+    bound = _phase_bounds(stack, force_bound, active)
+    step = _step_for(stack, y, t, bound, active)
+    eta, deta = stack.overlaps(y)
+    delta, speed = np.maximum(-eta, 0.0), np.abs(deta)
+    for _ in range(60):
+        trial = 2.0 * step
+        reach = delta + speed * trial + 0.5 * bound * trial * trial
+        local = reach**1.5 * (1.0 + stack.lam * (speed + bound * trial))
+        local = np.minimum(local, force_bound)
+        if _step_for(stack, y, t, _phase_bounds(stack, local, active), active) < trial:
+            break
+        step = trial
+    return step
+
+
+def _switching(stack: _Stack, y: np.ndarray, t: float, active) -> tuple:
+    """Each contact's switching function S = max(eta, g) (inactive: it pushes once S < 0) or
+    -S (active: it stops once -S < 0), its rate, and its rounding: the one rule of
+    docs/model.md, "Bodies, coordinates, forces", with g = lam eta' - 1 for Hertz."""
+    n = stack.n
+    eta, deta, tol = _tolerances(stack, y, t)
+    g = stack.clamps(y)
+    ddeta = stack.difference @ stack.rhs(active)(t, y)[n:]
+    by_overlap = eta >= g
+    value = np.where(by_overlap, eta, g)
+    rate = np.where(by_overlap, deta, stack.lam * ddeta)
+    rounding = np.where(by_overlap, tol, 1e-12)
+    sign = np.where(active, -1.0, 1.0)
+    return sign * value, sign * rate, rounding
+
+
+def _contact_phase(stack, y, t, active, free, force_bound, t_end, steps, record, fresh):
+    """Integrate a phase with a contact active to its first event (see the module); ``fresh``
+    is the contact whose switch began the phase (-1 for none): its function starts at zero.
+
+    Watched: each contact's switching function (:func:`_switching`), an event when it falls
+    below zero, and the velocity of each ball in free flight going up (its apex)."""
+    n = stack.n
+    scale = 1.0 + np.abs(y).max()
+    solver = DOP853(
+        stack.rhs(active.copy()), t, y, t_bound=t_end, rtol=RTOL, atol=RTOL * scale,
+        first_step=None,
+    )  # fmt: skip
+    watched_free = free & (y[n:] > 0.0)
+
+    def functions(state):
+        eta, _ = stack.overlaps(state)
+        switching = np.maximum(eta, stack.clamps(state))
+        return np.concatenate([np.where(active, -switching, switching), state[n:]])
+
+    while steps < MAX_STEPS:
+        # at a root to rounding and moving through it, or past it: the switch is here
+        value, rate, rounding = _switching(stack, solver.y, solver.t, active)
+        due = (value < -rounding) | ((value <= rounding) & (rate < 0.0))
+        if 0 <= fresh < n and solver.t == t:
+            due[fresh] = False  # it has just switched
+        if due.any():
+            return "switch", int(np.flatnonzero(due)[0]), solver.t, solver.y.copy(), steps
+        solver.max_step = _certified_step(stack, solver.y, solver.t, force_bound, active)
+        t_old = solver.t
+        before = functions(solver.y)
+        message = solver.step()
+        steps += 1
+        if solver.status == "failed":
+            raise RuntimeError(f"DOP853 failed in a Hertz contact phase: {message}")
+        dense = solver.dense_output()
+        hit = None
+        previous_t, previous = t_old, before
+        for when in np.linspace(t_old, solver.t, PROBES + 2)[1:]:
+            now = functions(dense(when) if when < solver.t else solver.y)
+            falls = (previous >= 0.0) & (now < 0.0)
+            falls[n:] &= watched_free & (previous[n:] > 0.0)
+            if falls.any():
+                roots = []
+                for k in np.flatnonzero(falls):
+
+                    def value_at(moment, k=k, dense=dense):
+                        return functions(dense(moment))[k]
+
+                    root = brentq(value_at, previous_t, when, xtol=1e-15 * (1 + abs(when)))
+                    roots.append((root, int(k)))
+                hit = min(roots)
+                break
+            previous_t, previous = when, now
+        record(t_old, hit[0] if hit else solver.t, dense)
+        if hit:
+            root, k = hit
+            state = dense(root)
+            if k >= n:
+                return "apex", k - n, root, state, steps
+            return "switch", k, root, state, steps
+        if solver.status == "finished":
+            return "time", -1, solver.t, solver.y.copy(), steps
+        if active.all() and _settled(stack, solver.y):
+            return "rest", -1, solver.t, solver.y.copy(), steps
+    return "steps", -1, solver.t, solver.y.copy(), steps
+
+
+def _settled(stack: _Stack, y: np.ndarray) -> bool:
+    """Every contact pushing and the energy within 1e-12 of the static stack's (estimated)."""
+    m = stack.masses
+    weights = np.cumsum(m[::-1])[::-1]
+    delta = weights ** (2.0 / 3.0)
+    static = _Stack(m, stack.lam)
+    rest_heights = np.cumsum(-delta)
+    rest = static.energy(np.concatenate([rest_heights, np.zeros(stack.n)]))
+    return stack.energy(y) - rest <= 1e-12 * (1.0 + abs(rest))
+
+
+def simulate(stack, apexes_wanted: int, t_end: float, times: np.ndarray | None):
+    """A :class:`twoball.stack.StackResult` for a validated stack with the Hertz force: its
+    gaps in units of the Hertz floor contact time (:func:`floor_contact_time`)."""
+    from dataclasses import replace
+
+    from twoball.stack import StackContact, StackResult, StackTrajectory, release_heights
+
+    tau_f = floor_contact_time(stack.eps[0], stack.height)
+    hertz_stack = replace(
+        stack, tau_f=tau_f, x_start=release_heights(stack.height, stack.tau_ratios, tau_f)
+    )
+    eps = np.asarray(stack.eps, dtype=float)
+    status, end, apexes, contacts, first, samples = solve(
+        hertz_stack.masses, eps, hertz_stack.x_start, stack.height, apexes_wanted, t_end, times
+    )
+    per_ball: list[list[tuple[float, float]]] = [[] for _ in range(stack.balls)]
+    for ball, when, where in apexes:
+        per_ball[ball].append((when, where))
+    trajectory = None
+    if times is not None:
+        n = stack.balls
+        trajectory = StackTrajectory(
+            np.sort(times), samples[:, :n], samples[:, n : 2 * n], samples[:, 2 * n :]
+        )
+    return StackResult(
+        stack=hertz_stack,
+        force="hertz",
+        apexes=per_ball,
+        contacts=[StackContact(c, s, e) for c, s, e in sorted(contacts, key=lambda r: r[1])],
+        contacts_first=[int(k) for k in first],
+        end_time=end,
+        status=status,
+        trajectory=trajectory,
+    )
