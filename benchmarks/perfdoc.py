@@ -24,13 +24,14 @@ def provenance() -> str:
     return f"Measured by `{command}` on {day}, load average {load:.2f}, {os.cpu_count()} cores."
 
 
-def write_section(name: str, text: str) -> None:
-    """Replace section ``name`` of docs/performance.md with ``text`` and its provenance."""
-    document = DOCUMENT.read_text()
+def write_section(name: str, text: str, path: Path = DOCUMENT) -> None:
+    """Replace section ``name`` of ``path`` (docs/performance.md) with ``text`` and its
+    provenance."""
+    document = path.read_text()
     begin, end = f"<!-- begin {name} -->", f"<!-- end {name} -->"
     body = f"{begin}\n{text.strip()}\n\n{provenance()}\n{end}"
     pattern = re.compile(re.escape(begin) + ".*?" + re.escape(end), re.DOTALL)
     if not pattern.search(document):
-        raise SystemExit(f"docs/performance.md has no section {name!r} ({begin} ... {end})")
-    DOCUMENT.write_text(pattern.sub(lambda _: body, document))
-    print(f"wrote section {name!r} of {DOCUMENT}")
+        raise SystemExit(f"{path} has no section {name!r} ({begin} ... {end})")
+    path.write_text(pattern.sub(lambda _: body, document))
+    print(f"wrote section {name!r} of {path}")

@@ -116,3 +116,10 @@ def test_any_hertz_stack_reaches_an_honest_answer(ratios, eps, gap):
     energy = float((result.stack.masses * result.stack.x_start).sum())
     for _, apex in result.apexes[-1]:
         assert apex <= energy / result.stack.masses[-1] * (1 + 1e-9)
+
+
+def test_the_check_values_of_the_specification():
+    """docs/model.md, "The Hertz force": Lambda(0.9), Lambda(0.5), the elastic duration."""
+    assert hertz.damping_factor(0.9) == pytest.approx(0.16648, abs=1e-5)
+    assert hertz.damping_factor(0.5) == pytest.approx(1.43275, abs=1e-5)
+    assert hertz.floor_contact_time(1.0, 0.5) == pytest.approx(3.218, abs=1e-3)
