@@ -37,6 +37,13 @@ def test_the_stack_scene_shows_the_library_and_follows_its_sliders(browser, app_
         page.wait_for_timeout(600)  # the URL is written shortly after a change
         assert _query(page)["N"] == "4" and _query(page)["scene"] == "stack"
         page.screenshot(path=folder / "four.png", full_page=True)
+        page.get_by_role("button", name="hertz").click()
+        hertz = simulate_stack([0.2] * 3, 0.9, 0.2, force="hertz")
+        expect(page.get_by_text("4 balls, hertz force")).to_be_visible(timeout=60_000)
+        expect(page.get_by_text(f"h1 = {hertz.h1:.4g}").first).to_be_visible()
+        page.wait_for_timeout(600)
+        assert _query(page)["force"] == "hertz"
+        page.screenshot(path=folder / "four_hertz.png", full_page=True)
         assert errors == []
     finally:
         context.close()
