@@ -66,7 +66,9 @@ class ExplorerState(Parameters):
     )
     stack_eps = param.Number(default=0.9, bounds=(0.3, 1.0), doc="Restitution of every contact.")
     stack_gap = param.Number(
-        default=0.2, bounds=(0.0, 2.0), doc="td/tau_f: how far apart the balls are at release."
+        default=0.2,
+        bounds=(0.01, 2.0),  # touching balls (0) cannot be carried with five or more
+        doc="td/tau_f: how far apart the balls are at release.",
     )
     force = param.Selector(
         default="linear", objects=["linear", "hertz"], doc="The contact force of the stack."

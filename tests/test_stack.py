@@ -137,6 +137,18 @@ def test_trajectory_is_the_apexes_and_forces_push():
     assert forces.min() >= 0.0 and forces.max() > 1.0
 
 
+@pytest.mark.parametrize("ratio", [1.0, 0.5, 0.2])
+def test_three_balls_released_touching(ratio):
+    """A zero gap: the contacts start active and unloaded; the run ends as asked, with the
+    apex the energy allows; near-elastic at a low height too."""
+    result = simulate_stack([ratio] * 2, 0.9, 0.0)
+    assert result.success and len(result.apexes[-1]) == 2
+    assert result.contacts_first[1] >= 1 and result.contacts_first[2] >= 1
+    energy = float((result.stack.masses * result.stack.x_start).sum())
+    assert result.h1 <= energy / result.stack.masses[-1]
+    assert simulate_stack([ratio] * 2, 1.0, 0.0, height=10.0).success
+
+
 def test_until_a_time_and_rest():
     running = simulate_stack([0.2, 0.2], 0.9, 0.2, until=50.0)
     assert running.end_time == pytest.approx(50.0) and running.status is Status.DONE
@@ -156,6 +168,7 @@ def test_until_a_time_and_rest():
         (([0.2, 0.2], 0.9, float("nan")), "tau_ratios must be a finite number"),
         (([1e-5, 1e-5], 0.9, 0.2), "masses relative to ball 0"),
         (([0.2] * 16, 0.9, 0.2), "mass_ratios must hold 1 to 15"),
+        (([0.5] * 3, 0.9, 0.0), "tau_ratios must be at least 1e-09 with 4 or more balls"),
     ],
 )
 def test_bad_input_names_the_parameter(arguments, words):
@@ -177,7 +190,7 @@ def test_bad_options():
 @given(
     ratios=st.lists(st.floats(0.01, 10.0), min_size=1, max_size=4),
     eps=st.floats(0.3, 1.0),
-    gap=st.floats(0.0, 1.0),
+    gap=st.one_of(st.just(0.0), st.floats(0.0, 1.0)),
     height=st.floats(10.0, 1e5),
 )
 def test_any_stack_reaches_an_honest_answer(ratios, eps, gap, height):
@@ -185,6 +198,8 @@ def test_any_stack_reaches_an_honest_answer(ratios, eps, gap, height):
     interval is ordered and the top ball never flies above what the energy at release allows."""
     if math.prod(ratios) < 1e-9 or math.prod(ratios) > 1e6:
         return
+    if len(ratios) >= 3 and gap < 1e-9:
+        return  # refused (test_bad_input_names_the_parameter)
     result = simulate_stack(ratios, eps, gap, height=height, throw=False)
     assert result.success, result.status
     energy = float((result.stack.masses * result.stack.x_start).sum())

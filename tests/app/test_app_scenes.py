@@ -30,19 +30,32 @@ def computations(explorer: Explorer) -> dict[str, int]:
     return {name: scene.computations for name, scene in explorer.scenes.items()}
 
 
+def test_the_stack_scene_computes_only_for_its_own_parameters():
+    explorer = rendered()
+    explorer.state.scene = "stack"
+    assert explorer.scenes["stack"].computations == 1
+    drops = explorer.scenes["drop"].computations
+    explorer.state.balls = 4
+    assert explorer.scenes["stack"].computations == 2
+    explorer.state.mu = 0.03  # a two-ball parameter: the stack does not recompute
+    assert explorer.scenes["stack"].computations == 2
+    assert explorer.scenes["drop"].computations == drops  # off screen: stale, not recomputed
+    assert "4 balls, linear force" in explorer.scenes["stack"].summary.object
+
+
 def test_only_the_scene_on_screen_computes():
     explorer = rendered()
-    assert computations(explorer) == {"drop": 1, "closeup": 0, "map": 0, "accuracy": 0}
+    assert computations(explorer) == {"drop": 1, "closeup": 0, "map": 0, "accuracy": 0, "stack": 0}
     explorer.state.mu = 0.02
-    assert computations(explorer) == {"drop": 2, "closeup": 0, "map": 0, "accuracy": 0}
+    assert computations(explorer) == {"drop": 2, "closeup": 0, "map": 0, "accuracy": 0, "stack": 0}
     explorer.tabs.active = 1  # the first-collision tab
     assert explorer.state.scene == "closeup"
-    assert computations(explorer) == {"drop": 2, "closeup": 1, "map": 0, "accuracy": 0}
+    assert computations(explorer) == {"drop": 2, "closeup": 1, "map": 0, "accuracy": 0, "stack": 0}
     explorer.state.eps = 0.7
     explorer.state.tau_ratio = 0.2
-    assert computations(explorer) == {"drop": 2, "closeup": 3, "map": 0, "accuracy": 0}
+    assert computations(explorer) == {"drop": 2, "closeup": 3, "map": 0, "accuracy": 0, "stack": 0}
     explorer.tabs.active = 0  # back to the drop: recomputed once, for the latest state
-    assert computations(explorer) == {"drop": 3, "closeup": 3, "map": 0, "accuracy": 0}
+    assert computations(explorer) == {"drop": 3, "closeup": 3, "map": 0, "accuracy": 0, "stack": 0}
     assert explorer.scenes["drop"].result.drop.eps == 0.7
 
 
