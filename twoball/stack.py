@@ -905,7 +905,7 @@ def simulate_stack(
             status=Status(out.status),
             trajectory=trajectory,
         )
-    bound = _apex_bound(stack)
+    bound = _apex_bound(stack, force)
     top = [h for _, h in result.apexes[-1]]
     if any(not math.isfinite(h) or h > bound * (1.0 + 1e-9) for h in top):
         result.status = Status.IMPOSSIBLE
@@ -931,9 +931,16 @@ def _stop_rule(until: str | float) -> tuple[int, float]:
     return NO_APEX_LIMIT, t_end
 
 
-def _apex_bound(stack: Stack) -> float:
-    """The highest the top ball can fly: all the energy at release in it (docs/model.md)."""
-    energy = float((stack.masses * stack.x_start).sum())
+def _apex_bound(stack: Stack, force: str) -> float:
+    """The highest the top ball can fly: the energy at release, sum m_i X_i(0), plus the most
+    the balls below and their contacts can give by sinking: each contact c below the top pair,
+    carrying the weight W_c of the balls above it but under the top, holds at least
+    -W_c^2/2 (linear: -W delta + delta^2/2) or -(3/5) W_c^(5/3) (Hertz). For two balls this
+    is :func:`twoball.model.apex_bound`."""
+    below = stack.masses[:-1]
+    weights = np.cumsum(below[::-1])[::-1]
+    sink = 0.5 * weights**2 if force == "linear" else 0.6 * weights ** (5.0 / 3.0)
+    energy = float((stack.masses * stack.x_start).sum() + sink.sum())
     return energy / stack.masses[-1]
 
 
