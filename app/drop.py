@@ -54,6 +54,21 @@ def ball_radii(mu: float) -> tuple[float, float]:
     return BALL_RADIUS, BALL_RADIUS * mu ** (1 / 3)
 
 
+def stage():
+    """The animation's stage: a narrow figure with the floor (a grey band below height 0)."""
+    fig = figure(
+        width=220,
+        height=400,
+        x_range=(-1, 1),
+        y_range=Range1d(0.0, 1.0),
+        tools="",
+        toolbar_location=None,
+        title="t = 0",
+    )
+    fig.add_layout(BoxAnnotation(top=0.0, fill_color="gray", fill_alpha=0.5))
+    return fig
+
+
 class DropScene(Scene):
     """Heights against time to the second apex, apexes marked, drop height and ICM as lines."""
 
@@ -138,16 +153,7 @@ class DropScene(Scene):
 
     def _animation_figure(self):
         """The two balls, one on the other, above the floor (a grey band below height 0)."""
-        fig = figure(
-            width=220,
-            height=400,
-            x_range=(-1, 1),
-            y_range=Range1d(0.0, 1.0),
-            tools="",
-            toolbar_location=None,
-            title="t = 0",
-        )
-        fig.add_layout(BoxAnnotation(top=0.0, fill_color="gray", fill_alpha=0.5))
+        fig = stage()
         fig.line(x=-0.6, y="x1", source=self.trail, color=LOWER, line_dash="dotted")
         fig.line(x=0.6, y="x2", source=self.trail, color=UPPER, line_dash="dotted")
         fig.circle(

@@ -13,7 +13,6 @@ import numpy as np
 import panel as pn
 import param
 from bokeh.models import (
-    BoxAnnotation,
     ColumnDataSource,
     LabelSet,
     Legend,
@@ -25,7 +24,7 @@ from bokeh.plotting import figure
 
 from twoball.stack import StackResult, icm_chain, simulate_stack
 
-from .drop import frame_times
+from .drop import frame_times, stage
 from .scene import Scene, readable
 
 # Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first
@@ -126,16 +125,7 @@ class StackScene(Scene):
         return fig
 
     def _animation_figure(self):
-        fig = figure(
-            width=220,
-            height=400,
-            x_range=(-1, 1),
-            y_range=Range1d(0.0, 1.0),
-            tools="",
-            toolbar_location=None,
-            title="t = 0",
-        )
-        fig.add_layout(BoxAnnotation(top=0.0, fill_color="gray", fill_alpha=0.5))
+        fig = stage()
         fig.circle(
             "x", "y", radius="r", radius_dimension="y", source=self.balls_drawn, color="color",
             line_color="black",

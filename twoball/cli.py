@@ -131,14 +131,21 @@ def _simulate(args: argparse.Namespace) -> int:
         until=args.until,
         method=args.method,
     )
-    summary = result.summary()
-    if args.json:
+    return _print_summary(result.summary(), args.json)
+
+
+def _print_summary(summary: dict, as_json: bool) -> int:
+    """A run's observables: one JSON object, or a column of names and values ("-" for none)."""
+    if as_json:
         print(json.dumps(summary))
         return 0
     width = max(len(key) for key in summary)
     for key, value in summary.items():
-        shown = f"{value:.12g}" if isinstance(value, float) else value
-        print(f"{key:<{width}}  {'-' if value is None else shown}")
+        values = value if isinstance(value, list) else [value]
+        shown = " ".join(
+            "-" if v is None else f"{v:.12g}" if isinstance(v, float) else str(v) for v in values
+        )
+        print(f"{key:<{width}}  {shown}")
     return 0
 
 
@@ -164,7 +171,7 @@ def _add_stack(subparsers: argparse._SubParsersAction) -> None:
         "--eps", type=_numbers, default=[0.9], help="one restitution, or N: floor first"
     )
     parser.add_argument(
-        "--tau-ratios", type=_numbers, default=[0.0], help="one gap td/tau_f, or N-1"
+        "--tau-ratios", type=_numbers, default=[0.2], help="one gap td/tau_f, or N-1 (0.2)"
     )
     parser.add_argument(
         "--height", type=_number, default=DEFAULT_HEIGHT, help="dimensionless drop height H > 0"
@@ -186,20 +193,7 @@ def _stack(args: argparse.Namespace) -> int:
         force=args.force,
         until=args.until,
     )
-    summary = result.summary()
-    if args.json:
-        print(json.dumps(summary))
-        return 0
-    width = max(len(key) for key in summary)
-    for key, value in summary.items():
-        if isinstance(value, list):
-            shown = " ".join("-" if v is None else f"{v:.12g}" for v in value)
-        elif isinstance(value, float):
-            shown = f"{value:.12g}"
-        else:
-            shown = "-" if value is None else value
-        print(f"{key:<{width}}  {shown}")
-    return 0
+    return _print_summary(result.summary(), args.json)
 
 
 # bench

@@ -92,7 +92,7 @@ def simulate(
     (True, 'DONE')
     """
     drop = check_parameters(eps, mu, tau_ratio, eps12=eps12, height=height)
-    apexes, t_end = _stop_rule(until)
+    apexes, t_end = stop_rule(until)
     if method not in METHODS:
         raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     for name, tol in (("rtol", rtol), ("atol", atol)):
@@ -159,7 +159,7 @@ def _failure(reason: str | None, apex_h: list[float], drop) -> str | None:
     return None
 
 
-def _stop_rule(until: str | float) -> tuple[int, float]:
+def stop_rule(until: str | float) -> tuple[int, float]:
     """(apexes wanted, end time) for an ``until`` argument."""
     if isinstance(until, str):
         if until not in UNTIL:

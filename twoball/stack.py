@@ -44,6 +44,7 @@ from twoball.errors import ParameterError, SolverError, Status
 from twoball.exact import ROUNDING
 from twoball.jit import njit
 from twoball.model import DEFAULT_HEIGHT, check_value, decay_ratio, floor_contact_time
+from twoball.solve import stop_rule
 
 MAX_BALLS = 16
 # With this many balls or more, gaps below SMALLEST_GAP were seen to stall the solver (measured:
@@ -480,16 +481,6 @@ class StackRun(NamedTuple):
 
 
 @njit
-def _grow(rows, count):
-    """``rows`` with room for one more row after ``count``."""
-    if count < rows.shape[0]:
-        return rows
-    grown = np.empty((max(2 * rows.shape[0], 8), rows.shape[1]))
-    grown[:count] = rows[:count]
-    return grown
-
-
-@njit
 def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases):
     """Run a stack from rest at heights ``x_start`` until the top ball's ``apexes_wanted``-th
     apex, ``t_end`` or rest (docs/model.md, "Stacks of N balls")."""
@@ -521,7 +512,7 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases):
     carried = 0.0
     for _ in range(MAX_PHASES):
         if record_phases:
-            phases = _grow(phases, n_phases)
+            phases = exact._room_for_one(phases, n_phases)
             bits = 0
             for c in range(n):
                 if active[c]:
@@ -551,7 +542,7 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases):
         t += tau
         if event == EV_SWITCH:
             if active[index]:
-                contacts = _grow(contacts, n_contacts)
+                contacts = exact._room_for_one(contacts, n_contacts)
                 contacts[n_contacts, 0], contacts[n_contacts, 1] = index, opened[index]
                 contacts[n_contacts, 2] = t
                 n_contacts += 1
@@ -562,7 +553,7 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases):
             active[index] = not active[index]
         elif event == EV_APEX:
             v[index] = 0.0
-            apexes = _grow(apexes, n_apex)
+            apexes = exact._room_for_one(apexes, n_apex)
             apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, x[index]
             n_apex += 1
             if index == n - 1:
@@ -584,7 +575,7 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases):
             break
     for c in range(n):  # contacts still open at the end end there
         if active[c]:
-            contacts = _grow(contacts, n_contacts)
+            contacts = exact._room_for_one(contacts, n_contacts)
             contacts[n_contacts, 0], contacts[n_contacts, 1], contacts[n_contacts, 2] = (
                 c,
                 opened[c],
@@ -637,8 +628,6 @@ def sample(phases, times, masses, zeta):
 # --- the public layer: validation, simulate_stack, the ICM chain -------------------------------
 
 FORCES = ("linear", "hertz")
-UNTIL = {"first": 1, "second": 2}
-NO_APEX_LIMIT = 2**62
 
 
 @dataclass(frozen=True)
@@ -869,7 +858,7 @@ def simulate_stack(
     stack = check_stack(mass_ratios, eps, tau_ratios, height=height)
     if force not in FORCES:
         raise ParameterError(f"force must be one of {', '.join(FORCES)}; got {force!r}")
-    apexes_wanted, t_end = _stop_rule(until)
+    apexes_wanted, t_end = stop_rule(until)
     times = None
     if t_eval is not None:
         times = np.atleast_1d(np.asarray(t_eval, dtype=float))
@@ -912,23 +901,6 @@ def simulate_stack(
     if throw and not result.success:
         raise SolverError(f"the stack run failed on {stack}: {result.status.message}", result)
     return result
-
-
-def _stop_rule(until: str | float) -> tuple[int, float]:
-    """(top-ball apexes wanted, end time) for an ``until`` argument."""
-    if isinstance(until, str):
-        if until not in UNTIL:
-            raise ParameterError(f"until must be 'first', 'second' or a time > 0; got {until!r}")
-        return UNTIL[until], math.inf
-    try:
-        t_end = float(until)
-    except (TypeError, ValueError):
-        raise ParameterError(
-            f"until must be 'first', 'second' or a time > 0; got {until!r}"
-        ) from None
-    if not (math.isfinite(t_end) and t_end > 0.0):
-        raise ParameterError(f"until must be 'first', 'second' or a finite time > 0; got {until!r}")
-    return NO_APEX_LIMIT, t_end
 
 
 def _apex_bound(stack: Stack, force: str) -> float:
