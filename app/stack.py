@@ -52,20 +52,20 @@ class StackScene(Scene):
         self.result: StackResult | None = None
         self.times = np.zeros(1)
         state = self.state.param
-        self.widgets = pn.Column(
-            pn.Row(
-                pn.widgets.IntSlider.from_param(state.balls, name="balls N"),
-                pn.widgets.FloatSlider.from_param(
-                    state.stack_ratio, name="mass ratio (each ball / the one below)", step=0.01
-                ),
-                sizing_mode="stretch_width",
+        self.widgets = pn.FlexBox(  # wraps: side by side on a wide screen, stacked on a phone
+            pn.widgets.IntSlider.from_param(state.balls, name="balls N", width=260),
+            pn.widgets.FloatSlider.from_param(
+                state.stack_ratio,
+                name="mass ratio (each ball / the one below)",
+                step=0.01,
+                width=260,
             ),
-            pn.Row(
-                pn.widgets.FloatSlider.from_param(state.stack_eps, name="eps", step=0.01),
-                pn.widgets.FloatSlider.from_param(state.stack_gap, name="gap td/tau_f", step=0.05),
-                pn.widgets.RadioButtonGroup.from_param(state.force, name="force"),
-                sizing_mode="stretch_width",
+            pn.widgets.FloatSlider.from_param(state.stack_eps, name="eps", step=0.01, width=260),
+            pn.widgets.FloatSlider.from_param(
+                state.stack_gap, name="gap td/tau_f", step=0.05, width=260
             ),
+            pn.widgets.RadioButtonGroup.from_param(state.force, name="force", width=200),
+            flex_wrap="wrap",
             sizing_mode="stretch_width",
         )
         self.player = pn.widgets.Player(

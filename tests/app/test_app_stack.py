@@ -69,6 +69,9 @@ def test_the_stack_scene_fits_a_phone(browser, app_server, artifacts):
     try:
         expect(page.get_by_text("3 balls, linear force")).to_be_visible(timeout=60_000)
         assert page.evaluate("document.documentElement.scrollWidth") <= 390
+        # nothing of the scene is cut off at the right (its sliders once made it 600 px wide)
+        caption = page.get_by_text("Each ball is").bounding_box()
+        assert caption["x"] + caption["width"] <= 390
         page.screenshot(path=artifacts / "stack" / "phone.png", full_page=True)
         assert errors == []
     finally:
