@@ -3,14 +3,19 @@
 At start-up the kernels' Python functions stand in for them (same results, a drop in ~25 ms)
 while another process compiles them (15-40 s on a new machine or CPU, ~2 s from the disk cache);
 then the machine code takes over (:func:`twoball.jit.compile_in_background`). The map cube is
-opened once per server.
+opened once per server. A page closed while an update is being sent to it is a client leaving,
+not an error (:func:`drop_messages_to_closed_sockets`).
 """
 
 from __future__ import annotations
 
+import functools
 import logging
 import sys
 import time
+
+import panel.io.document
+from tornado.websocket import WebSocketClosedError
 
 from twoball import jit
 
@@ -25,9 +30,33 @@ log = logging.getLogger("bokeh.twoball")
 QUERY_DIGITS = 70_000
 
 
+def drop_messages_to_closed_sockets() -> None:
+    """Panel 1.9 checks that a socket is open, then writes a message's parts one by one; a tab
+    closed between the two makes the write raise WebSocketClosedError inside a task nobody
+    awaits, and the server logs a traceback ("Task exception was never retrieved"). Panel's
+    own handling of that error, when it comes later, is a warning and the message dropped
+    (panel.io.document._run_write_futures): do the same here. Idempotent."""
+    dispatch = panel.io.document.dispatch_tornado
+    if getattr(dispatch, "drops_closed", False):
+        return
+
+    @functools.wraps(dispatch)
+    def dispatch_to_open_sockets(*args, **kwargs):
+        try:
+            return dispatch(*args, **kwargs)
+        except WebSocketClosedError:
+            log.warning("a page closed while a message to it was being sent; dropped")
+            return []
+
+    dispatch_to_open_sockets.drops_closed = True
+    panel.io.document.dispatch_tornado = dispatch_to_open_sockets
+
+
 def on_server_loaded(server_context) -> None:
-    """Serve at once on the Python kernels, compile in the background; open the map cube."""
+    """Serve at once on the Python kernels, compile in the background; open the map cube; drop
+    messages to pages that have closed."""
     sys.set_int_max_str_digits(QUERY_DIGITS)
+    drop_messages_to_closed_sockets()
     started = time.monotonic()
     jit.compile_in_background(
         done=lambda: log.info("compiled kernels in use after %.1f s", time.monotonic() - started)
