@@ -96,6 +96,39 @@ def test_a_three_ball_stack_reaches_its_second_apex():
     assert result.stack.tau_f == pytest.approx(hertz.floor_contact_time(0.9, 1e4))
 
 
+def test_a_heavy_stack_comes_to_a_proven_rest():
+    """Heavy, strongly damped balls on a light one never fly apart: the run ends at rest, proven
+    from the energy (hertz._settled). Sampling on, well past that moment, must show every
+    contact still compressed (an integration independent of the proof's arithmetic)."""
+    ratios, eps = [4.28, 4.31], 0.05
+    result = simulate_stack(ratios, eps, 0.0, force="hertz")
+    assert result.status.name == "REST" and result.h2 is None
+    later = np.linspace(result.end_time, result.end_time + 300.0, 301)
+    sampled = simulate_stack(ratios, eps, 0.0, force="hertz", until=later[-1], t_eval=later)
+    assert sampled.status.name == "REST" and np.isfinite(sampled.trajectory.x).all()
+    x = sampled.trajectory.x
+    eta = np.concatenate([x[:, :1], np.diff(x, axis=1)], axis=1)
+    assert eta.max() < 0.0
+    energy = _energy(sampled)
+    assert np.diff(energy).max() <= 1e-9 * abs(energy).max()
+
+
+def test_four_hertz_balls_released_touching():
+    """A Hertz force is continuous at first touch, so touching balls carry no limit (the linear
+    force refuses gaps below 1e-9 from four balls on)."""
+    from twoball.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="tau_ratios must be at least 1e-09"):
+        simulate_stack([0.5, 0.5, 0.5], 0.9, 0.0)
+    first = simulate_stack([0.5, 0.5, 0.5], 0.9, 0.0, height=10.0, force="hertz")
+    assert first.success and len(first.apexes[-1]) == 2
+    sampled = simulate_stack(
+        [0.5, 0.5, 0.5], 0.9, 0.0, height=10.0, force="hertz", t_eval=_times(first)
+    )
+    energy = _energy(sampled)
+    assert np.diff(energy).max() <= 1e-9 * energy[0]
+
+
 def test_hertz_refuses_what_it_cannot_carry():
     from twoball.errors import ParameterError
 

@@ -6,6 +6,7 @@ from twoball.cubes import load_cube
 from twoball.model import Parameters, check_parameters
 from twoball.observables import ContactInterval, Result, Trajectory
 from twoball.solve import METHODS, SolverError, simulate
+from twoball.stack import Stack, StackResult, icm_chain, simulate_stack
 
 try:
     __version__ = version("twoball")
@@ -18,9 +19,13 @@ __all__ = [
     "Parameters",
     "Result",
     "SolverError",
+    "Stack",
+    "StackResult",
     "Trajectory",
     "__version__",
     "check_parameters",
     "load_cube",
+    "icm_chain",
     "simulate",
+    "simulate_stack",
 ]

@@ -28,7 +28,8 @@ next touch, clamp or apex is a root of a polynomial of degree at most two. A pha
 active is integrated with scipy's DOP853 (rtol 1e-12), whose every step is bounded so that no
 touch or release (a root of some overlap eta) can be stepped over: the energy never rises, so it
 bounds every overlap, speed and force over the whole run (:func:`_force_bounds`); with the
-contacts active in a phase, that bounds |eta''| <= M (:func:`_phase_bounds`);
+contacts active in a phase, that bounds eta'' towards each switch by M (:func:`_phase_bounds`:
+an active contact opens only by its own force, an inactive one closes only by its neighbours');
 a step keeps eta + eta' h - M h^2 / 2 on its side (the certified step of twoball.exact). That
 part is proven for the exact solution (the integrator's error, ~1e-12 relative, is not part of
 the proof). The clamp (1 + lam delta' = 0) and the apexes are located by sign changes at the
@@ -48,7 +49,6 @@ from scipy.optimize import brentq
 from twoball.errors import Status
 
 MAX_STEPS = 100_000  # about a minute and a half of steps
-SMALLEST_RESTITUTION = 0.05  # below it the clamp chatters (tested down to here)
 RTOL = 1e-12
 PROBES = 8  # dense-output points per step where the clamp and the apexes are looked for
 
@@ -180,18 +180,30 @@ def _force_bounds(stack: _Stack, energy: float) -> np.ndarray:
     return force
 
 
-def _phase_bounds(stack: _Stack, force: np.ndarray, active: np.ndarray) -> np.ndarray:
-    """M_c >= |eta_c''| while the phase lasts: only the forces of active contacts act, and
-    gravity cancels between two balls, so eta_c'' = f_c (1/m_c + 1/m_(c-1)) - f_(c+1)/m_c -
-    f_(c-1)/m_(c-1) (eta_0'' = -1 + (f_0 - f_1)/m_0)."""
+def _phase_bounds(
+    stack: _Stack, force: np.ndarray, active: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds on eta_c'' while the phase lasts, with each contact's force in [0, F_c] and only
+    active contacts pushing. Gravity cancels between two balls, so
+    eta_c'' = f_c (1/m_c + 1/m_(c-1)) - f_(c+1)/m_c - f_(c-1)/m_(c-1) and
+    eta_0'' = -1 + (f_0 - f_1)/m_0. Returns (|eta''| <= M, the bound towards the switch): an
+    active contact opens only by its own force, eta_c'' <= F_c (1/m_c + 1/m_(c-1)); an inactive
+    one closes only by its neighbours', -eta_c'' <= F_(c+1)/m_c + F_(c-1)/m_(c-1) (+ 1 for the
+    floor). The second is what a step needs; it stays small for a contact that just touches
+    while its neighbours push hard (balls released touching, at the floor's impact)."""
     m = stack.masses
     acting = np.where(active, force, 0.0)
     above = np.append(acting[1:], 0.0)
     below = np.concatenate([[0.0], acting[:-1]])
-    bound = np.empty(stack.n)
-    bound[0] = 1.0 + (acting[0] + above[0]) / m[0]
-    bound[1:] = acting[1:] * (1.0 / m[1:] + 1.0 / m[:-1]) + above[1:] / m[1:] + below[1:] / m[:-1]
-    return np.maximum(bound, 1e-300)
+    own = acting / m
+    own[1:] += acting[1:] / m[:-1]
+    neighbours = above / m
+    neighbours[1:] += below[1:] / m[:-1]
+    neighbours[0] += 1.0  # gravity pulls ball 0 towards the floor
+    both = own + neighbours
+    towards = np.where(active, own, neighbours)
+    towards[0] = max(own[0] - 1.0, 0.0) if active[0] else neighbours[0]
+    return np.maximum(both, 1e-300), np.maximum(towards, 1e-300)
 
 
 def solve(
@@ -224,6 +236,7 @@ def solve(
     status = Status.PHASE_LIMIT
     steps = 0
     fresh = -1  # the contact whose switch ended the last phase
+    resting = False
 
     def record(start: float, stop: float, state_at) -> None:
         nonlocal next_sample
@@ -261,14 +274,15 @@ def solve(
                 t,
                 active,
                 free,
-                _phase_bounds(stack, force_bound, active),
+                force_bound,
                 t_end,
                 steps,
                 record,
                 fresh,
+                not resting,
             )
-        if kind == "time":
-            status = Status.DONE
+        if kind == "time" or (resting and next_sample == len(times)):
+            status = Status.REST if resting else Status.DONE
             break
         if kind == "steps":
             break
@@ -284,7 +298,10 @@ def solve(
             continue
         if kind == "rest":
             status = Status.REST
-            break
+            if times is None or next_sample == len(times):
+                break
+            resting = True  # proven: carry on only to fill the samples asked for
+            continue
         # a switch: the contact's function fell through zero, so it toggles
         if active[index]:
             contacts.append((index, float(opened[index]), t))
@@ -363,22 +380,37 @@ def _step_for(stack: _Stack, y: np.ndarray, t: float, bound: np.ndarray, active)
     return step
 
 
-def _certified_step(stack: _Stack, y: np.ndarray, t: float, force_bound: np.ndarray, active):
-    """A step over which no overlap changes sign unseen (:func:`_step_for`), with the bound M
-    of the run's forces (:func:`_phase_bounds`), then doubled while a bound local to the step
-    still certifies it: over h, a compression is at most delta + |delta'| h + M h^2 / 2, which
-    bounds each force, hence a smaller M. (Near a first touch the forces are tiny, and the
-    run's bound alone would creep with steps of ~1e-9.)"""
-    bound = _phase_bounds(stack, force_bound, active)
-    step = _step_for(stack, y, t, bound, active)
+def _local_forces(stack: _Stack, y: np.ndarray, active, span: float, force_bound: np.ndarray):
+    """Bounds F_c on each force over the next ``span``, by bootstrap: if the forces stay below F,
+    |eta''| <= M(F) (:func:`_phase_bounds`), so a compression stays below
+    delta + |delta'| s + M s^2 / 2 and its speed below |delta'| + M s, hence each force below F';
+    when F' < F no force can be the first to reach F, so F holds. Falls back to the run's bound."""
     eta, deta = stack.overlaps(y)
     delta, speed = np.maximum(-eta, 0.0), np.abs(deta)
+    bound = np.minimum(2.0 * delta**1.5 * (1.0 + stack.lam * speed) + 1e-300, force_bound)
+    for _ in range(6):
+        both = _phase_bounds(stack, bound, active)[0]
+        reach = delta + speed * span + 0.5 * both * span * span
+        implied = reach**1.5 * (1.0 + stack.lam * (speed + both * span))
+        if (implied < bound).all():
+            return bound
+        bound = np.minimum(np.maximum(bound, 1.5 * implied), force_bound)
+        if (bound == force_bound).all():
+            break
+    return force_bound
+
+
+def _certified_step(stack: _Stack, y: np.ndarray, t: float, force_bound: np.ndarray, active):
+    """A step over which no overlap changes sign unseen (:func:`_step_for`), with the bound
+    towards each switch from the run's forces (:func:`_phase_bounds`), then doubled while the
+    forces bounded over the step itself (:func:`_local_forces`) still certify it. (Near a first
+    touch the forces are tiny, and the run's bound alone would creep with steps of ~1e-9; in a
+    stack at rest they are its weights.)"""
+    step = _step_for(stack, y, t, _phase_bounds(stack, force_bound, active)[1], active)
     for _ in range(60):
         trial = 2.0 * step
-        reach = delta + speed * trial + 0.5 * bound * trial * trial
-        local = reach**1.5 * (1.0 + stack.lam * (speed + bound * trial))
-        local = np.minimum(local, force_bound)
-        if _step_for(stack, y, t, _phase_bounds(stack, local, active), active) < trial:
+        local = _local_forces(stack, y, active, trial, force_bound)
+        if _step_for(stack, y, t, _phase_bounds(stack, local, active)[1], active) < trial:
             break
         step = trial
     return step
@@ -400,7 +432,9 @@ def _switching(stack: _Stack, y: np.ndarray, t: float, active) -> tuple:
     return sign * value, sign * rate, rounding
 
 
-def _contact_phase(stack, y, t, active, free, force_bound, t_end, steps, record, fresh):
+def _contact_phase(
+    stack, y, t, active, free, force_bound, t_end, steps, record, fresh, watch_rest=True
+):
     """Integrate a phase with a contact active to its first event (see the module); ``fresh``
     is the contact whose switch began the phase (-1 for none): its function starts at zero.
 
@@ -462,20 +496,22 @@ def _contact_phase(stack, y, t, active, free, force_bound, t_end, steps, record,
             return "switch", k, root, state, steps
         if solver.status == "finished":
             return "time", -1, solver.t, solver.y.copy(), steps
-        if active.all() and _settled(stack, solver.y):
+        if watch_rest and _settled(stack, solver.y):
             return "rest", -1, solver.t, solver.y.copy(), steps
     return "steps", -1, solver.t, solver.y.copy(), steps
 
 
 def _settled(stack: _Stack, y: np.ndarray) -> bool:
-    """Every contact pushing and the energy within 1e-12 of the static stack's (estimated)."""
-    m = stack.masses
-    weights = np.cumsum(m[::-1])[::-1]
-    delta = weights ** (2.0 / 3.0)
-    static = _Stack(m, stack.lam)
-    rest_heights = np.cumsum(-delta)
-    rest = static.energy(np.concatenate([rest_heights, np.zeros(stack.n)]))
-    return stack.energy(y) - rest <= 1e-12 * (1.0 + abs(rest))
+    """True when no contact can open again, which is proven by the energy (docs/model.md, "The
+    Hertz force", rest): with W_c the weight above contact c, the potential is a sum over contacts
+    of W_c eta_c + (2/5) delta_c^(5/2), least at delta_c = W_c^(2/3), where it is -(3/5) W_c^(5/3);
+    contact c open (eta_c >= 0) costs at least (3/5) W_c^(5/3) more. The energy never rises, so
+    once it lies below the least of these (the top ball's) above the minimum, no ball flies again.
+    """
+    weights = np.cumsum(stack.masses[::-1])[::-1]
+    lowest = -0.6 * float((weights ** (5.0 / 3.0)).sum())
+    # half the proven margin leaves room for the integrator's error in the energy (~1e-12 E)
+    return stack.energy(y) - lowest < 0.3 * weights[-1] ** (5.0 / 3.0)
 
 
 def simulate(stack, apexes_wanted: int, t_end: float, times: np.ndarray | None):

@@ -51,8 +51,11 @@ MAX_BALLS = 16
 # five to eight balls of any mass ratio with gaps of 1e-12 and less; four near-elastic balls
 # released touching at H = 10). Three balls carry a zero gap: 576 drops over eps 0.3-1,
 # H 10-1e5 and mass ratios 0.01-10 all finish.
+# (the linear force's: a Hertz contact's force is continuous at first touch, and its step bounds a
+# touching contact by its own force only; touching Hertz stacks of 4 to 6 balls finish)
 TOUCHING_LIMIT_BALLS = 4
 SMALLEST_GAP = 1e-9
+HERTZ_SMALLEST_RESTITUTION = 0.05  # below it the Hunt-Crossley clamp chatters
 MAX_STEPS_PER_PHASE = 100_000
 MAX_PHASES = 1_000_000
 
@@ -673,15 +676,23 @@ def _values(name: str, declared: str, values: object, count: int, what: str) -> 
 
 
 def check_stack(
-    mass_ratios: object, eps: object, tau_ratios: object, *, height: float = DEFAULT_HEIGHT
+    mass_ratios: object,
+    eps: object,
+    tau_ratios: object,
+    *,
+    height: float = DEFAULT_HEIGHT,
+    force: str = "linear",
 ) -> Stack:
     """Validate a stack's inputs with the two-ball model's ranges and derive the rest.
 
     ``mass_ratios`` holds the N - 1 ratios m_i / m_(i-1) (each a ``mu``); ``eps`` one restitution
     or N (the floor's, then each pair's); ``tau_ratios`` one gap or N - 1 (each a ``tau_ratio``,
-    the delay td_i over the floor contact time). Raises ``ParameterError`` (a ``ValueError``)
-    naming the parameter and its allowed range.
+    the delay td_i over the floor contact time); ``force`` the contact law, which sets the
+    smallest gap (:data:`TOUCHING_LIMIT_BALLS`) and, for Hertz, the smallest eps. Raises
+    ``ParameterError`` (a ``ValueError``) naming the parameter and its allowed range.
     """
+    if force not in FORCES:
+        raise ParameterError(f"force must be one of {', '.join(FORCES)}; got {force!r}")
     try:
         ratios = list(np.ravel(np.asarray(mass_ratios, dtype=object)))
     except (TypeError, ValueError):
@@ -702,12 +713,17 @@ def check_stack(
             "the masses relative to ball 0 (products of mass_ratios) must lie in [1e-09, 1e+06]; "
             f"got {masses.min():.3g} to {masses.max():.3g}"
         )
-    if balls >= TOUCHING_LIMIT_BALLS and min(gaps) < SMALLEST_GAP:
+    if force == "linear" and balls >= TOUCHING_LIMIT_BALLS and min(gaps) < SMALLEST_GAP:
         raise ParameterError(
             f"tau_ratios must be at least {SMALLEST_GAP:g} with {TOUCHING_LIMIT_BALLS} or more "
-            f"balls; got {min(gaps):g}. Balls released touching pass the first impact's "
-            "compression up the stack as a contact flatter than rounding, which the solver "
-            "cannot follow (docs/stacks.md, Limits)"
+            f"balls and the linear force; got {min(gaps):g}. Balls released touching pass the "
+            "first impact's compression up the stack as a contact flatter than rounding, which "
+            "the solver cannot follow (docs/stacks.md, Limits)"
+        )
+    if force == "hertz" and min(restitutions) < HERTZ_SMALLEST_RESTITUTION:
+        raise ParameterError(
+            f"eps must be at least {HERTZ_SMALLEST_RESTITUTION:g} with the hertz force "
+            f"(tested range [{HERTZ_SMALLEST_RESTITUTION:g}, 1]); got {min(restitutions):g}"
         )
     zeta = np.empty(balls)
     zeta[0] = decay_ratio(restitutions[0])
@@ -855,9 +871,7 @@ def simulate_stack(
     >>> bool(abs(pair.h2 - single.h2) < 1e-9 * single.h2), pair.contacts_first[1]
     (True, 4)
     """
-    stack = check_stack(mass_ratios, eps, tau_ratios, height=height)
-    if force not in FORCES:
-        raise ParameterError(f"force must be one of {', '.join(FORCES)}; got {force!r}")
+    stack = check_stack(mass_ratios, eps, tau_ratios, height=height, force=force)
     apexes_wanted, t_end = stop_rule(until)
     times = None
     if t_eval is not None:
@@ -866,12 +880,6 @@ def simulate_stack(
             raise ParameterError("t_eval must be a one-dimensional array of finite times")
     if force == "hertz":
         from twoball import hertz
-
-        if min(stack.eps) < hertz.SMALLEST_RESTITUTION:
-            raise ParameterError(
-                f"eps must be at least {hertz.SMALLEST_RESTITUTION:g} with the hertz force "
-                f"(tested range [{hertz.SMALLEST_RESTITUTION:g}, 1]); got {min(stack.eps):g}"
-            )
 
         result = hertz.simulate(stack, apexes_wanted, t_end, times)
         stack = result.stack  # its gaps are in units of the Hertz floor contact
