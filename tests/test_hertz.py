@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from twoball import hertz
+from twoball.errors import Status
 from twoball.stack import icm_chain, simulate_stack
 
 
@@ -144,8 +145,13 @@ def test_hertz_refuses_what_it_cannot_carry():
     gap=st.floats(0.0, 1.0),
 )
 def test_any_hertz_stack_reaches_an_honest_answer(ratios, eps, gap):
+    """Lighter balls on heavier ones (the app's range) finish; heavy balls on light ones finish
+    or, nearly elastic and released touching, may run out of steps, loudly (docs/stacks.md)."""
     result = simulate_stack(ratios, eps, gap, force="hertz", throw=False)
-    assert result.success, result.status  # which includes: no apex above what energy allows
+    if max(ratios) <= 1.0:
+        assert result.success, result.status  # which includes: no apex above what energy allows
+    else:
+        assert result.success or result.status == Status.PHASE_LIMIT, result.status
 
 
 def test_the_check_values_of_the_specification():

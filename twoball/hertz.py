@@ -235,7 +235,10 @@ def solve(
     next_sample = 0
     status = Status.PHASE_LIMIT
     steps = 0
-    fresh = -1  # the contact whose switch ended the last phase
+    # the contacts switched at this instant: each switches at most once in an instant (at a
+    # clamp reached with no rate, two contacts toggled each other forever at one time)
+    fresh = np.zeros(n, dtype=bool)
+    switched_at = 0.0
     resting = False
 
     def record(start: float, stop: float, state_at) -> None:
@@ -281,12 +284,18 @@ def solve(
                 fresh,
                 not resting,
             )
+            steps += 1  # a phase counts, so that a run always ends
         if kind == "time" or (resting and next_sample == len(times)):
             status = Status.REST if resting else Status.DONE
             break
         if kind == "steps":
             break
-        fresh = index if kind == "switch" else -1
+        if kind == "switch":
+            if not fresh.any() or t != switched_at:
+                fresh[:] = False
+            fresh[index], switched_at = True, t
+        else:
+            fresh[:] = False
         if kind == "apex":
             y[n + index] = 0.0
             apexes.append((index, t, float(y[index])))
@@ -436,7 +445,8 @@ def _contact_phase(
     stack, y, t, active, free, force_bound, t_end, steps, record, fresh, watch_rest=True
 ):
     """Integrate a phase with a contact active to its first event (see the module); ``fresh``
-    is the contact whose switch began the phase (-1 for none): its function starts at zero.
+    marks the contacts switched at its start time: their functions start at zero, and they do
+    not switch again before a step is taken.
 
     Watched: each contact's switching function (:func:`_switching`), an event when it falls
     below zero, and the velocity of each ball in free flight going up (its apex)."""
@@ -457,8 +467,8 @@ def _contact_phase(
         # at a root to rounding and moving through it, or past it: the switch is here
         value, rate, rounding = _switching(stack, solver.y, solver.t, active)
         due = (value < -rounding) | ((value <= rounding) & (rate < 0.0))
-        if 0 <= fresh < n and solver.t == t:
-            due[fresh] = False  # it has just switched
+        if solver.t == t:
+            due &= ~fresh  # they have just switched
         if due.any():
             return "switch", int(np.flatnonzero(due)[0]), solver.t, solver.y.copy(), steps
         solver.max_step = _certified_step(stack, solver.y, solver.t, force_bound, active)
