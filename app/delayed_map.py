@@ -23,14 +23,14 @@ import numpy as np
 import panel as pn
 import param
 import xarray as xr
-from bokeh.models import BasicTickFormatter, FixedTicker
+from bokeh.models import BasicTickFormatter, ColumnDataSource, FixedTicker
 from holoviews.operation import contours
 
 import twoball
 from twoball import jit
 from twoball.sweep import compute_block
 
-from .scene import Scene, font_sizes
+from .scene import Scene, font_sizes, later
 from .state import validate
 
 CUBE = "map"
@@ -109,6 +109,7 @@ class MapScene(Scene):
     variable = param.Selector(
         default="h2_over_h1", objects=list(SHOWN), doc="The quantity coloured on the map."
     )
+    moved = param.Event(doc="mu or tau_ratio changed while the map is on screen: the star moves.")
 
     def __init__(self, **params):
         super().__init__(**params)
@@ -121,10 +122,16 @@ class MapScene(Scene):
         )
         self.choice.link(self, value="variable")
         self.note = pn.pane.Markdown(
-            pn.bind(self._note, self.param.revision, self.param.active),
+            pn.bind(self._note, self.param.revision, self.param.moved, self.param.active),
             sizing_mode="stretch_width",
         )
         self.tap: hv.streams.Tap | None = None
+        # the star (current mu, tau_ratio): a glyph of its own on the figure, moved by its data
+        # alone; as a HoloViews layer each move re-rendered the whole overlay (~120 ms of
+        # server CPU), and bound to mu directly it did so on every scene
+        self.star = ColumnDataSource(
+            {"x": [math.log10(self.state.mu)], "y": [math.log10(self.state.tau_ratio)]}
+        )
         # a new figure per variable (its colour scale and label change); within one, the
         # figure's DynamicMaps follow the state
         self.figure = pn.pane.HoloViews(
@@ -135,14 +142,12 @@ class MapScene(Scene):
         ticks = _decade_ticks(map_cube())
         image = hv.DynamicMap(pn.bind(self._image, self.param.revision, variable))
         outline = hv.DynamicMap(pn.bind(self._outline, self.param.revision))
-        marker = hv.DynamicMap(
-            pn.bind(self._marker, self.state.param.mu, self.state.param.tau_ratio)
-        )
         # the stream before the overlay that shows the image: HoloViews links it at creation,
         # and only to a DynamicMap of one element (not of an overlay)
         self.tap = hv.streams.Tap(source=image, x=None, y=None)
         self.tap.param.watch(self._tapped, ["x", "y"])
-        return (image * outline * marker).opts(
+        return (image * outline).opts(
+            hooks=[self._draw_star],
             xticks=ticks["mu"],
             yticks=ticks["tau_ratio"],
             xlabel="mu = m2/m1 (log scale)",
@@ -155,8 +160,32 @@ class MapScene(Scene):
 
     def _state_changed(self, *events: param.parameterized.Event) -> None:
         if {e.name for e in events} <= {"mu", "tau_ratio"}:
-            return  # only the marker moves, and it follows mu and tau_ratio itself
+            if self.active:  # (on the next tick: a click on the map lands here unlocked)
+                later(self._move_star)
+            return
         super()._state_changed(*events)
+
+    def _redraw(self) -> None:
+        if self.active:  # back on screen: the star to where mu and tau_ratio went meanwhile
+            self._move_star()
+        super()._redraw()
+
+    def _move_star(self) -> None:
+        """The star to the current mu and tau_ratio (the map is drawn in log10), and the note."""
+        self.star.data = {
+            "x": [math.log10(self.state.mu)],
+            "y": [math.log10(self.state.tau_ratio)],
+        }
+        self.param.trigger("moved")
+
+    def _draw_star(self, plot, element) -> None:
+        """HoloViews hook: the star's glyph on the map's Bokeh figure, once per figure."""
+        figure = plot.state
+        if not any(getattr(r, "data_source", None) is self.star for r in figure.renderers):
+            figure.scatter(
+                "x", "y", source=self.star, marker="star", size=18,
+                fill_color="yellow", line_color="black",
+            )  # fmt: skip
 
     def _is_cube_drop(self) -> bool:
         """Whether the current drop's H and eps12 are the cube's (else a slice is computed)."""
@@ -176,7 +205,8 @@ class MapScene(Scene):
         except (OSError, ValueError, KeyError) as error:
             self.slice, self.error = None, f"The map cube could not be read: {error}"
 
-    def _note(self, revision: int, active: bool) -> str:
+    def _note(self, *_changes: object) -> str:
+        """What the map shows and how to read it (bound to revision, moved and active)."""
         if not self.active:
             return ""  # off screen: nothing is computed
         self.current()
@@ -273,12 +303,6 @@ class MapScene(Scene):
             dims,
         )
         return contours(flags, levels=[0.5]).opts(color="black", line_width=1.5)
-
-    def _marker(self, mu: float, tau_ratio: float) -> hv.Points:
-        point = (math.log10(mu), math.log10(tau_ratio))
-        return hv.Points([point], ["log_mu", "log_tau_ratio"]).opts(
-            marker="star", size=18, color="yellow", line_color="black"
-        )
 
     def _tapped(self, *events: param.parameterized.Event) -> None:
         tap = events[0].obj
