@@ -30,6 +30,7 @@ from appdriver import (  # noqa: E402
     open_page,
     panel_serve,
     serve,
+    server_errors,
     start_slider_move,
     wait_until_served,
 )
@@ -49,6 +50,13 @@ def cpu_seconds(pid: int) -> float:
     """User + system CPU time of a process so far (/proc)."""
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / TICKS
+
+
+def server_errors_in(log: str) -> list[str]:
+    with tempfile.NamedTemporaryFile("w", suffix=".log") as file:
+        file.write(log)
+        file.flush()
+        return server_errors(Path(file.name))
 
 
 def main() -> None:
@@ -116,6 +124,8 @@ def main() -> None:
         f"{statistics.median(rounds):.2f} s, max {max(rounds):.2f} s"
     )
     print(f"  console errors: {len(errors)}; server tracebacks: {log.count('Traceback')}")
+    for entry in server_errors_in(log):
+        print("  server:", " | ".join(entry.strip().splitlines()[:2]), "...", entry.strip()[-200:])
 
 
 if __name__ == "__main__":
