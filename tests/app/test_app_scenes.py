@@ -43,8 +43,8 @@ def test_the_stack_scene_computes_only_for_its_own_parameters():
     assert "4 balls, linear force" in explorer.scenes["stack"].summary.object
 
 
-def _changed_models_by_scene(explorer: Explorer, change) -> dict[str, int]:
-    """How many Bokeh models of each scene's tab a change of the state modifies."""
+def _models_by_scene(explorer: Explorer):
+    """The explorer in a document, and the scene whose tab holds each Bokeh model."""
     from bokeh.models import Tabs
 
     document = Document()
@@ -56,12 +56,17 @@ def _changed_models_by_scene(explorer: Explorer, change) -> dict[str, int]:
         for name, panel in zip(explorer.scenes, tabs.tabs, strict=True)
         for model in panel.child.references()
     }
+    return document, owners
+
+
+def _changed(explorer: Explorer, document: Document, owners: dict, change) -> dict[str, int]:
+    """How many Bokeh models of each scene's tab a change of the state modifies."""
     events = []
     document.on_change(events.append)
     change()
-    touched = {getattr(event, "model", None) for event in events}
+    document.remove_on_change(events.append)
     counts = dict.fromkeys(explorer.scenes, 0)
-    for model in touched:
+    for model in {getattr(event, "model", None) for event in events}:
         if model is not None and model.id in owners:
             counts[owners[model.id]] += 1
     return counts
@@ -71,14 +76,15 @@ def test_a_move_redraws_only_the_scene_on_screen():
     """A class moving sliders at once costs the server what one move redraws: a scene off
     screen must not redraw (the map's star once followed mu itself, ~100 ms a move)."""
     explorer = Explorer({})
-    counts = _changed_models_by_scene(explorer, lambda: explorer.state.param.update(mu=0.03))
+    document, owners = _models_by_scene(explorer)
+    counts = _changed(explorer, document, owners, lambda: explorer.state.param.update(mu=0.03))
     assert counts["drop"] > 0
     assert {name: n for name, n in counts.items() if name != "drop"} == dict.fromkeys(
         ("closeup", "map", "accuracy", "stack"), 0
     )
     explorer.state.scene = "map"
-    star_moves = _changed_models_by_scene(explorer, lambda: explorer.state.param.update(mu=0.05))
-    assert star_moves["map"] > 0 and star_moves["drop"] == 0
+    moves = _changed(explorer, document, owners, lambda: explorer.state.param.update(mu=0.05))
+    assert moves["map"] > 0 and moves["drop"] == 0
 
 
 def test_only_the_scene_on_screen_computes():
