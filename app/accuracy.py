@@ -64,8 +64,9 @@ class AccuracyScene(Scene):
         if self.active:
             self._start()
 
-    def _activated(self, event: param.parameterized.Event) -> None:
-        if event.new and self._stale:
+    @param.depends("active", watch=True)
+    def _activated(self) -> None:
+        if self.active and self._stale:
             self._start()
 
     def _start(self) -> None:
@@ -90,10 +91,10 @@ class AccuracyScene(Scene):
         if request != self._request:
             return  # superseded by a newer drop
         self.rows = rows
-        self.revision += 1
+        self.param.trigger("revision")
         self.view.loading = False
 
-    def _plot(self, revision: int) -> hv.Overlay:
+    def _plot(self, revision: bool) -> hv.Overlay:
         time_dim = hv.Dimension("seconds", label="run time per drop [s]")
         error_dim = hv.Dimension("error", label="relative error of h1, h2 (larger)")
         layers = []
@@ -121,7 +122,7 @@ class AccuracyScene(Scene):
             )
         )
 
-    def _table(self, revision: int) -> str:
+    def _table(self, revision: bool) -> str:
         if not self.rows:
             return ""
         lines = ["| method | tolerance | error h1 | error h2 | seconds |", "|---|---|---|---|---|"]
@@ -133,5 +134,5 @@ class AccuracyScene(Scene):
             )
         return "\n".join(lines)
 
-    def __panel__(self) -> pn.viewable.Viewable:
+    def layout(self) -> pn.viewable.Viewable:
         return self.view

@@ -63,7 +63,6 @@ class CloseUpScene(Scene):
         self.ball_force.line("t", "f12", source=self.samples, color=UPPER, line_width=2)
         for fig in (self.positions, self.floor_force, self.ball_force):
             readable(fig, self.state.presentation)
-        self.param.watch(self._draw, "revision")
 
     def _figure(self, title: str, height: int, **shared):
         """A figure of the scene; ``x_range`` shares the time axis with the first one."""
@@ -75,6 +74,7 @@ class CloseUpScene(Scene):
             **shared,
         )
 
+    @param.depends("revision", watch=True)
     def _draw(self, *events: param.parameterized.Event) -> None:
         """Send the current collision to the figures (only while on screen)."""
         if not self.active:
@@ -106,7 +106,7 @@ class CloseUpScene(Scene):
         )
         self.result = dataclasses.replace(first, trajectory=first.evaluate(times))
 
-    def _contacts_text(self, revision: int, active: bool) -> str:
+    def _contacts_text(self, revision: bool, active: bool) -> str:
         if not self.active:
             return ""  # off screen: nothing is computed
         self.current()
@@ -131,7 +131,7 @@ class CloseUpScene(Scene):
                 )
         return "\n".join(lines)
 
-    def __panel__(self) -> pn.viewable.Viewable:
+    def layout(self) -> pn.viewable.Viewable:
         self._draw()
         return pn.Column(
             pn.pane.Bokeh(self.positions, sizing_mode="stretch_width"),

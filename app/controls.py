@@ -16,7 +16,7 @@ from bokeh.models import CustomJSTickFormatter
 
 from twoball import presets
 
-from .scene import later
+from .scene import Built, later
 from .state import APP_RANGES, ExplorerState, validate
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
@@ -49,7 +49,7 @@ ball): up to 9 times the drop height for elastic balls and a very light upper ba
 """
 
 
-class Controls(pn.viewable.Viewer):
+class Controls(Built):
     """Widgets bound to one :class:`ExplorerState`, and the message box for bad input."""
 
     state = param.ClassSelector(class_=ExplorerState)
@@ -94,6 +94,7 @@ class Controls(pn.viewable.Viewer):
         self.height.param.watch(self._height_typed, "value")
         self.eps12.param.watch(self._eps12_typed, "value")
         self._syncing = False  # True while the widgets follow the state
+        # (a watcher, not @param.depends: _show_state reads which parameters changed)
         self.state.param.watch(
             self._show_state, ["eps", "mu", "tau_ratio", "height", "eps12", "units"]
         )
@@ -221,7 +222,7 @@ class Controls(pn.viewable.Viewer):
         self.height.param.update(value=f"{height:.6g}")
         self.eps12.param.update(value="" if s.eps12 is None else f"{s.eps12:.6g}")
 
-    def __panel__(self) -> pn.viewable.Viewable:
+    def layout(self) -> pn.viewable.Viewable:
         advanced = pn.Card(
             self.height, self.eps12, title="advanced", collapsed=True, sizing_mode="stretch_width"
         )

@@ -58,13 +58,13 @@ def map_cube() -> xr.Dataset:
     return twoball.load_cube(CUBE)
 
 
-@functools.lru_cache(maxsize=128)
+@pn.cache(max_items=128)  # shared by every session of the server, as the cube is
 def eps_slice(eps: float, variable: str) -> xr.Dataset:
     """One variable and the delayed-rebound flags at one of the cube's eps values."""
     return map_cube()[[variable, "delayed_rebound"]].sel(eps=eps).load()
 
 
-@functools.lru_cache(maxsize=32)
+@pn.cache(max_items=32)
 def computed_slice(eps: float, height: float, eps12: float | None) -> xr.Dataset:
     """The map's slice at ``eps`` for another drop height or ball-ball restitution than the
     cube's, computed on the cube's mu and tau_ratio axes with the sweep's batch path (about
@@ -245,7 +245,7 @@ class MapScene(Scene):
             )
         return "  \n".join(lines)
 
-    def _image(self, revision: int, variable: str) -> hv.Image:
+    def _image(self, revision: bool, variable: str) -> hv.Image:
         mu_dim = hv.Dimension("log_mu", label="log10 mu")
         tau_dim = hv.Dimension("log_tau_ratio", label="log10 tau_d/tau_f")
         if self.slice is not None and variable not in self.slice.data_vars:
@@ -281,7 +281,7 @@ class MapScene(Scene):
             opts = dict(cmap="viridis", logz=False, clim=(np.nan, np.nan))
         return mesh.opts(colorbar=True, tools=["hover", "tap"], **opts)
 
-    def _outline(self, revision: int) -> hv.Contours:
+    def _outline(self, revision: bool) -> hv.Contours:
         """The outline of the delayed rebounds (h2 > h1) of the slice.
 
         One path per region instead of one cross per grid point: ~3000 markers made every
@@ -312,7 +312,7 @@ class MapScene(Scene):
         tau_ratio, _ = validate("tau_ratio", 10.0**tap.y, self.state.tau_ratio)
         self.state.param.update(mu=mu, tau_ratio=tau_ratio)
 
-    def __panel__(self) -> pn.viewable.Viewable:
+    def layout(self) -> pn.viewable.Viewable:
         return pn.Column(
             pn.Row(self.choice),
             self.note,

@@ -110,8 +110,6 @@ class DropScene(Scene):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # 1366x768: under the header, tabs, caption and summary
             self.heights.height = self.animation.height = 400
-        self.param.watch(self._show_frame, "frame")
-        self.param.watch(self._draw, "revision")
 
     def _heights_figure(self):
         fig = figure(
@@ -175,6 +173,7 @@ class DropScene(Scene):
         self.times = frame_times(self.result.end_time, self.result.contacts)
         self.player.end = len(self.times) - 1
 
+    @param.depends("revision", watch=True)
     def _draw(self, *events: param.parameterized.Event) -> None:
         """Send the current drop to the figures (only while on screen)."""
         if not self.active:
@@ -204,6 +203,7 @@ class DropScene(Scene):
         self.heights.xaxis.axis_label = units.time_label
         self._show_frame()
 
+    @param.depends("frame", watch=True)
     def _show_frame(self, *events: param.parameterized.Event) -> None:
         """Place the balls at the frame's time: the lower ball stands on its height X1, the
         upper ball on the lower one when X2 = X1 (they overlap by the compression)."""
@@ -258,7 +258,7 @@ class DropScene(Scene):
             f"{units.height(r.x2_0)}; ball contacts in the first bounce: {r.contacts_first}"
         )
 
-    def __panel__(self) -> pn.viewable.Viewable:
+    def layout(self) -> pn.viewable.Viewable:
         self._draw()
         heights = pn.pane.Bokeh(
             self.heights, sizing_mode="stretch_width", styles={"flex": "1 1 340px"}

@@ -91,10 +91,10 @@ class Explorer(pn.viewable.Viewer):
     state = param.ClassSelector(class_=ExplorerState)
 
     def __init__(self, query: Mapping[str, str] | None = None, **params):
-        params.setdefault("state", ExplorerState())
-        super().__init__(**params)
-        values, messages = read_query(query or {}, self.state)
-        self.state.param.update(**values)
+        state = params.pop("state", None) or ExplorerState()
+        values, messages = read_query(query or {}, state)
+        state.param.update(**values)  # before the scenes exist (_scene_chosen depends on it)
+        super().__init__(state=state, **params)
         self.controls = Controls(state=self.state, messages=messages)
         self.lesson = Lesson(state=self.state)
         self.scenes = {
@@ -115,7 +115,6 @@ class Explorer(pn.viewable.Viewer):
             sizing_mode="stretch_width",
         )
         self.tabs.param.watch(self._tab_chosen, "active")
-        self.state.param.watch(self._scene_chosen, "scene")
         self.scenes[self.state.scene].active = True
 
     @staticmethod
@@ -129,16 +128,20 @@ class Explorer(pn.viewable.Viewer):
     def _tab_chosen(self, event: param.parameterized.Event) -> None:
         self.state.scene = SCENES[event.new]
 
-    def _scene_chosen(self, event: param.parameterized.Event) -> None:
+    @param.depends("state.scene", watch=True)
+    def _scene_chosen(self) -> None:
         for name, scene in self.scenes.items():
-            scene.active = name == event.new
-        self.tabs.active = SCENES.index(event.new)
+            scene.active = name == self.state.scene
+        self.tabs.active = SCENES.index(self.state.scene)
 
     def follow_location(self, location: pn.io.location.Location) -> None:
         """Keep the browser's URL equal to the state (bad values in it are replaced at once).
 
         The URL is rewritten shortly after a change, once for a burst of changes: sent in the
         same update as the plots it delayed them by about 65 ms (benchmarks/app_latency.py).
+        Not ``pn.state.location.sync``: that writes every change at once (each slider step of a
+        drag) and reads values with Panel's own parsing, while the query here has its own short
+        keys, units and validation with messages (app/state.py, ``read_query``/``url_query``).
         """
         pending = False
 

@@ -15,7 +15,7 @@ import param
 
 from twoball import presets
 
-from .scene import later
+from .scene import Built, later
 from .state import ExplorerState
 
 HEIGHT = 1e4  # about a 1 m drop (twoball.presets), and the height of the shipped map
@@ -143,7 +143,7 @@ STEPS = (
 )
 
 
-class Lesson(pn.viewable.Viewer):
+class Lesson(Built):
     """The lesson's card: the step's text, its question, reveal, previous and next."""
 
     state = param.ClassSelector(class_=ExplorerState)
@@ -166,7 +166,6 @@ class Lesson(pn.viewable.Viewer):
         )
         self.start.on_click(lambda _: later(lambda: self._go(1)))
         self.choices.param.watch(self._chosen, "value")
-        self.state.param.watch(self._show, "step")
         self._show()
 
     def _go(self, step: int) -> None:
@@ -193,7 +192,8 @@ class Lesson(pn.viewable.Viewer):
         self.reveal.disabled = True
         self.choices.disabled = True
 
-    def _show(self, *_events: param.parameterized.Event) -> None:
+    @param.depends("state.step", watch=True)
+    def _show(self) -> None:
         step = self.state.step
         lesson_on = step > 0
         for widget in (self.choices, self.reveal, self.previous, self.next):
@@ -215,7 +215,7 @@ class Lesson(pn.viewable.Viewer):
         self.previous.disabled = step == 1
         self.next.label = "Next >" if step < len(STEPS) else "End the lesson"
 
-    def __panel__(self) -> pn.viewable.Viewable:
+    def layout(self) -> pn.viewable.Viewable:
         return pn.Card(
             self.heading,
             self.start,

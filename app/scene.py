@@ -28,17 +28,32 @@ def later(callback) -> None:
         document.add_next_tick_callback(callback)
 
 
-class Scene(pn.viewable.Viewer):
-    """A scene of the explorer. Subclasses implement :meth:`update` and :meth:`__panel__`.
+class Built(pn.viewable.Viewer):
+    """A viewer whose layout is built once, by :meth:`layout`, and returned by ``__panel__``
+    from then on (its widgets and figures keep their Bokeh models for the session)."""
+
+    _layout: pn.viewable.Viewable | None = None
+
+    def layout(self) -> pn.viewable.Viewable:
+        raise NotImplementedError
+
+    def __panel__(self) -> pn.viewable.Viewable:
+        if self._layout is None:
+            self._layout = self.layout()
+        return self._layout
+
+
+class Scene(Built):
+    """A scene of the explorer. Subclasses implement :meth:`update` and :meth:`layout`.
 
     A change of the watched parameters marks the scene stale and, if it is ``active`` (on
-    screen), bumps ``revision``, which redraws its views; each view calls :meth:`current`
+    screen), fires ``revision``, which redraws its views; each view calls :meth:`current`
     first. A scene off screen is recomputed when it comes on screen.
     """
 
     state = param.ClassSelector(class_=ExplorerState, doc="The session's shared state.")
     active = param.Boolean(default=False, doc="Whether the scene is on screen.")
-    revision = param.Integer(default=0, doc="Counts the recomputations (plots depend on it).")
+    revision = param.Event(doc="Fires when the scene must redraw (its views depend on it).")
 
     watched: tuple[str, ...] = (*MODEL_PARAMETERS, "units")
 
@@ -46,21 +61,22 @@ class Scene(pn.viewable.Viewer):
         super().__init__(**params)
         self._stale = True
         self.computations = 0
+        # (a watcher, not @param.depends: each scene class names its own ``watched``)
         self.state.param.watch(self._state_changed, list(self.watched))
-        self.param.watch(self._activated, "active")
 
     def _state_changed(self, *events: param.parameterized.Event) -> None:
         self._stale = True
         if self.active:
-            self.revision += 1
+            self.param.trigger("revision")
 
-    def _activated(self, event: param.parameterized.Event) -> None:
-        if event.new:  # redrawn each time it comes on screen (recomputed only if stale)
+    @param.depends("active", watch=True)
+    def _activated(self) -> None:
+        if self.active:  # redrawn each time it comes on screen (recomputed only if stale)
             later(self._redraw)
 
     def _redraw(self) -> None:
         if self.active:  # (a text bound to ``active`` may have recomputed it meanwhile)
-            self.revision += 1
+            self.param.trigger("revision")
 
     def current(self) -> None:
         """Recompute what the scene shows if the state changed since; every view calls this

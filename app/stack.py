@@ -69,7 +69,7 @@ class StackScene(Scene):
             sizing_mode="stretch_width",
         )
         self.player = pn.widgets.Player(
-            name="Animation",
+            label="Animation",
             start=0,
             end=1,
             value=0,
@@ -92,8 +92,6 @@ class StackScene(Scene):
         self.animation = self._animation_figure()
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)
-        self.param.watch(self._show_frame, "frame")
-        self.param.watch(self._draw, "revision")
 
     def _heights_figure(self):
         fig = figure(
@@ -152,6 +150,7 @@ class StackScene(Scene):
         self.times = frame_times(first.end_time, first.contacts)
         self.player.end = len(self.times) - 1
 
+    @param.depends("revision", watch=True)
     def _draw(self, *events: param.parameterized.Event) -> None:
         if not self.active:
             return
@@ -180,6 +179,7 @@ class StackScene(Scene):
         self.animation.y_range.update(start=low, end=room, reset_start=low, reset_end=room)
         self._show_frame()
 
+    @param.depends("frame", watch=True)
     def _show_frame(self, *events: param.parameterized.Event) -> None:
         """Each ball drawn on its height, stacked: ball i stands on ball i-1 when X_i = X_(i-1)
         (their overlap is the compression); radii follow the masses (equal density)."""
@@ -223,7 +223,7 @@ class StackScene(Scene):
             f"Contacts before h1 (floor, then each pair): {counts}."
         )
 
-    def __panel__(self) -> pn.viewable.Viewable:
+    def layout(self) -> pn.viewable.Viewable:
         self._draw()
         heights = pn.pane.Bokeh(
             self.heights, sizing_mode="stretch_width", styles={"flex": "1 1 340px"}

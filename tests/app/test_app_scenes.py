@@ -30,6 +30,19 @@ def computations(explorer: Explorer) -> dict[str, int]:
     return {name: scene.computations for name, scene in explorer.scenes.items()}
 
 
+@pytest.mark.parametrize("scene", ["drop", "closeup", "map", "stack"])
+def test_a_page_opens_on_the_scene_its_url_names(scene):
+    """Only that scene is on screen, computed, and its tab chosen (the query is read before
+    the scenes exist, and the tab follows the state)."""
+    explorer = rendered({"scene": scene})
+    assert [name for name, shown in explorer.scenes.items() if shown.active] == [scene]
+    assert explorer.tabs.active == list(explorer.scenes).index(scene)
+    assert explorer.scenes[scene].computations == 1
+    explorer.state.scene = "drop" if scene != "drop" else "map"
+    assert not explorer.scenes[scene].active
+    assert explorer.tabs.active == list(explorer.scenes).index(explorer.state.scene)
+
+
 def test_the_stack_scene_computes_only_for_its_own_parameters():
     explorer = rendered()
     explorer.state.scene = "stack"
