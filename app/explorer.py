@@ -70,14 +70,19 @@ URL_DELAY_MS = 300
 # a phone or a narrow window: the controls above the scenes, each the full width
 PAGE_CSS = """
 @media (max-width: 767px) {
+  #container { height: auto !important; min-height: 100vh; overflow: visible !important; }
   #content { flex-direction: column; flex-wrap: nowrap; height: auto !important;
              overflow: visible !important; }
-  #sidebar { max-width: 100% !important; width: 100% !important; height: auto !important;
-             flex: none !important; }
-  #main { width: 100%; height: auto !important; max-height: none !important;
-          overflow: visible !important; flex: none !important; }
+  #content > #main { order: 1; width: 100%; height: auto !important; max-height: none !important;
+                     overflow: visible !important; flex: none !important; }
+  #content > #sidebar { order: 2; max-width: 100% !important; width: 100% !important;
+                        height: auto !important; flex: none !important; }
+  #header .title, .title { font-size: 1.15rem !important; white-space: normal; }
 }
 """
+# On a phone (narrower than 768 px) the page scrolls as a whole (the template's container is
+# one screen high and clips: the plots were out of reach), the scene comes first and the lesson
+# and the controls follow it at full width; the button top left still folds them away.
 # presentation mode (?present=1): large text for a room
 PRESENTATION_CSS = """
 :root { --bokeh-font-size: 20px; --bokeh-base-font-size: 20px; --pn-font-size: 20px; }

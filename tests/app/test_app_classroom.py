@@ -155,14 +155,32 @@ def test_url_markdown_is_shown_literally(browser, app_server, artifacts):
 
 
 def test_a_phone_gets_a_page_of_its_width(browser, app_server, artifacts):
-    """Defect 4: viewport meta tag, no sideways scroll at 390x844, the plot fills the width."""
+    """Defect 4: viewport meta tag, no sideways scroll at 390x844, the plot fills the width,
+    the scene first, and the whole page scrolls so that the lesson and controls can be reached."""
     base, _ = app_server
     context, page, errors = open_page(browser, f"{base}/app", viewport=(390, 844))
     try:
         assert page.locator('meta[name="viewport"]').count() == 1
         assert page.evaluate("document.documentElement.scrollWidth") <= 390
         canvases = [c for c in deep_query(page, "canvas") if c["width"] > 0]
-        assert max(c["width"] for c in canvases) > 300
+        plot = max(canvases, key=lambda c: c["width"])
+        assert plot["width"] > 300
+        # the scene comes first, the lesson and the controls after it at the full width
+        boxes = page.evaluate(
+            """() => ['#main', '#sidebar', '.app-header .title'].map((s) => {
+                 const r = document.querySelector(s).getBoundingClientRect();
+                 return {top: r.top, width: r.width, right: r.right}; })"""
+        )
+        main, sidebar, title = boxes
+        assert main["top"] < sidebar["top"] and plot["top"] < sidebar["top"], boxes
+        assert sidebar["width"] >= 380 and title["right"] <= 390, boxes
+        # the page itself scrolls (the template's one-screen container once clipped the rest,
+        # out of reach of a finger): the lesson can be scrolled into view
+        assert page.evaluate("document.documentElement.scrollHeight") > 844 + 500
+        page.mouse.wheel(0, 10000)
+        page.wait_for_timeout(300)
+        lesson = page.get_by_role("button", name="Start the lesson").bounding_box()
+        assert lesson is not None and 0 <= lesson["y"] <= 844, lesson
         page.screenshot(path=artifacts / "phone_drop.png", full_page=True)
         assert errors == []
     finally:
