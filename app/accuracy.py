@@ -8,6 +8,7 @@ older one.
 from __future__ import annotations
 
 import asyncio
+import functools
 import math
 
 import holoviews as hv
@@ -17,7 +18,7 @@ from bokeh.palettes import Category10
 
 from twoball.studies.precision import work_precision
 
-from .scene import Scene, font_sizes
+from .scene import Scene, font_sizes, later
 
 ERROR_FLOOR = 1e-17  # a relative error of 0 (the exact solver against itself) is drawn here
 FAILED_ERROR = 10.0  # where failed runs and missed bounces are drawn
@@ -74,7 +75,7 @@ class AccuracyScene(Scene):
         self._request += 1
         self.view.loading = True
         if pn.state.curdoc is not None and pn.state.curdoc.session_context is not None:
-            pn.state.execute(self._compute_in_thread)
+            pn.state.execute(functools.partial(self._compute_in_thread, self._request))
         else:  # no server (a script or a test): compute now
             self._show(self._request, self._work())
 
@@ -83,9 +84,11 @@ class AccuracyScene(Scene):
         self.computations += 1
         return work_precision(s.eps, s.mu, s.tau_ratio, eps12=s.eps12, height=s.height)
 
-    async def _compute_in_thread(self) -> None:
-        request = self._request
-        self._show(request, await asyncio.to_thread(self._work))
+    async def _compute_in_thread(self, request: int) -> None:
+        rows = await asyncio.to_thread(self._work)
+        # shown on the session's next tick, under its document lock: shown from the coroutine
+        # itself, the plots arrived but the loading overlay sometimes stayed on
+        later(lambda: self._show(request, rows))
 
     def _show(self, request: int, rows: list[dict]) -> None:
         if request != self._request:
@@ -118,7 +121,7 @@ class AccuracyScene(Scene):
                 padding=0.1,  # points at the ends of the axes are not cut in half
                 fontsize=font_sizes(self.state.presentation),
                 legend_position="right",
-                title="Error against run time at the current parameters",
+                title="Error against run time",
             )
         )
 

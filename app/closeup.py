@@ -47,7 +47,7 @@ class CloseUpScene(Scene):
             sizing_mode="stretch_width",
         )
         self.samples = ColumnDataSource({"t": [], "x1": [], "x2": [], "f01": [], "f12": []})
-        self.positions = self._figure("First collision: positions (negative = compressed)", 300)
+        self.positions = self._figure("Positions (negative: compressed)", 300)
         self.positions.line(
             "t", "x1", source=self.samples, color=LOWER, line_width=2, legend_label="X1 lower ball"
         )

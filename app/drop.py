@@ -131,7 +131,8 @@ class DropScene(Scene):
                 source=self.apexes,
                 text_color=UPPER,
                 text_font_size="10pt",
-                x_offset=-50,
+                text_align="right",  # left of the point: h2 is at the right edge of the plot
+                x_offset=-4,
                 y_offset=6,
             )
         )

@@ -118,6 +118,9 @@ class Explorer(pn.viewable.Viewer):
             dynamic=False,
             active=SCENES.index(self.state.scene),
             sizing_mode="stretch_width",
+            # the tab titles wrap onto a second row on a narrow screen (Bokeh scrolls them
+            # sideways, with no sign on a phone that two more tabs lie off screen)
+            stylesheets=[":host(.bk-above) .bk-headers-wrapper { flex-wrap: wrap; }"],
         )
         self.tabs.param.watch(self._tab_chosen, "active")
         self.scenes[self.state.scene].active = True

@@ -97,7 +97,7 @@ class StackScene(Scene):
         fig = figure(
             height=400,
             sizing_mode="stretch_width",
-            title="Heights to the top ball's second apex",
+            title="Heights to the top ball's h2",
             y_range=Range1d(0.0, 1.0),
             tools="pan,box_zoom,wheel_zoom,reset,save",
             x_axis_label="time tau (dimensionless)",
@@ -113,7 +113,7 @@ class StackScene(Scene):
         fig.add_layout(
             LabelSet(
                 x="t", y="h", text="text", source=self.apexes, text_font_size="10pt",
-                x_offset=-50, y_offset=6,
+                text_align="right", x_offset=-4, y_offset=6,  # left of the point: h2 is at the edge
             )
         )  # fmt: skip
         fig.add_layout(self.icm_line)

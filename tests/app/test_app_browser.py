@@ -1,6 +1,7 @@
 """The served app in Chromium (Playwright): load, sliders, map clicks, URL state, bad URLs.
 
-Each scene's screenshot is saved under test-artifacts/. The server is ``panel serve app`` from
+Each scene's screenshot is saved under test-artifacts/, and at a projector's, a desktop's and a
+phone's size under test-artifacts/scenes/. The server is ``panel serve app`` from
 the repository root, as the README runs it.
 """
 
@@ -26,6 +27,12 @@ pytestmark = pytest.mark.browser
 PAPER = "eps=0.9&mu=0.01&tau_ratio=0.01"
 RANGE_ENDS_JS = """() => [...Bokeh.documents[0].all_models]
   .filter((m) => m.constructor.__name__ === "Range1d").map((m) => m.end)"""
+# true once no element (shadow roots included) carries Panel's loading overlay class
+LOADING_GONE_JS = """() => { const walk = (root) => { for (const el of root.querySelectorAll("*")) {
+  if ([...el.classList].some((c) => c.startsWith("pn-loading"))) return false;
+  if (el.shadowRoot && !walk(el.shadowRoot)) return false; } return true; };
+  return walk(document); }"""
+SIZES = {"projector": (1366, 768), "desktop": (1920, 1080), "phone": (390, 844)}
 TAB_TITLES = {name: entry.title for name, entry in SCENE_REGISTRY.items()}
 
 
@@ -45,12 +52,20 @@ def test_each_scene_loads_without_console_errors(browser, app_server, artifacts,
         assert active_tab(page) == TAB_TITLES[scene]
         if scene == "accuracy":  # computed in the background after the page is up
             page.get_by_text("DOP853").first.wait_for(timeout=120_000)
+            # and the overlay that says it is computing goes away
+            page.wait_for_function(LOADING_GONE_JS, timeout=30_000)
         if scene == "closeup":
             page.get_by_text("4 ball contacts").wait_for()
         if scene == "map":
             page.get_by_text("Slice of the shipped cube").wait_for()
         page.wait_for_timeout(500)
         page.screenshot(path=artifacts / f"scene_{scene}.png", full_page=True)
+        for size, (width, height) in SIZES.items():  # the same page, resized: nothing sideways
+            page.set_viewport_size({"width": width, "height": height})
+            page.wait_for_timeout(700)
+            (artifacts / "scenes").mkdir(exist_ok=True)
+            page.screenshot(path=artifacts / "scenes" / f"{scene}-{size}.png")
+            assert page.evaluate("document.documentElement.scrollWidth") <= width, size
         assert errors == []
     finally:
         context.close()

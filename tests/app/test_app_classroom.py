@@ -19,6 +19,8 @@ from appdriver import (
     wait_for_change,
 )
 
+from app.explorer import SCENE_REGISTRY
+
 pytestmark = pytest.mark.browser
 
 RANGE_ENDS_JS = """() => [...Bokeh.documents[0].all_models]
@@ -174,6 +176,9 @@ def test_a_phone_gets_a_page_of_its_width(browser, app_server, artifacts):
         main, sidebar, title = boxes
         assert main["top"] < sidebar["top"] and plot["top"] < sidebar["top"], boxes
         assert sidebar["width"] >= 380 and title["right"] <= 390, boxes
+        tabs = [t for t in deep_query(page, ".bk-tab") if t["width"] > 0]
+        assert len(tabs) == len(SCENE_REGISTRY), tabs  # every scene's tab within reach
+        assert all(t["left"] >= 0 and t["right"] <= 390 for t in tabs), tabs
         # the page itself scrolls (the template's one-screen container once clipped the rest,
         # out of reach of a finger): the lesson can be scrolled into view
         assert page.evaluate("document.documentElement.scrollHeight") > 844 + 500
