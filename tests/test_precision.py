@@ -145,3 +145,18 @@ def test_truth_does_not_depend_on_its_step(monkeypatch):
 def test_truth_rejects_bad_input_like_the_library():
     with pytest.raises(ValueError, match="mu"):
         solve_truth(0.9, -1.0, 0.3)
+
+
+def test_truth_can_nudge_the_state_at_the_first_apex():
+    """A nudge of X2 at the first apex leaves h1 alone and moves h2 smoothly: twice the nudge,
+    twice the move (what benchmarks/state_conditioning.py measures, docs/accuracy.md)."""
+    drop = dict(height=100.0)
+    plain = solve_truth(*BENIGN.drop, **drop)
+    once = solve_truth(*BENIGN.drop, nudge=(1, 2**20), **drop)
+    twice = solve_truth(*BENIGN.drop, nudge=(1, 2**21), **drop)
+    with mpmath.workdps(40):
+        assert once.h1 == plain.h1 == twice.h1
+        step = math.ulp(float(plain.h1))  # the nudge is in ulps of X2 there, which is h1
+        first, second = once.h2 - plain.h2, twice.h2 - plain.h2
+        assert abs(first) > 2**19 * step * 1e-3  # it moved h2 (by a fair share of the nudge)
+        assert abs(second / first - 2) < 1e-3

@@ -24,6 +24,7 @@ handles benign cases (a few contacts, no rest) in seconds per case. Call :func:`
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mpmath
@@ -176,11 +177,15 @@ def solve_truth(
     eps12: float | None = None,
     height: float = DEFAULT_HEIGHT,
     apexes: int = 2,
+    nudge: tuple[int, int] | None = None,
 ) -> Truth:
     """Apexes and contacts of one drop at 40 digits, independently of the exact solver.
 
     For benign cases only (see the module docstring); raises RuntimeError if the wanted apexes
     are not reached within MAX_PHASES phases or MAX_STEPS steps (e.g. the ball came to rest).
+    ``nudge=(component, ulps)`` moves one component of the state (x1, x2, v1, v2) by that many
+    double ulps at the first apex, to measure how sensitive the rest of the run is to the
+    rounding of the state there (docs/accuracy.md, "Many-contact drops").
     """
     drop = check_parameters(eps, mu, tau_ratio, eps12=eps12, height=height)
     with mpmath.workdps(DIGITS):
@@ -221,6 +226,9 @@ def solve_truth(
             if event == 2:
                 apex_t.append(t)
                 apex_h.append(y[1])
+                if nudge is not None and len(apex_t) == 1:
+                    component, ulps = nudge
+                    y[component] += ulps * math.ulp(float(y[component]))
                 if len(apex_t) == apexes:
                     return Truth(apex_t, apex_h, contacts, contacts_first)
                 continue
