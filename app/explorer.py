@@ -123,6 +123,15 @@ class Explorer(pn.viewable.Viewer):
             stylesheets=[":host(.bk-above) .bk-headers-wrapper { flex-wrap: wrap; }"],
         )
         self.tabs.param.watch(self._tab_chosen, "active")
+        self.cover = pn.pane.Alert(
+            "**Predict first.** Answer the lesson's question (in the Lesson card, beside the "
+            "scene or below it on a phone), then press *Reveal the answer*: the drop appears "
+            "here.",
+            alert_type="info",
+            sizing_mode="stretch_width",
+        )
+        self._layout = pn.Column(self.cover, self.tabs, sizing_mode="stretch_width")
+        self._cover()
         self.scenes[self.state.scene].active = True
 
     @staticmethod
@@ -135,6 +144,14 @@ class Explorer(pn.viewable.Viewer):
 
     def _tab_chosen(self, event: param.parameterized.Event) -> None:
         self.state.scene = SCENES[event.new]
+
+    @param.depends("state.step", "state.revealed", watch=True)
+    def _cover(self) -> None:
+        """A lesson step's scene stays covered until its answer is revealed (it would give the
+        answer away); it keeps computing underneath, so it shows at once."""
+        covered = self.state.step > 0 and not self.state.revealed
+        self.cover.visible = covered
+        self.tabs.visible = not covered
 
     @param.depends("state.scene", watch=True)
     def _scene_chosen(self) -> None:
@@ -189,8 +206,9 @@ class Explorer(pn.viewable.Viewer):
         )
 
     def __panel__(self) -> pn.viewable.Viewable:
-        """The scenes (the controls go into the page's sidebar, :meth:`page`)."""
-        return self.tabs
+        """The scenes under their lesson cover (the controls go into the page's sidebar,
+        :meth:`page`)."""
+        return self._layout
 
     def page(self) -> pn.template.BootstrapTemplate:
         """The served page: a template gives the viewport meta tag, a sidebar that folds away

@@ -1,9 +1,10 @@
 """The lesson: a guided path through the demonstration, one step per idea.
 
 Each step sets the drop and the scene, says what to look for, and asks for a prediction before
-it reveals the answer. The numbers quoted in the answers are the solver's own for that step's
-drop (tests/app/test_app_lesson.py recomputes each with ``twoball.simulate``). The step is in
-the URL (``?step=3``), so a teacher can send a class to one step.
+it reveals the answer: until then the scene is covered (app/explorer.py), so that a class
+shown the step predicts before it sees. The numbers quoted in the answers are the solver's own
+for that step's drop (tests/app/test_app_lesson.py recomputes each with ``twoball.simulate``).
+The step is in the URL (``?step=3``), so a teacher can send a class to one step.
 """
 
 from __future__ import annotations
@@ -83,8 +84,8 @@ STEPS = (
         scene="drop",
         drop={"eps": 0.9, "eps12": None, "mu": 0.01, "tau_ratio": 0.01, "height": HEIGHT},
         look_for="Now a much lighter ball (a hundred times lighter, like a ping-pong ball) held "
-        "touching the big one. Watch the small ball's first two bounces (the peaks of the orange "
-        "curve).",
+        "touching the big one. Think of the small ball's first two bounces (the peaks of the "
+        "orange curve, once revealed).",
         question="Which bounce of the small ball is higher?",
         choices=("The first", "The second", "Both the same"),
         answer=1,
@@ -173,9 +174,9 @@ class Lesson(Built):
         step = min(max(step, 0), len(STEPS))
         if step:
             shown = STEPS[step - 1]
-            self.state.param.update(**shown.drop, scene=shown.scene, step=step)
+            self.state.param.update(**shown.drop, scene=shown.scene, step=step, revealed=False)
         else:
-            self.state.step = 0
+            self.state.param.update(step=0, revealed=False)
 
     def _chosen(self, event: param.parameterized.Event) -> None:
         self.reveal.disabled = event.new is None or self.answer.visible
@@ -191,6 +192,7 @@ class Lesson(Built):
         )
         self.reveal.disabled = True
         self.choices.disabled = True
+        self.state.revealed = True  # the scene comes out from under its cover
 
     @param.depends("state.step", watch=True)
     def _show(self) -> None:

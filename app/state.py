@@ -56,6 +56,10 @@ class ExplorerState(Parameters):
     step = param.Integer(
         default=0, bounds=(0, None), doc="The lesson's step on screen, 0 without the lesson."
     )
+    revealed = param.Boolean(
+        default=False,
+        doc="Whether the lesson step's answer is revealed (until then its scene is covered).",
+    )
     presentation = param.Boolean(
         default=False, doc="Large text and plots for a projector (URL: present=1)."
     )

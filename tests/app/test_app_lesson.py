@@ -7,7 +7,7 @@ from __future__ import annotations
 from urllib.parse import parse_qs, urlparse
 
 import pytest
-from appdriver import open_page
+from appdriver import deep_query, open_page
 from playwright.sync_api import expect
 
 import twoball
@@ -49,6 +49,12 @@ def test_a_step_in_the_url_sets_its_drop_and_scene():
         assert "step" not in values and messages and len(messages[0]) < 200
 
 
+def _scene_canvases(page) -> list[dict]:
+    """The plots on screen right of the sidebar (the scene's, not the controls')."""
+    found = deep_query(page, "canvas")
+    return [c for c in found if c["visible"] and c["width"] > 50 and c["height"] > 50]
+
+
 def _query(page) -> dict[str, str]:
     return {k: v[-1] for k, v in parse_qs(urlparse(page.url).query).items()}
 
@@ -69,11 +75,16 @@ def test_the_lesson_asks_before_it_answers_and_walks_the_scenes(browser, app_ser
             assert float(query["mu"]) == pytest.approx(step.drop["mu"], rel=1e-11)
             reveal = page.get_by_role("button", name="Reveal the answer")
             expect(reveal).to_be_disabled()  # a prediction first
+            expect(page.get_by_text("Predict first.")).to_be_visible()  # the scene is covered
+            assert _scene_canvases(page) == []
             page.get_by_text(step.choices[step.answer], exact=True).click()
             expect(reveal).to_be_enabled()
             reveal.click()
             page.get_by_text("Right.").wait_for()
+            expect(page.get_by_text("Predict first.")).to_be_hidden()
             page.wait_for_timeout(1500)  # the scene's plots follow the step's drop
+            if step.scene != "accuracy":  # (computed in the background, drawn when done)
+                assert max(c["width"] for c in _scene_canvases(page)) > 300
             page.screenshot(path=shots / f"step{number}-projector.png")
             page.get_by_role(
                 "button", name="Next >" if number < len(STEPS) else "End the lesson"
@@ -98,6 +109,11 @@ def test_every_step_opens_from_its_url(browser, app_server, artifacts, size):
         try:
             page.get_by_text(f"Step {number} of {len(STEPS)}").wait_for()
             assert _query(page)["scene"] == step.scene
+            expect(page.get_by_text("Predict first.")).to_be_visible()
+            page.get_by_text(step.choices[step.answer], exact=True).click()
+            page.get_by_role("button", name="Reveal the answer").click()
+            page.get_by_text("Right.").wait_for()
+            page.wait_for_timeout(1000)
             if size == "phone":  # nothing scrolls sideways
                 width = page.evaluate("() => document.documentElement.scrollWidth")
                 assert width <= SIZES["phone"][0] + 1

@@ -265,3 +265,20 @@ def test_choosing_contacts_reads_their_slice_and_matches_the_solver():
         mu, tau = float(counts["mu"][i]), float(counts["tau_ratio"][j])
         direct = twoball.simulate(scene.slice_eps, mu, tau, height=map_cube().attrs["height"])
         assert int(counts[i, j]) == direct.contacts_first
+
+
+def test_a_lesson_step_covers_its_scene_until_the_answer_is_revealed():
+    """A class predicts before it sees: the scene (computed underneath) is shown on reveal, and
+    covered again on the next step; without the lesson nothing is covered."""
+    explorer = rendered({"step": "3"})
+    assert explorer.cover.visible and not explorer.tabs.visible
+    assert explorer.scenes["drop"].computations == 1  # ready underneath
+    lesson = explorer.lesson
+    lesson.choices.value = lesson.choices.options[1]
+    lesson._reveal()
+    assert not explorer.cover.visible and explorer.tabs.visible
+    lesson._go(4)
+    assert explorer.cover.visible and not explorer.tabs.visible
+    lesson._go(0)
+    assert not explorer.cover.visible and explorer.tabs.visible
+    assert not rendered().cover.visible
