@@ -95,12 +95,16 @@ def _decade_ticks(cube: xr.Dataset) -> dict[str, list[tuple[float, str]]]:
     return ticks
 
 
-def blank_image(mu_dim: hv.Dimension, tau_dim: hv.Dimension) -> hv.Image:
-    """An empty image over the cube's extent (the plot keeps the first frame's ranges)."""
+def blank_image(mu_dim: hv.Dimension, tau_dim: hv.Dimension, variable: str) -> hv.Image:
+    """An empty image on the cube's grid, with the variable's name: the plot keeps the first
+    frame's ranges and colour bar title. (A 2 x 2 image with its centres at the cube's corners
+    stretched the axes by half the cube on every side, and its value was called "z".)"""
     cube = map_cube()
-    log_mu = np.log10(cube["mu"].values[[0, -1]])
-    log_tau = np.log10(cube["tau_ratio"].values[[0, -1]])
-    return hv.Image((log_mu, log_tau, np.ones((2, 2))), [mu_dim, tau_dim])
+    log_mu = np.log10(cube["mu"].values)
+    log_tau = np.log10(cube["tau_ratio"].values)
+    nothing = np.full((log_tau.size, log_mu.size), np.nan)
+    value = hv.Dimension(variable, label=variable_label(variable))
+    return hv.Image((log_mu, log_tau, nothing), [mu_dim, tau_dim], value)
 
 
 class MapScene(Scene):
@@ -251,14 +255,16 @@ class MapScene(Scene):
         if self.slice is not None and variable not in self.slice.data_vars:
             self._stale = True  # a new variable: its slice is read now
         if not self.active:  # rendered off screen: nothing is read until the map is opened
-            blank = blank_image(mu_dim, tau_dim)  # the plot keeps its first colour bar's ticker
-            if variable in RATIO_CENTRES:
-                return blank.opts(colorbar=True, logz=True, colorbar_opts=ratio_colorbar())
+            blank = blank_image(mu_dim, tau_dim, variable)  # (the plot keeps its first ticker)
+            if variable in RATIO_CENTRES:  # (a log scale needs limits: the blank has no data)
+                return blank.opts(
+                    colorbar=True, logz=True, clim=(0.5, 2.0), colorbar_opts=ratio_colorbar()
+                )
             return blank
         self.current()
         label = variable_label(variable)
         if self.slice is None:
-            return blank_image(mu_dim, tau_dim)
+            return blank_image(mu_dim, tau_dim, variable)
         values = self.slice[variable].transpose("tau_ratio", "mu")
         log_mu = np.log10(self.slice["mu"].values)
         log_tau = np.log10(self.slice["tau_ratio"].values)

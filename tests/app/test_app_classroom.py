@@ -27,6 +27,12 @@ RANGE_ENDS_JS = """() => [...Bokeh.documents[0].all_models]
   .filter((m) => m.constructor.__name__ === "Range1d").map((m) => m.end)"""
 TITLES_JS = """() => [...Bokeh.documents[0].all_models]
   .filter((m) => m.constructor.__name__ === "Title").map((m) => m.text)"""
+MAP_RANGES_JS = """() => { const image = (r) => r.glyph && r.glyph.constructor.__name__ === "Image";
+  const plot = [...Bokeh.documents[0].all_models]
+    .find((m) => Array.isArray(m.renderers) && m.renderers.some(image));
+  return [plot.x_range.start, plot.x_range.end, plot.y_range.start, plot.y_range.end]; }"""
+COLORBAR_TITLES_JS = """() => [...Bokeh.documents[0].all_models]
+  .filter((m) => m.constructor.__name__ === "ColorBar").map((m) => m.title)"""
 COLORBAR_TICKS_JS = """() => [...Bokeh.documents[0].all_models]
   .filter((m) => m.constructor.__name__ === "ColorBar")
   .map((m) => m.ticker.ticks ? Array.from(m.ticker.ticks) : [])"""
@@ -120,6 +126,11 @@ def test_tab_switches_keep_plots_rescaling(browser, app_server, artifacts):
         # 6: the ratio's colour bar has numbers below 1
         ticks = [t for bar in page.evaluate(COLORBAR_TICKS_JS) for t in bar]
         assert any(0 < t < 1 for t in ticks), ticks
+        # the axes span the cube (log10 mu -3..0, log10 tau_d/tau_f -3..1, plus half a cell),
+        # and the colour bar names the variable, as on a page opened on the map
+        x0, x1, y0, y1 = page.evaluate(MAP_RANGES_JS)
+        assert -3.1 < x0 < -2.9 and -0.1 < x1 < 0.1 and -3.1 < y0 < -2.9 and 0.9 < y1 < 1.1
+        assert "h2 / h1" in page.evaluate(COLORBAR_TITLES_JS)
         page.screenshot(path=artifacts / "map_after_tab_switch.png", full_page=True)
         # 11: the balls are stacked (same x, upper above lower), the time has its unit
         tab(page, "Drop")
