@@ -102,9 +102,9 @@ def blank_image(mu_dim: hv.Dimension, tau_dim: hv.Dimension, variable: str) -> h
     cube = map_cube()
     log_mu = np.log10(cube["mu"].values)
     log_tau = np.log10(cube["tau_ratio"].values)
-    nothing = np.full((log_tau.size, log_mu.size), np.nan)
+    neutral = np.ones((log_tau.size, log_mu.size))  # (NaN made HoloViews warn of an empty slice)
     value = hv.Dimension(variable, label=variable_label(variable))
-    return hv.Image((log_mu, log_tau, nothing), [mu_dim, tau_dim], value)
+    return hv.Image((log_mu, log_tau, neutral), [mu_dim, tau_dim], value)
 
 
 class MapScene(Scene):

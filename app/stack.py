@@ -22,8 +22,10 @@ from bokeh.models import (
 )
 from bokeh.plotting import figure
 
+from twoball.errors import ParameterError
 from twoball.stack import StackResult, icm_chain, simulate_stack
 
+from .controls import plain
 from .drop import frame_times, stage
 from .scene import Scene, readable
 
@@ -136,7 +138,15 @@ class StackScene(Scene):
         s = self.state
         arguments = ([s.stack_ratio] * (s.balls - 1), s.stack_eps, s.stack_gap)
         options = {"height": s.height, "force": s.force, "throw": False}
-        first = simulate_stack(*arguments, **options)  # apexes and contacts only
+        try:
+            first = simulate_stack(*arguments, **options)  # apexes and contacts only
+        except ParameterError as error:  # e.g. six balls, each 0.01 of the one below: 1e-10
+            self.result = None
+            self.summary.object = (
+                f"**This stack is outside what the solver carries:** {plain(str(error))}. "
+                "Choose fewer balls or a larger mass ratio."
+            )
+            return
         times = np.unique(
             np.concatenate(
                 [np.linspace(0.0, first.end_time, SAMPLES)]
@@ -156,6 +166,11 @@ class StackScene(Scene):
             return
         self.current()
         r = self.result
+        if r is None:  # refused (the summary says why): nothing drawn rather than the last stack
+            self.curves.data = {"t": [], **{f"x{ball}": [] for ball in range(len(PALETTE))}}
+            self.apexes.data = {"t": [], "h": [], "text": []}
+            self.balls_drawn.data = {"x": [], "y": [], "r": [], "color": []}
+            return
         tr = r.trajectory
         n = r.stack.balls
         data = {"t": tr.t}

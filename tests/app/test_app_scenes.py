@@ -282,3 +282,15 @@ def test_a_lesson_step_covers_its_scene_until_the_answer_is_revealed():
     lesson._go(0)
     assert not explorer.cover.visible and explorer.tabs.visible
     assert not rendered().cover.visible
+
+
+def test_a_stack_outside_the_solver_is_refused_with_a_message():
+    """Six balls at the smallest mass ratio make the top ball 1e-10 of the bottom one: the
+    scene says so instead of raising, draws nothing, and draws again for a valid ratio."""
+    explorer = rendered({"scene": "stack", "N": "6", "ratio": "0.01"})
+    scene = explorer.scenes["stack"]
+    assert scene.result is None and "outside what the solver carries" in scene.summary.object
+    assert len(scene.curves.data["t"]) == 0
+    explorer.state.stack_ratio = 0.2
+    assert scene.result is not None and "6 balls, linear force" in scene.summary.object
+    assert len(scene.curves.data["t"]) > 0

@@ -7,7 +7,7 @@ from __future__ import annotations
 from urllib.parse import parse_qs, urlparse
 
 import pytest
-from appdriver import open_page, press_slider, slider_titles
+from appdriver import open_page, press_slider, slider_titles, sources_with
 from playwright.sync_api import expect
 
 from twoball.stack import simulate_stack
@@ -58,6 +58,22 @@ def test_a_bad_stack_value_in_the_url_is_reported(browser, app_server):
         )
         expect(page.get_by_text("URL force: must be one of linear, hertz")).to_be_visible()
         expect(page.get_by_text("3 balls, linear force")).to_be_visible()
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_a_stack_the_solver_refuses_says_why_and_the_app_goes_on(browser, app_server):
+    """Six balls, each 0.01 of the one below: each slider within its range, the top ball 1e-10
+    of the bottom one, outside the solver's masses. A message, no stale plot, no traceback
+    (the server log is checked by the fixture); a valid ratio then draws again."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?scene=stack&N=6&ratio=0.01")
+    try:
+        expect(page.get_by_text("outside what the solver carries")).to_be_visible(timeout=60_000)
+        assert not [s for s in sources_with(page, "t", "h", "text") if s["t"]]  # no apexes
+        page.goto(f"{base}/app?scene=stack&N=6&ratio=0.2")
+        expect(page.get_by_text("6 balls, linear force")).to_be_visible(timeout=60_000)
         assert errors == []
     finally:
         context.close()
