@@ -212,9 +212,9 @@ class Explorer(pn.viewable.Viewer):
 
     def page(self) -> pn.template.BootstrapTemplate:
         """The served page: a template gives the viewport meta tag, a sidebar that folds away
-        (the button top left), and a header; on a narrow screen the controls stack above the
-        scenes. BootstrapTemplate, not FastListTemplate: the latter loads a font from Google,
-        and the app must not reach the network."""
+        (the button top left), and a header; on a narrow screen the controls stack below the
+        scenes (PAGE_CSS). BootstrapTemplate, not FastListTemplate: the latter loads a font
+        from Google, and the app must not reach the network."""
         template = pn.template.BootstrapTemplate(
             title="Two-ball bounce explorer",
             sidebar=[self.sidebar()],

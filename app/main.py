@@ -4,7 +4,9 @@ import panel as pn
 
 from .explorer import Explorer
 
-pn.extension(notifications=False)
+# app/static/history.js (Bokeh serves app/static/): Back and Forward rebuild the page from
+# the URL they go to (the URL follows the state; nothing told the server when it went back)
+pn.extension(notifications=False, js_files={"history": "app/static/history.js"})
 
 query = {key: values[-1].decode(errors="replace") for key, values in pn.state.session_args.items()}
 explorer = Explorer(query)

@@ -18,6 +18,7 @@ from appdriver import (
     slider_titles,
     sources_with,
     wait_for_change,
+    wait_for_plots,
 )
 
 from app.explorer import SCENE_REGISTRY
@@ -216,3 +217,24 @@ def test_the_server_logged_no_error(app_server, browser):
         and not ("WebSocketClosedError" in entry and "StreamClosedError" in entry)
     ]
     assert errors == []
+
+
+def test_back_rebuilds_the_page_from_the_url_it_shows(browser, app_server):
+    """The URL follows every change (a history entry each); Back must bring the page back to
+    the URL's drop, not leave the page on the newer one under an older URL."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?{PAPER}")
+    try:
+        before = slider_titles(page)
+        assert press_slider(page, "mu") > 0
+        page.wait_for_function("() => !location.search.includes('mu=0.01&')")
+        moved = slider_titles(page)
+        assert moved[1] != before[1]
+        page.go_back()
+        page.wait_for_function("() => location.search.includes('mu=0.01&')")
+        wait_for_plots(page)
+        assert slider_titles(page) == before
+        assert url_query(page)["mu"] == "0.01"
+        assert errors == []
+    finally:
+        context.close()
