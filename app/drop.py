@@ -16,6 +16,7 @@ from bokeh.models import (
     LabelSet,
     Legend,
     LegendItem,
+    NumeralTickFormatter,
     Range1d,
     Span,
 )
@@ -54,6 +55,11 @@ def ball_radii(mu: float) -> tuple[float, float]:
     return BALL_RADIUS, BALL_RADIUS * mu ** (1 / 3)
 
 
+def height_axis(fig) -> None:
+    """Heights on the y axis in grouped digits, no exponent (200,000, not 2.000e+5)."""
+    fig.yaxis.formatter = NumeralTickFormatter(format="0,0.[0000]")
+
+
 def stage():
     """The animation's stage: a narrow figure with the floor (a grey band below height 0)."""
     fig = figure(
@@ -66,6 +72,7 @@ def stage():
         title="t = 0",
     )
     fig.add_layout(BoxAnnotation(top=0.0, fill_color="gray", fill_alpha=0.5))
+    height_axis(fig)
     return fig
 
 
@@ -120,6 +127,7 @@ class DropScene(Scene):
             tools="pan,box_zoom,wheel_zoom,reset,save",
         )
         fig.toolbar.autohide = True
+        height_axis(fig)
         lower = fig.line("t", "x1", source=self.curves, color=LOWER, line_width=2)
         upper = fig.line("t", "x2", source=self.curves, color=UPPER, line_width=2)
         fig.scatter("t", "h", source=self.apexes, color=UPPER, size=8)
@@ -255,8 +263,9 @@ class DropScene(Scene):
         first = "no first bounce" if r.h1 is None else f"h1 = {units.height(r.h1)}"
         return (
             f"{first}, {second}; {verdict}  \n"
-            f"ICM apex (dotted green): {units.height(r.h_icm)}; drop height (dashed): "
-            f"{units.height(r.x2_0)}; ball contacts in the first bounce: {r.contacts_first}"
+            f"ICM apex (dotted green): {units.height(r.h_icm)}; upper ball released at "
+            f"(dashed): {units.height(r.x2_0)}; ball contacts in the first bounce: "
+            f"{r.contacts_first}"
         )
 
     def layout(self) -> pn.viewable.Viewable:
@@ -276,7 +285,8 @@ class DropScene(Scene):
         return pn.Column(
             self.summary,
             plots,
-            pn.Row(self.player, self.trails, sizing_mode="stretch_width"),
+            # wraps: on a phone a row squeezed the player until its first buttons left the screen
+            pn.FlexBox(self.player, self.trails, flex_wrap="wrap", sizing_mode="stretch_width"),
             pn.pane.Markdown(PLAYER_HELP, sizing_mode="stretch_width"),
             sizing_mode="stretch_width",
         )

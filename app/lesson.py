@@ -152,7 +152,12 @@ class Lesson(Built):
     def __init__(self, **params):
         super().__init__(**params)
         self.heading = pn.pane.Markdown(sizing_mode="stretch_width", margin=(0, 10))
-        self.choices = pn.widgets.RadioBoxGroup(options=[], value=None, sizing_mode="stretch_width")
+        self.choices = pn.widgets.RadioBoxGroup(
+            options=[],
+            value=None,
+            sizing_mode="stretch_width",
+            stylesheets=[":host label { white-space: normal; }"],  # long answers wrap, not cut
+        )
         self.reveal = pn.widgets.Button(label="Reveal the answer", color="primary")
         self.answer = pn.pane.Alert("", visible=False, sizing_mode="stretch_width")
         self.previous = pn.widgets.Button(label="< Previous", width=110)

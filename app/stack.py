@@ -24,9 +24,10 @@ from bokeh.plotting import figure
 
 from twoball.errors import ParameterError
 from twoball.stack import StackResult, icm_chain, simulate_stack
+from twoball.units import number_text
 
 from .controls import plain
-from .drop import frame_times, stage
+from .drop import frame_times, height_axis, stage
 from .scene import Scene, readable
 
 # Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first
@@ -106,6 +107,7 @@ class StackScene(Scene):
             y_axis_label="height X (dimensionless)",
         )
         fig.toolbar.autohide = True
+        height_axis(fig)
         items = []
         for ball, color in enumerate(PALETTE):
             self.curves.data[f"x{ball}"] = []
@@ -183,7 +185,7 @@ class StackScene(Scene):
         self.apexes.data = {
             "t": [t for t, _ in top],
             "h": [h for _, h in top],
-            "text": [f"h{i + 1} = {h:.4g}" for i, (_, h) in enumerate(top)],
+            "text": [f"h{i + 1} = {number_text(h)}" for i, (_, h) in enumerate(top)],
         }
         icm = icm_chain(r.stack)[-1]
         self.icm_line.location = icm
@@ -224,9 +226,12 @@ class StackScene(Scene):
         icm = icm_chain(r.stack)[-1]
         drop = r.stack.x_start[-1]
         first = "no first bounce" if r.h1 is None else (
-            f"the top ball rises to **h1 = {r.h1:.4g}**, {r.h1 / drop:.3g} times its drop height"
+            f"the top ball rises to **h1 = {number_text(r.h1)}**, {r.h1 / drop:.3g} times its drop "
+            "height"
         )  # fmt: skip
-        second = "" if r.h2 is None else f"; then h2 = {r.h2:.4g} (h2/h1 = {r.h2 / r.h1:.3f})"
+        second = (
+            "" if r.h2 is None else f"; then h2 = {number_text(r.h2)} (h2/h1 = {r.h2 / r.h1:.3f})"
+        )
         counts = ", ".join(
             ("floor" if c == 0 else f"{c}-{c + 1}") + f": {k}"
             for c, k in enumerate(r.contacts_first)
@@ -234,7 +239,7 @@ class StackScene(Scene):
         ratio = "" if r.h1 is None else f" (h1/chain = {r.h1 / icm:.3f})"
         return (
             f"{s.balls} balls, {s.force} force: {first}{second}.  \n"
-            f"Chain of independent collisions (dotted green): {icm:.4g}{ratio}. "
+            f"Chain of independent collisions (dotted green): {number_text(icm)}{ratio}. "
             f"Contacts before h1 (floor, then each pair): {counts}."
         )
 

@@ -128,3 +128,12 @@ def test_bad_parameters_name_the_parameter_and_range(name, value, text):
             height=arguments["height"],
         )
     assert text in str(error.value)
+
+
+def test_heights_read_without_an_exponent():
+    from twoball.units import DIMENSIONLESS, SI, number_text
+
+    assert number_text(211950.3) == "211,950" and number_text(9256.048) == "9256"
+    assert number_text(0.51234567) == "0.51235" and number_text(3e14) == "3e+14"
+    assert DIMENSIONLESS.height(50076.39) == "50,076"
+    assert SI.height(1e4).endswith(" m")

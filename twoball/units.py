@@ -19,8 +19,16 @@ class Units:
     force_label: str
 
     def height(self, value: float) -> str:
-        """A height as text with its unit."""
-        return f"{value * self.length:.5g}{'' if self.length == 1.0 else ' m'}"
+        """A height as text with its unit, without an exponent where it is a plain number
+        (211,950 rather than 2.1195e+05: read from the back of a classroom)."""
+        return f"{number_text(value * self.length)}{'' if self.length == 1.0 else ' m'}"
+
+
+def number_text(value: float) -> str:
+    """A number as text: grouped digits from 1e4 to 1e13, five significant digits otherwise."""
+    if 1e4 <= abs(value) < 1e13:
+        return f"{value:,.0f}"
+    return f"{value:.5g}"
 
 
 DIMENSIONLESS = Units(1.0, 1.0, 1.0, "height X", "time tau", "force f")

@@ -65,7 +65,7 @@ def test_opening_page_typed_values_and_messages(browser, app_server, artifacts):
         height.fill("20000")
         height.press("Enter")
         wait_for_change(page, before)
-        page.get_by_text("drop height (dashed): 2000").wait_for()  # the summary follows
+        page.get_by_text("released at (dashed): 2000").wait_for()  # the summary follows
         page.wait_for_function("() => location.search.includes('H=20000')", timeout=5000)
         # 7: an error, then a valid value clears it
         height.fill("abc")
@@ -187,6 +187,9 @@ def test_a_phone_gets_a_page_of_its_width(browser, app_server, artifacts):
         main, sidebar, title = boxes
         assert main["top"] < sidebar["top"] and plot["top"] < sidebar["top"], boxes
         assert sidebar["width"] >= 380 and title["right"] <= 390, boxes
+        players = "button.first, button.previous, button.pause, button.play, button.next, button.last"
+        buttons = [b for b in deep_query(page, players) if b["width"] > 0]
+        assert buttons and all(b["left"] >= 0 and b["right"] <= 390 for b in buttons), buttons
         tabs = [t for t in deep_query(page, ".bk-tab") if t["width"] > 0]
         assert len(tabs) == len(SCENE_REGISTRY), tabs  # every scene's tab within reach
         assert all(t["left"] >= 0 and t["right"] <= 390 for t in tabs), tabs

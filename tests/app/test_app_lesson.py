@@ -75,6 +75,9 @@ def test_the_lesson_asks_before_it_answers_and_walks_the_scenes(browser, app_ser
             assert float(query["mu"]) == pytest.approx(step.drop["mu"], rel=1e-11)
             reveal = page.get_by_role("button", name="Reveal the answer")
             expect(reveal).to_be_disabled()  # a prediction first
+            # every choice whole in the sidebar (a long one once ran off its edge, cut)
+            labels = [c for c in deep_query(page, "label") if c["text"] in step.choices]
+            assert len(labels) == len(step.choices) and all(c["right"] <= 330 for c in labels)
             expect(page.get_by_text("Predict first.")).to_be_visible()  # the scene is covered
             assert _scene_canvases(page) == []
             page.get_by_text(step.choices[step.answer], exact=True).click()

@@ -11,6 +11,7 @@ from appdriver import open_page, press_slider, slider_titles, sources_with
 from playwright.sync_api import expect
 
 from twoball.stack import simulate_stack
+from twoball.units import number_text
 
 pytestmark = pytest.mark.browser
 
@@ -27,20 +28,20 @@ def test_the_stack_scene_shows_the_library_and_follows_its_sliders(browser, app_
     try:
         expected = simulate_stack([0.2, 0.2], 0.9, 0.2)
         expect(page.get_by_text("3 balls, linear force")).to_be_visible(timeout=60_000)
-        expect(page.get_by_text(f"h1 = {expected.h1:.4g}").first).to_be_visible()
+        expect(page.get_by_text(f"h1 = {number_text(expected.h1)}").first).to_be_visible()
         page.screenshot(path=folder / "three.png", full_page=True)
         balls = next(i for i, t in enumerate(slider_titles(page)) if t.startswith("balls N"))
         assert press_slider(page, balls) > 0, "the balls slider did not redraw the stack"
         four = simulate_stack([0.2] * 3, 0.9, 0.2)
         expect(page.get_by_text("4 balls, linear force")).to_be_visible()
-        expect(page.get_by_text(f"h1 = {four.h1:.4g}").first).to_be_visible()
+        expect(page.get_by_text(f"h1 = {number_text(four.h1)}").first).to_be_visible()
         page.wait_for_timeout(600)  # the URL is written shortly after a change
         assert _query(page)["N"] == "4" and _query(page)["scene"] == "stack"
         page.screenshot(path=folder / "four.png", full_page=True)
         page.get_by_role("button", name="hertz").click()
         hertz = simulate_stack([0.2] * 3, 0.9, 0.2, force="hertz")
         expect(page.get_by_text("4 balls, hertz force")).to_be_visible(timeout=60_000)
-        expect(page.get_by_text(f"h1 = {hertz.h1:.4g}").first).to_be_visible()
+        expect(page.get_by_text(f"h1 = {number_text(hertz.h1)}").first).to_be_visible()
         page.wait_for_timeout(600)
         assert _query(page)["force"] == "hertz"
         page.screenshot(path=folder / "four_hertz.png", full_page=True)
