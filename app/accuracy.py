@@ -128,7 +128,17 @@ class AccuracyScene(Scene):
     def _table(self, revision: bool) -> str:
         if not self.rows:
             return ""
-        lines = ["| method | tolerance | error h1 | error h2 | seconds |", "|---|---|---|---|---|"]
+        exact = next(r for r in self.rows if r["tolerance"] is None)
+        if math.isnan(exact["rel_err_h1"]):
+            return (
+                "**This drop has no bounce to measure:** the upper ball comes to rest on the "
+                "lower one (the Drop scene shows it), so there is no h1 or h2 to compare the "
+                "methods on. Choose a bouncier drop (a larger eps) to compare them."
+            )
+        lines = []
+        if math.isnan(exact["rel_err_h2"]):
+            lines += ["*No second bounce in this drop: the errors are those of h1 alone.*", ""]
+        lines += ["| method | tolerance | error h1 | error h2 | seconds |", "|---|---|---|---|---|"]
         for r in self.rows:
             tol = "-" if r["tolerance"] is None else f"{r['tolerance']:.0e}"
             lines.append(

@@ -294,3 +294,12 @@ def test_a_stack_outside_the_solver_is_refused_with_a_message():
     explorer.state.stack_ratio = 0.2
     assert scene.result is not None and "6 balls, linear force" in scene.summary.object
     assert len(scene.curves.data["t"]) > 0
+
+
+def test_accuracy_explains_a_drop_without_a_bounce():
+    """eps = 0.01, mu = 1: the upper ball comes to rest (simulate says so), so there is no
+    apex to compare the methods on; the scene says that instead of a table of NaN."""
+    query = {"eps": "0.01", "mu": "1", "tau_ratio": "1", "scene": "accuracy"}
+    assert twoball.simulate(0.01, 1.0, 1.0).h1 is None  # the premise, from the library
+    table = rendered(query).scenes["accuracy"].table.object
+    assert "no bounce to measure" in table and "nan" not in table
