@@ -187,7 +187,7 @@ def test_a_phone_gets_a_page_of_its_width(browser, app_server, artifacts):
         main, sidebar, title = boxes
         assert main["top"] < sidebar["top"] and plot["top"] < sidebar["top"], boxes
         assert sidebar["width"] >= 380 and title["right"] <= 390, boxes
-        players = "button.first, button.previous, button.pause, button.play, button.next, button.last"
+        players = ", ".join(f"button.{b}" for b in ("first", "previous", "pause", "play", "last"))
         buttons = [b for b in deep_query(page, players) if b["width"] > 0]
         assert buttons and all(b["left"] >= 0 and b["right"] <= 390 for b in buttons), buttons
         tabs = [t for t in deep_query(page, ".bk-tab") if t["width"] > 0]
