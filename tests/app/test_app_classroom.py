@@ -65,7 +65,7 @@ def test_opening_page_typed_values_and_messages(browser, app_server, artifacts):
         height.fill("20000")
         height.press("Enter")
         wait_for_change(page, before)
-        page.get_by_text("released at (dashed): 2000").wait_for()  # the summary follows
+        page.get_by_text("released at (dashed): 20,0").wait_for()  # the summary follows
         page.wait_for_function("() => location.search.includes('H=20000')", timeout=5000)
         # 7: an error, then a valid value clears it
         height.fill("abc")
