@@ -65,6 +65,7 @@ STATUS_DONE, STATUS_REST = int(Status.DONE), int(Status.REST)
 STATUS_STUCK, STATUS_PHASES = int(Status.STUCK), int(Status.PHASE_LIMIT)
 
 MAX_STEPS_PER_PHASE = 100_000
+MAX_NEWTON = 100  # iterations of a bracketed Newton search (it converges in a few)
 MAX_PHASES = 1_000_000
 ROUNDING = 16.0 * MACHINE_EPSILON  # tolerance in units of relative rounding
 SUBSPACE_SWEEPS = 4  # refinement sweeps of the both-contact mode split (see _split_modes)
@@ -112,6 +113,78 @@ def _oscillator(u0, v0, b, w2, tau):
     u = cos_part * u0 + sin_part * (v0 + b * u0)
     v = cos_part * v0 - sin_part * (w2 * u0 + b * v0)
     return u, v, -2.0 * b * v - w2 * u
+
+
+@njit
+def _oscillator_zeros(y0, y1, b, w2):
+    """The first two times t > 0 at which y = 0, for y'' + 2 b y' + w2 y = 0 from (y0, y1)
+    (inf where there are fewer), on every damping branch.
+
+    With the decay pair of :func:`_decay_pair`, y = cos_part y0 + sin_part p (p = y1 + b y0).
+    Underdamped, y = exp(-b t) R cos(W t - phi): zeros pi/W apart. Otherwise at most one zero,
+    where exp(-2 Om t) = 1 + x with x = 2 Om y0 / (p - Om y0), written without cancellation as
+    Om goes to 0 (the critical branch's t = -y0/p).
+    """
+    p = y1 + b * y0
+    d = w2 - b * b
+    if d > 0.0:
+        om = math.sqrt(d)
+        theta = math.atan2(p / om, y0) - 0.5 * math.pi  # a zero, in (-3 pi/2, pi/2]
+        while theta <= 0.0:
+            theta += math.pi
+        return theta / om, (theta + math.pi) / om
+    om = math.sqrt(-d)
+    denominator = p - om * y0
+    if denominator == 0.0:
+        return np.inf, np.inf  # y is the fast exponential alone
+    ratio = y0 / denominator
+    x = 2.0 * om * ratio
+    if not (ratio < 0.0 and x > -1.0):
+        return np.inf, np.inf
+    return -ratio * (math.log1p(x) / x if x != 0.0 else 1.0), np.inf
+
+
+@njit
+def _release_time(u0, v0, b, w2, zeta, level, limit):
+    """When an active contact's force ends, in closed form: the first t in (0, limit) at which
+    q = u + 2 zeta u' rises to ``level`` for u'' + 2 b u' + w2 u = 0 from (u0, v0); inf if none.
+
+    The contact's force is level - q (docs/model.md, "Bodies, coordinates, forces": u is the
+    overlap about the static rest, level its static force), and q obeys the same equation. q is
+    monotone between consecutive zeros of q' (:func:`_oscillator_zeros`), so it can rise
+    through the level only in its first rising stretch: its later maxima are each smaller by
+    exp(-2 pi b / W), and the other branches turn at most once. The root is bracketed there and
+    found by Newton's method kept inside the bracket, so none is missed or approximated by steps.
+    """
+    a0 = -2.0 * b * v0 - w2 * u0
+    dq0 = v0 + 2.0 * zeta * a0
+    first, second = _oscillator_zeros(dq0, -2.0 * b * dq0 - w2 * (u0 + 2.0 * zeta * v0), b, w2)
+    low, high = (0.0, first) if dq0 >= 0.0 else (first, second)
+    high = min(high, limit)
+    if not (low < high < np.inf):
+        return np.inf
+    u, v, _ = _oscillator(u0, v0, b, w2, high)
+    if u + 2.0 * zeta * v < level:
+        return np.inf  # its rise stops short of the level (or the limit comes first)
+    u, v, _ = _oscillator(u0, v0, b, w2, low)
+    if u + 2.0 * zeta * v >= level:
+        return low
+    t = 0.5 * (low + high)
+    for _ in range(MAX_NEWTON):
+        u, v, a = _oscillator(u0, v0, b, w2, t)
+        gap = u + 2.0 * zeta * v - level
+        if gap >= 0.0:
+            high = t
+        else:
+            low = t
+        slope = v + 2.0 * zeta * a
+        following = t - gap / slope if slope > 0.0 else low - 1.0
+        if not low <= following <= high:
+            following = 0.5 * (low + high)
+        if abs(following - t) <= ROUNDING * t:
+            return following
+        t = following
+    return t
 
 
 @njit
@@ -587,9 +660,12 @@ def advance_phase(
 
     Returns (event, tau, x1, x2, v1, v2) with tau the time into the phase. horizon is a known
     event time (apex or end of the run) with its event code; prepared is what :func:`prepare`
-    returned.
+    returned. With one contact active, that contact's oscillator moves on its own, so the time
+    its force ends is found in closed form (:func:`_release_time`) and becomes the horizon; only
+    the other contact is stepped.
     """
     params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, mode_rows = prepared
+    z01, z12, w2_ball = params[P_Z01], params[P_Z12], params[P_W2]
     noise = params[P_NOISE] if kind == BOTH else 1.0
     size = 1.0 + abs(x1) + abs(x2)
     # Without the ball contact the lower ball moves on its own, so the floor contact's rounding
@@ -603,6 +679,7 @@ def advance_phase(
     speed = abs(v1) + abs(v2)
     floor_on = (kind & 1) != 0
     ball_on = (kind & 2) != 0
+    own = EVENT_FLOOR if kind == FLOOR else EVENT_BALL if kind == BALL else -1
     tau = 0.0
     last_step = 0.0
     for _ in range(MAX_STEPS_PER_PHASE):
@@ -623,6 +700,8 @@ def advance_phase(
         event = -1
         best = np.inf
         for contact in range(2):
+            if contact == own and tau > 0.0:
+                continue  # its end is the horizon
             active = floor_on if contact == 0 else ball_on
             bound_eta = _curvature_bound(
                 kind, contact, 0, c0, c1, c2, roots, rates, mode_rows, block_states
@@ -663,12 +742,25 @@ def advance_phase(
                     shift = 0.0  # not back to where it switched (see fresh above)
                 if tau + shift < best:
                     best, event = tau + shift, contact
+            elif contact == own:
+                # the force ends at -tol once it is within tol of zero just after switching on
+                level = tol if fresh and value <= tol else 0.0
+                if kind == FLOOR:
+                    release = _release_time(x1 + 1.0, v1, z01, 1.0, z01, 1.0 + level, horizon)
+                else:
+                    release = _release_time(
+                        x2 - x1, v2 - v1, z12 * w2_ball, w2_ball, z12, level, horizon
+                    )
+                if release < horizon:
+                    horizon, horizon_event = release, own
+                    step = min(step, horizon - tau)
             else:
                 step = min(step, h)
         if event >= 0:
-            y1, y2, w1, w2, _, _ = state_at(
-                kind, best, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest
-            )
+            if best != tau:  # else the state is the one just computed
+                y1, y2, w1, w2, _, _ = state_at(
+                    kind, best, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest
+                )
             return event, best, y1, y2, w1, w2
         if kind == BOTH and _at_rest(
             roots, params, rest, rates, mode_rows, block_states, tol_state
