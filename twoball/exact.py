@@ -441,9 +441,53 @@ def prepare(mu, z01, z12):
 
 
 @njit
+def _pair(a):
+    return a[0], a[1]
+
+
+@njit
+def _square(m):
+    """A 2x2 array as a nested tuple."""
+    return _pair(m[0]), _pair(m[1])
+
+
+@njit
+def _quad(a):
+    return a[0], a[1], a[2], a[3]
+
+
+@njit
+def constants(prepared):
+    """What :func:`prepare` returned, as nested tuples of floats (indexed alike).
+
+    :func:`run` steps with these: an array handed to a compiled function costs an atomic
+    reference-count increment and decrement per call, which in the stepping loop took about
+    half the kernel's time; tuples of floats cost nothing to pass.
+    """
+    params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, mode_rows = prepared
+    return (
+        (params[0], params[1], params[2], params[3], params[4], params[5], params[6]),
+        (_square(c0[0]), _square(c0[1]), _square(c0[2]), _square(c0[3])),
+        (_square(c1[0]), _square(c1[1]), _square(c1[2]), _square(c1[3])),
+        (_square(c2[0]), _square(c2[1]), _square(c2[2]), _square(c2[3])),
+        _square(rest),
+        (_quad(x[0]), _quad(x[1]), _quad(x[2]), _quad(x[3])),
+        (_quad(x_inv[0]), _quad(x_inv[1]), _quad(x_inv[2]), _quad(x_inv[3])),
+        (_square(blocks[0]), _square(blocks[1])),
+        (_square(companions[0]), _square(companions[1])),
+        _quad(y_rest),
+        _square(rates),
+        (
+            (_square(mode_rows[0, 0]), _square(mode_rows[0, 1])),
+            (_square(mode_rows[1, 0]), _square(mode_rows[1, 1])),
+        ),
+    )
+
+
+@njit
 def _row4(m, i, a, b, c, d):
-    """Row i of a 4x4 matrix times (a, b, c, d), without allocating."""
-    return m[i, 0] * a + m[i, 1] * b + m[i, 2] * c + m[i, 3] * d
+    """Row i of a 4x4 matrix (array or nested tuple) times (a, b, c, d), without allocating."""
+    return m[i][0] * a + m[i][1] * b + m[i][2] * c + m[i][3] * d
 
 
 @njit
@@ -460,14 +504,26 @@ def _modes(x1, x2, v1, v2, x_inv, y_rest):
 
 @njit
 def _block_flow(b, z0, z1, tau):
-    """exp(B tau) z and B exp(B tau) z for a 2x2 block, exact on every damping branch:
+    """exp(B tau) z and B exp(B tau) z for a 2x2 block (an array), exact on every damping
+    branch; see :func:`_flow`."""
+    return _flow(b[0, 0], b[0, 1], b[1, 0], b[1, 1], z0, z1, tau)
+
+
+@njit
+def _flow(b00, b01, b10, b11, z0, z1, tau):
+    """exp(B tau) z and B exp(B tau) z for the 2x2 block B = [[b00, b01], [b10, b11]]:
     exp(B tau) = cos_part I + sin_part (B - tr(B)/2 I) with the oscillator's decay pair."""
-    half_trace = 0.5 * (b[0, 0] + b[1, 1])
-    det = b[0, 0] * b[1, 1] - b[0, 1] * b[1, 0]
-    cos_part, sin_part = _decay_pair(-half_trace, det, tau)
-    n0 = cos_part * z0 + sin_part * ((b[0, 0] - half_trace) * z0 + b[0, 1] * z1)
-    n1 = cos_part * z1 + sin_part * (b[1, 0] * z0 + (b[1, 1] - half_trace) * z1)
-    return n0, n1, b[0, 0] * n0 + b[0, 1] * n1, b[1, 0] * n0 + b[1, 1] * n1
+    half_trace = 0.5 * (b00 + b11)
+    cos_part, sin_part = _decay_pair(-half_trace, b00 * b11 - b01 * b10, tau)
+    n0 = cos_part * z0 + sin_part * ((b00 - half_trace) * z0 + b01 * z1)
+    n1 = cos_part * z1 + sin_part * (b10 * z0 + (b11 - half_trace) * z1)
+    return n0, n1, b00 * n0 + b01 * n1, b10 * n0 + b11 * n1
+
+
+@njit
+def _block_flow_of(block, z0, z1, tau):
+    """:func:`_flow` for a block given as an array or a nested tuple."""
+    return _flow(block[0][0], block[0][1], block[1][0], block[1][1], z0, z1, tau)
 
 
 @njit
@@ -503,8 +559,8 @@ def state_at(kind, tau, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest):
             -1.0 + share2 * ddeta,
         )
     z0, z1, z2, z3 = _modes(x1, x2, v1, v2, x_inv, y_rest)
-    n0, n1, r0, r1 = _block_flow(blocks[0], z0, z1, tau)
-    n2, n3, r2, r3 = _block_flow(blocks[1], z2, z3, tau)
+    n0, n1, r0, r1 = _block_flow_of(blocks[0], z0, z1, tau)
+    n2, n3, r2, r3 = _block_flow_of(blocks[1], z2, z3, tau)
     return (
         y_rest[0] + _row4(x, 0, n0, n1, n2, n3),
         y_rest[1] + _row4(x, 1, n0, n1, n2, n3),
@@ -531,20 +587,20 @@ def _curvature_bound(kind, contact, part, c0, c1, c2, roots, rates, mode_rows, b
     """Bound on |F''| of one part (0: eta, 1: g) of a contact's switching function for the rest
     of the phase: c0 + c1 sqrt(2 E_1) + c2 sqrt(2 E_2), where a strongly overdamped mode of the
     both-contact phase takes the tighter of its energy bound and its two-exponential bound."""
-    first = c1[kind, contact, part] * roots[0]
-    second = c2[kind, contact, part] * roots[1]
+    first = c1[kind][contact][part] * roots[0]
+    second = c2[kind][contact][part] * roots[1]
     if kind == BOTH:
-        if rates[0, 1] > 0.0:
+        if rates[0][1] > 0.0:
             tight = _overdamped_bound(
-                rates[0], mode_rows[contact, part, 0], block_states[0], block_states[1], 2
+                rates[0], mode_rows[contact][part][0], block_states[0], block_states[1], 2
             )
             first = min(first, tight)
-        if rates[1, 1] > 0.0:
+        if rates[1][1] > 0.0:
             tight = _overdamped_bound(
-                rates[1], mode_rows[contact, part, 1], block_states[2], block_states[3], 2
+                rates[1], mode_rows[contact][part][1], block_states[2], block_states[3], 2
             )
             second = min(second, tight)
-    return c0[kind, contact, part] + first + second
+    return c0[kind][contact][part] + first + second
 
 
 @njit
@@ -594,7 +650,7 @@ def contact_switch(active, eta, deta, ddeta, zeta, bound_eta, bound_g, tol_state
 @njit
 def _mode_energy_root(block, u, du):
     """sqrt(2 E) of a mode's oscillator energy E = (u'^2 + det(B) u^2)/2."""
-    det = block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0]
+    det = block[0][0] * block[1][1] - block[0][1] * block[1][0]
     return math.sqrt(du * du + det * u * u)
 
 
@@ -621,10 +677,10 @@ def _block_states(x1, x2, v1, v2, x_inv, companions, y_rest):
     """(u, u') of each mode's oscillator in the both-contact phase: (u_1, u_1', u_2, u_2')."""
     z0, z1, z2, z3 = _modes(x1, x2, v1, v2, x_inv, y_rest)
     return (
-        companions[0, 0, 0] * z0 + companions[0, 0, 1] * z1,
-        companions[0, 1, 0] * z0 + companions[0, 1, 1] * z1,
-        companions[1, 0, 0] * z2 + companions[1, 0, 1] * z3,
-        companions[1, 1, 0] * z2 + companions[1, 1, 1] * z3,
+        companions[0][0][0] * z0 + companions[0][0][1] * z1,
+        companions[0][1][0] * z0 + companions[0][1][1] * z1,
+        companions[1][0][0] * z2 + companions[1][0][1] * z3,
+        companions[1][1][0] * z2 + companions[1][1][1] * z3,
     )
 
 
@@ -636,11 +692,11 @@ def _at_rest(roots, params, rest, rates, mode_rows, block_states, tol):
     for contact in range(2):
         margin = params[P_F1] if contact == 0 else params[P_F2]
         for block in range(2):
-            excursion = rest[contact, block] * roots[block]
-            if rates[block, 1] > 0.0:
+            excursion = rest[contact][block] * roots[block]
+            if rates[block][1] > 0.0:
                 tight = _overdamped_bound(
                     rates[block],
-                    mode_rows[contact, 1, block],
+                    mode_rows[contact][1][block],
                     block_states[2 * block],
                     block_states[2 * block + 1],
                     0,
@@ -828,7 +884,8 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
     # A state that leaves the both-contact phase carries the rounding of its closed form about
     # the static rest (~ mu ulp for a heavy upper ball); later phases must not take that for an
     # overlap, or a contact that just opened closes again at once, for ever.
-    params, y_rest = prepared[0], prepared[9]
+    stepping = constants(prepared)
+    params, y_rest = stepping[0], stepping[9]
     both_offset = ROUNDING * params[P_NOISE] * (abs(y_rest[0]) + abs(y_rest[1]))
     carried = 0.0
     for _ in range(MAX_PHASES):
@@ -843,7 +900,7 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
             horizon = v2  # the upper ball flies freely: its apex is exactly v2 away
             horizon_event = EVENT_APEX
         event, tau, x1, x2, v1, v2 = advance_phase(
-            kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared, entered_by, carried
+            kind, t, x1, x2, v1, v2, horizon, horizon_event, stepping, entered_by, carried
         )
         if kind == BOTH:  # the state leaves it with the rounding of its offset (see below)
             carried = both_offset
