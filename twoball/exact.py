@@ -65,7 +65,7 @@ STATUS_DONE, STATUS_REST = int(Status.DONE), int(Status.REST)
 STATUS_STUCK, STATUS_PHASES = int(Status.STUCK), int(Status.PHASE_LIMIT)
 
 MAX_STEPS_PER_PHASE = 100_000
-MAX_NEWTON = 100  # iterations of a bracketed Newton search (it converges in a few)
+MAX_ROOT_ITERATIONS = 100  # of a bracketed Halley search (it converges in about three)
 MAX_PHASES = 1_000_000
 ROUNDING = 16.0 * MACHINE_EPSILON  # tolerance in units of relative rounding
 SUBSPACE_SWEEPS = 4  # refinement sweeps of the both-contact mode split (see _split_modes)
@@ -154,11 +154,12 @@ def _release_time(u0, v0, b, w2, zeta, level, limit):
     monotone between consecutive zeros of q' (:func:`_oscillator_zeros`), so it can rise
     through the level only in its first rising stretch: its later maxima are each smaller by
     exp(-2 pi b / W), and the other branches turn at most once. The root is bracketed there and
-    found by Newton's method kept inside the bracket, so none is missed or approximated by steps.
+    found by Halley's method (q'' comes with the closed form) kept inside the bracket, so none is
+    missed or approximated by steps.
     """
-    a0 = -2.0 * b * v0 - w2 * u0
-    dq0 = v0 + 2.0 * zeta * a0
-    first, second = _oscillator_zeros(dq0, -2.0 * b * dq0 - w2 * (u0 + 2.0 * zeta * v0), b, w2)
+    q0 = u0 + 2.0 * zeta * v0
+    dq0 = v0 + 2.0 * zeta * (-2.0 * b * v0 - w2 * u0)
+    first, second = _oscillator_zeros(dq0, -2.0 * b * dq0 - w2 * q0, b, w2)
     low, high = (0.0, first) if dq0 >= 0.0 else (first, second)
     high = min(high, limit)
     if not (low < high < np.inf):
@@ -166,11 +167,16 @@ def _release_time(u0, v0, b, w2, zeta, level, limit):
     u, v, _ = _oscillator(u0, v0, b, w2, high)
     if u + 2.0 * zeta * v < level:
         return np.inf  # its rise stops short of the level (or the limit comes first)
-    u, v, _ = _oscillator(u0, v0, b, w2, low)
-    if u + 2.0 * zeta * v >= level:
-        return low
+    if q0 >= level:  # q falls to low from q0, so only then can it start the stretch past the level
+        u, v, _ = _oscillator(u0, v0, b, w2, low)
+        if u + 2.0 * zeta * v >= level:
+            return low
+    # start where q crosses zero in the stretch (its inflection, when undamped), else mid-way
     t = 0.5 * (low + high)
-    for _ in range(MAX_NEWTON):
+    for zero in _oscillator_zeros(q0, dq0, b, w2):
+        if low < zero < high:
+            t = zero
+    for _ in range(MAX_ROOT_ITERATIONS):
         u, v, a = _oscillator(u0, v0, b, w2, t)
         gap = u + 2.0 * zeta * v - level
         if gap >= 0.0:
@@ -178,7 +184,9 @@ def _release_time(u0, v0, b, w2, zeta, level, limit):
         else:
             low = t
         slope = v + 2.0 * zeta * a
-        following = t - gap / slope if slope > 0.0 else low - 1.0
+        bend = a - 2.0 * zeta * (2.0 * b * a + w2 * v)  # q'', with u''' = -2 b u'' - w2 u'
+        halley = 2.0 * slope * slope - gap * bend
+        following = t - 2.0 * gap * slope / halley if slope > 0.0 and halley > 0.0 else -1.0
         if not low <= following <= high:
             following = 0.5 * (low + high)
         if abs(following - t) <= ROUNDING * t:
