@@ -36,6 +36,14 @@ Near a simple root the steps converge quadratically (the parabola is a second-or
 times the condition of the mode split in the both-contact phase); an overlap shallower than that
 is below what double precision can represent and is the only thing that can go unnoticed.
 
+One switch needs no steps: with one contact active, that contact's overlap is a damped
+oscillator of its own (the floor's about its static compression, the balls' about touching),
+so the time its force ends is a root of a damped sinusoid (or two exponentials) against a
+constant, found in closed form: the force is monotone between the zeros of its rate, which are
+known exactly, so the root is bracketed in the first rising stretch and found to rounding
+(:func:`_release_time`). It bounds the phase like the apex does; only the other contact is
+stepped. The floor contacts of a bounce sequence take two state evaluations instead of eight.
+
 The upper ball at rest on the lower one (both contacts active for ever) is also proven rather
 than guessed: once the energy of the deviation from the static equilibrium is too small for
 either contact force to reach zero, no switch can ever happen again.

@@ -3,8 +3,8 @@
 The grid is cut into chunks; each chunk is computed by the exact solver (docs/model.md, "What is
 measured"), calling its compiled kernel case by case for the apex heights and times and the
 contact count only (no contact intervals, no phases are recorded). Chunks run in parallel
-(local processes, or a Dask distributed cluster) and each is written to the store as soon as it
-finishes, then marked done.
+(local threads, each writing its own chunks, or a Dask distributed cluster whose results this
+process writes) and each is written to the store as soon as it finishes, then marked done.
 
 Why Zarr (v3): every chunk is its own file, written independently; a reader takes one slice by
 reading only the chunks it touches, and a run that was killed restarts by skipping the chunks
@@ -51,8 +51,9 @@ SCHEDULER_TIMEOUT = "10s"  # to connect to a Dask scheduler
 PROGRESS_DIR = "_progress"  # a Zarr group holding one empty file per finished chunk
 # Drops a sweep undertakes without --force: over an hour on 2 cores at the rate below.
 MAX_DROPS = 100_000_000
-# Drops per second one local thread computes, end to end (the paper's 50^3 cube: about
-# 22 000-25 000/s on 2 threads, docs/performance.md); the plan's estimate.
+# Drops per second one local thread computes, end to end, for the plan's estimate: cautious (the
+# paper's 50^3 cube runs at 40 000-95 000/s on 2 threads depending on the machine's load,
+# docs/performance.md; heavier corners of the domain take longer per drop).
 DROPS_PER_WORKER_SECOND = 11_000
 
 HEIGHT_UNITS = "m1 g / k (dimensionless height X = z k / (m1 g))"
