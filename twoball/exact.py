@@ -458,6 +458,7 @@ def prepare(mu, z01, z12):
 
 @njit
 def _pair(a):
+    """The first two entries of a (an array's row, as a tuple)."""
     return a[0], a[1]
 
 
@@ -469,6 +470,7 @@ def _square(m):
 
 @njit
 def _quad(a):
+    """The first four entries of a (an array's row, as a tuple)."""
     return a[0], a[1], a[2], a[3]
 
 
