@@ -232,13 +232,13 @@ def test_resume_after_kill_9_finishes_without_recomputing(tmp_path):
     assert workers == []
     finished = sorted(path.name for path in progress.glob("*.*.*"))
     assert 3 <= len(finished) < total, "the run must be killed part way"
-    written = {key: (store / "h1" / "c" / key.replace(".", "/")).stat().st_mtime_ns
+    written = {key: (store / "h1" / f"c.{key}").stat().st_mtime_ns
                for key in finished}  # fmt: skip
     again = subprocess.run(_sweep_command(store, grid), capture_output=True, text=True, timeout=300)
     assert again.returncode == 0, again.stderr
     assert len(list(progress.glob("*.*.*"))) == total
     for key, mtime in written.items():  # finished chunks were not written again
-        assert (store / "h1" / "c" / key.replace(".", "/")).stat().st_mtime_ns == mtime
+        assert (store / "h1" / f"c.{key}").stat().st_mtime_ns == mtime
     _assert_cube_equals_block(store, grid)
 
 
@@ -247,17 +247,17 @@ def test_store_with_other_arguments_is_refused(tmp_path, capsys):
     store = tmp_path / "cube.zarr"
     sweep(small, store, workers=1, progress=False)
     metadata = (store / "zarr.json").read_bytes()
-    chunk = (store / "h1" / "c" / "0" / "0" / "0").read_bytes()
+    chunk = (store / "h1" / "c.0.0.0").read_bytes()
     words = small.command(store).split()[2:]
     words[words.index("--height") + 1] = "1e3"
     assert main(["sweep", *words, "--quiet"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "other arguments" in err and "height" in err
     assert (store / "zarr.json").read_bytes() == metadata
-    assert (store / "h1" / "c" / "0" / "0" / "0").read_bytes() == chunk
+    assert (store / "h1" / "c.0.0.0").read_bytes() == chunk
     # the same arguments again: nothing left to do, nothing rewritten
     assert main(["sweep", *small.command(store).split()[2:], "--quiet"]) == 0
-    assert (store / "h1" / "c" / "0" / "0" / "0").read_bytes() == chunk
+    assert (store / "h1" / "c.0.0.0").read_bytes() == chunk
     other = tmp_path / "not_a_cube"
     other.mkdir()
     (other / "precious.txt").write_text("keep me")

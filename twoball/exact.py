@@ -36,6 +36,14 @@ Near a simple root the steps converge quadratically (the parabola is a second-or
 times the condition of the mode split in the both-contact phase); an overlap shallower than that
 is below what double precision can represent and is the only thing that can go unnoticed.
 
+One switch needs no steps: with one contact active, that contact's overlap is a damped
+oscillator of its own (the floor's about its static compression, the balls' about touching),
+so the time its force ends is a root of a damped sinusoid (or two exponentials) against a
+constant, found in closed form: the force is monotone between the zeros of its rate, which are
+known exactly, so the root is bracketed in the first rising stretch and found to rounding
+(:func:`_release_time`). It bounds the phase like the apex does; only the other contact is
+stepped. The floor contacts of a bounce sequence take two state evaluations instead of eight.
+
 The upper ball at rest on the lower one (both contacts active for ever) is also proven rather
 than guessed: once the energy of the deviation from the static equilibrium is too small for
 either contact force to reach zero, no switch can ever happen again.
@@ -65,6 +73,7 @@ STATUS_DONE, STATUS_REST = int(Status.DONE), int(Status.REST)
 STATUS_STUCK, STATUS_PHASES = int(Status.STUCK), int(Status.PHASE_LIMIT)
 
 MAX_STEPS_PER_PHASE = 100_000
+MAX_ROOT_ITERATIONS = 100  # of a bracketed Halley search (it converges in about three)
 MAX_PHASES = 1_000_000
 ROUNDING = 16.0 * MACHINE_EPSILON  # tolerance in units of relative rounding
 SUBSPACE_SWEEPS = 4  # refinement sweeps of the both-contact mode split (see _split_modes)
@@ -112,6 +121,86 @@ def _oscillator(u0, v0, b, w2, tau):
     u = cos_part * u0 + sin_part * (v0 + b * u0)
     v = cos_part * v0 - sin_part * (w2 * u0 + b * v0)
     return u, v, -2.0 * b * v - w2 * u
+
+
+@njit
+def _oscillator_zeros(y0, y1, b, w2):
+    """The first two times t > 0 at which y = 0, for y'' + 2 b y' + w2 y = 0 from (y0, y1)
+    (inf where there are fewer), on every damping branch.
+
+    With the decay pair of :func:`_decay_pair`, y = cos_part y0 + sin_part p (p = y1 + b y0).
+    Underdamped, y = exp(-b t) R cos(W t - phi): zeros pi/W apart. Otherwise at most one zero,
+    where exp(-2 Om t) = 1 + x with x = 2 Om y0 / (p - Om y0), written without cancellation as
+    Om goes to 0 (the critical branch's t = -y0/p).
+    """
+    p = y1 + b * y0
+    d = w2 - b * b
+    if d > 0.0:
+        om = math.sqrt(d)
+        theta = math.atan2(p / om, y0) - 0.5 * math.pi  # a zero, in (-3 pi/2, pi/2]
+        while theta <= 0.0:
+            theta += math.pi
+        return theta / om, (theta + math.pi) / om
+    om = math.sqrt(-d)
+    denominator = p - om * y0
+    if denominator == 0.0:
+        return np.inf, np.inf  # y is the fast exponential alone
+    ratio = y0 / denominator
+    x = 2.0 * om * ratio
+    if not (ratio < 0.0 and x > -1.0):
+        return np.inf, np.inf
+    return -ratio * (math.log1p(x) / x if x != 0.0 else 1.0), np.inf
+
+
+@njit
+def _release_time(u0, v0, b, w2, zeta, level, limit):
+    """When an active contact's force ends, in closed form: the first t in (0, limit) at which
+    q = u + 2 zeta u' rises to ``level`` for u'' + 2 b u' + w2 u = 0 from (u0, v0); inf if none.
+
+    The contact's force is level - q (docs/model.md, "Bodies, coordinates, forces": u is the
+    overlap about the static rest, level its static force), and q obeys the same equation. q is
+    monotone between consecutive zeros of q' (:func:`_oscillator_zeros`), so it can rise
+    through the level only in its first rising stretch: its later maxima are each smaller by
+    exp(-2 pi b / W), and the other branches turn at most once. The root is bracketed there and
+    found by Halley's method (q'' comes with the closed form) kept inside the bracket, so none is
+    missed or approximated by steps.
+    """
+    q0 = u0 + 2.0 * zeta * v0
+    dq0 = v0 + 2.0 * zeta * (-2.0 * b * v0 - w2 * u0)
+    first, second = _oscillator_zeros(dq0, -2.0 * b * dq0 - w2 * q0, b, w2)
+    low, high = (0.0, first) if dq0 >= 0.0 else (first, second)
+    high = min(high, limit)
+    if not (low < high < np.inf):
+        return np.inf
+    u, v, _ = _oscillator(u0, v0, b, w2, high)
+    if u + 2.0 * zeta * v < level:
+        return np.inf  # its rise stops short of the level (or the limit comes first)
+    if q0 >= level:  # q falls to low from q0, so only then can it start the stretch past the level
+        u, v, _ = _oscillator(u0, v0, b, w2, low)
+        if u + 2.0 * zeta * v >= level:
+            return low
+    # start where q crosses zero in the stretch (its inflection, when undamped), else mid-way
+    t = 0.5 * (low + high)
+    for zero in _oscillator_zeros(q0, dq0, b, w2):
+        if low < zero < high:
+            t = zero
+    for _ in range(MAX_ROOT_ITERATIONS):
+        u, v, a = _oscillator(u0, v0, b, w2, t)
+        gap = u + 2.0 * zeta * v - level
+        if gap >= 0.0:
+            high = t
+        else:
+            low = t
+        slope = v + 2.0 * zeta * a
+        bend = a - 2.0 * zeta * (2.0 * b * a + w2 * v)  # q'', with u''' = -2 b u'' - w2 u'
+        halley = 2.0 * slope * slope - gap * bend
+        following = t - 2.0 * gap * slope / halley if slope > 0.0 and halley > 0.0 else -1.0
+        if not low <= following <= high:
+            following = 0.5 * (low + high)
+        if abs(following - t) <= ROUNDING * t:
+            return following
+        t = following
+    return t
 
 
 @njit
@@ -368,9 +457,55 @@ def prepare(mu, z01, z12):
 
 
 @njit
+def _pair(a):
+    """The first two entries of a (an array's row, as a tuple)."""
+    return a[0], a[1]
+
+
+@njit
+def _square(m):
+    """A 2x2 array as a nested tuple."""
+    return _pair(m[0]), _pair(m[1])
+
+
+@njit
+def _quad(a):
+    """The first four entries of a (an array's row, as a tuple)."""
+    return a[0], a[1], a[2], a[3]
+
+
+@njit
+def constants(prepared):
+    """What :func:`prepare` returned, as nested tuples of floats (indexed alike).
+
+    :func:`run` steps with these: an array handed to a compiled function costs an atomic
+    reference-count increment and decrement per call, which in the stepping loop took about
+    half the kernel's time; tuples of floats cost nothing to pass.
+    """
+    params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, mode_rows = prepared
+    return (
+        (params[0], params[1], params[2], params[3], params[4], params[5], params[6]),
+        (_square(c0[0]), _square(c0[1]), _square(c0[2]), _square(c0[3])),
+        (_square(c1[0]), _square(c1[1]), _square(c1[2]), _square(c1[3])),
+        (_square(c2[0]), _square(c2[1]), _square(c2[2]), _square(c2[3])),
+        _square(rest),
+        (_quad(x[0]), _quad(x[1]), _quad(x[2]), _quad(x[3])),
+        (_quad(x_inv[0]), _quad(x_inv[1]), _quad(x_inv[2]), _quad(x_inv[3])),
+        (_square(blocks[0]), _square(blocks[1])),
+        (_square(companions[0]), _square(companions[1])),
+        _quad(y_rest),
+        _square(rates),
+        (
+            (_square(mode_rows[0, 0]), _square(mode_rows[0, 1])),
+            (_square(mode_rows[1, 0]), _square(mode_rows[1, 1])),
+        ),
+    )
+
+
+@njit
 def _row4(m, i, a, b, c, d):
-    """Row i of a 4x4 matrix times (a, b, c, d), without allocating."""
-    return m[i, 0] * a + m[i, 1] * b + m[i, 2] * c + m[i, 3] * d
+    """Row i of a 4x4 matrix (array or nested tuple) times (a, b, c, d), without allocating."""
+    return m[i][0] * a + m[i][1] * b + m[i][2] * c + m[i][3] * d
 
 
 @njit
@@ -387,14 +522,26 @@ def _modes(x1, x2, v1, v2, x_inv, y_rest):
 
 @njit
 def _block_flow(b, z0, z1, tau):
-    """exp(B tau) z and B exp(B tau) z for a 2x2 block, exact on every damping branch:
+    """exp(B tau) z and B exp(B tau) z for a 2x2 block (an array), exact on every damping
+    branch; see :func:`_flow`."""
+    return _flow(b[0, 0], b[0, 1], b[1, 0], b[1, 1], z0, z1, tau)
+
+
+@njit
+def _flow(b00, b01, b10, b11, z0, z1, tau):
+    """exp(B tau) z and B exp(B tau) z for the 2x2 block B = [[b00, b01], [b10, b11]]:
     exp(B tau) = cos_part I + sin_part (B - tr(B)/2 I) with the oscillator's decay pair."""
-    half_trace = 0.5 * (b[0, 0] + b[1, 1])
-    det = b[0, 0] * b[1, 1] - b[0, 1] * b[1, 0]
-    cos_part, sin_part = _decay_pair(-half_trace, det, tau)
-    n0 = cos_part * z0 + sin_part * ((b[0, 0] - half_trace) * z0 + b[0, 1] * z1)
-    n1 = cos_part * z1 + sin_part * (b[1, 0] * z0 + (b[1, 1] - half_trace) * z1)
-    return n0, n1, b[0, 0] * n0 + b[0, 1] * n1, b[1, 0] * n0 + b[1, 1] * n1
+    half_trace = 0.5 * (b00 + b11)
+    cos_part, sin_part = _decay_pair(-half_trace, b00 * b11 - b01 * b10, tau)
+    n0 = cos_part * z0 + sin_part * ((b00 - half_trace) * z0 + b01 * z1)
+    n1 = cos_part * z1 + sin_part * (b10 * z0 + (b11 - half_trace) * z1)
+    return n0, n1, b00 * n0 + b01 * n1, b10 * n0 + b11 * n1
+
+
+@njit
+def _block_flow_of(block, z0, z1, tau):
+    """:func:`_flow` for a block given as an array or a nested tuple."""
+    return _flow(block[0][0], block[0][1], block[1][0], block[1][1], z0, z1, tau)
 
 
 @njit
@@ -430,8 +577,8 @@ def state_at(kind, tau, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest):
             -1.0 + share2 * ddeta,
         )
     z0, z1, z2, z3 = _modes(x1, x2, v1, v2, x_inv, y_rest)
-    n0, n1, r0, r1 = _block_flow(blocks[0], z0, z1, tau)
-    n2, n3, r2, r3 = _block_flow(blocks[1], z2, z3, tau)
+    n0, n1, r0, r1 = _block_flow_of(blocks[0], z0, z1, tau)
+    n2, n3, r2, r3 = _block_flow_of(blocks[1], z2, z3, tau)
     return (
         y_rest[0] + _row4(x, 0, n0, n1, n2, n3),
         y_rest[1] + _row4(x, 1, n0, n1, n2, n3),
@@ -458,20 +605,20 @@ def _curvature_bound(kind, contact, part, c0, c1, c2, roots, rates, mode_rows, b
     """Bound on |F''| of one part (0: eta, 1: g) of a contact's switching function for the rest
     of the phase: c0 + c1 sqrt(2 E_1) + c2 sqrt(2 E_2), where a strongly overdamped mode of the
     both-contact phase takes the tighter of its energy bound and its two-exponential bound."""
-    first = c1[kind, contact, part] * roots[0]
-    second = c2[kind, contact, part] * roots[1]
+    first = c1[kind][contact][part] * roots[0]
+    second = c2[kind][contact][part] * roots[1]
     if kind == BOTH:
-        if rates[0, 1] > 0.0:
+        if rates[0][1] > 0.0:
             tight = _overdamped_bound(
-                rates[0], mode_rows[contact, part, 0], block_states[0], block_states[1], 2
+                rates[0], mode_rows[contact][part][0], block_states[0], block_states[1], 2
             )
             first = min(first, tight)
-        if rates[1, 1] > 0.0:
+        if rates[1][1] > 0.0:
             tight = _overdamped_bound(
-                rates[1], mode_rows[contact, part, 1], block_states[2], block_states[3], 2
+                rates[1], mode_rows[contact][part][1], block_states[2], block_states[3], 2
             )
             second = min(second, tight)
-    return c0[kind, contact, part] + first + second
+    return c0[kind][contact][part] + first + second
 
 
 @njit
@@ -521,7 +668,7 @@ def contact_switch(active, eta, deta, ddeta, zeta, bound_eta, bound_g, tol_state
 @njit
 def _mode_energy_root(block, u, du):
     """sqrt(2 E) of a mode's oscillator energy E = (u'^2 + det(B) u^2)/2."""
-    det = block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0]
+    det = block[0][0] * block[1][1] - block[0][1] * block[1][0]
     return math.sqrt(du * du + det * u * u)
 
 
@@ -548,10 +695,10 @@ def _block_states(x1, x2, v1, v2, x_inv, companions, y_rest):
     """(u, u') of each mode's oscillator in the both-contact phase: (u_1, u_1', u_2, u_2')."""
     z0, z1, z2, z3 = _modes(x1, x2, v1, v2, x_inv, y_rest)
     return (
-        companions[0, 0, 0] * z0 + companions[0, 0, 1] * z1,
-        companions[0, 1, 0] * z0 + companions[0, 1, 1] * z1,
-        companions[1, 0, 0] * z2 + companions[1, 0, 1] * z3,
-        companions[1, 1, 0] * z2 + companions[1, 1, 1] * z3,
+        companions[0][0][0] * z0 + companions[0][0][1] * z1,
+        companions[0][1][0] * z0 + companions[0][1][1] * z1,
+        companions[1][0][0] * z2 + companions[1][0][1] * z3,
+        companions[1][1][0] * z2 + companions[1][1][1] * z3,
     )
 
 
@@ -563,11 +710,11 @@ def _at_rest(roots, params, rest, rates, mode_rows, block_states, tol):
     for contact in range(2):
         margin = params[P_F1] if contact == 0 else params[P_F2]
         for block in range(2):
-            excursion = rest[contact, block] * roots[block]
-            if rates[block, 1] > 0.0:
+            excursion = rest[contact][block] * roots[block]
+            if rates[block][1] > 0.0:
                 tight = _overdamped_bound(
                     rates[block],
-                    mode_rows[contact, 1, block],
+                    mode_rows[contact][1][block],
                     block_states[2 * block],
                     block_states[2 * block + 1],
                     0,
@@ -587,9 +734,12 @@ def advance_phase(
 
     Returns (event, tau, x1, x2, v1, v2) with tau the time into the phase. horizon is a known
     event time (apex or end of the run) with its event code; prepared is what :func:`prepare`
-    returned.
+    returned. With one contact active, that contact's oscillator moves on its own, so the time
+    its force ends is found in closed form (:func:`_release_time`) and becomes the horizon; only
+    the other contact is stepped.
     """
     params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, mode_rows = prepared
+    z01, z12, w2_ball = params[P_Z01], params[P_Z12], params[P_W2]
     noise = params[P_NOISE] if kind == BOTH else 1.0
     size = 1.0 + abs(x1) + abs(x2)
     # Without the ball contact the lower ball moves on its own, so the floor contact's rounding
@@ -603,6 +753,7 @@ def advance_phase(
     speed = abs(v1) + abs(v2)
     floor_on = (kind & 1) != 0
     ball_on = (kind & 2) != 0
+    own = EVENT_FLOOR if kind == FLOOR else EVENT_BALL if kind == BALL else -1
     tau = 0.0
     last_step = 0.0
     for _ in range(MAX_STEPS_PER_PHASE):
@@ -623,6 +774,8 @@ def advance_phase(
         event = -1
         best = np.inf
         for contact in range(2):
+            if contact == own and tau > 0.0:
+                continue  # its end is the horizon
             active = floor_on if contact == 0 else ball_on
             bound_eta = _curvature_bound(
                 kind, contact, 0, c0, c1, c2, roots, rates, mode_rows, block_states
@@ -663,12 +816,25 @@ def advance_phase(
                     shift = 0.0  # not back to where it switched (see fresh above)
                 if tau + shift < best:
                     best, event = tau + shift, contact
+            elif contact == own:
+                # the force ends at -tol once it is within tol of zero just after switching on
+                level = tol if fresh and value <= tol else 0.0
+                if kind == FLOOR:
+                    release = _release_time(x1 + 1.0, v1, z01, 1.0, z01, 1.0 + level, horizon)
+                else:
+                    release = _release_time(
+                        x2 - x1, v2 - v1, z12 * w2_ball, w2_ball, z12, level, horizon
+                    )
+                if release < horizon:
+                    horizon, horizon_event = release, own
+                    step = min(step, horizon - tau)
             else:
                 step = min(step, h)
         if event >= 0:
-            y1, y2, w1, w2, _, _ = state_at(
-                kind, best, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest
-            )
+            if best != tau:  # else the state is the one just computed
+                y1, y2, w1, w2, _, _ = state_at(
+                    kind, best, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest
+                )
             return event, best, y1, y2, w1, w2
         if kind == BOTH and _at_rest(
             roots, params, rest, rates, mode_rows, block_states, tol_state
@@ -736,7 +902,8 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
     # A state that leaves the both-contact phase carries the rounding of its closed form about
     # the static rest (~ mu ulp for a heavy upper ball); later phases must not take that for an
     # overlap, or a contact that just opened closes again at once, for ever.
-    params, y_rest = prepared[0], prepared[9]
+    stepping = constants(prepared)
+    params, y_rest = stepping[0], stepping[9]
     both_offset = ROUNDING * params[P_NOISE] * (abs(y_rest[0]) + abs(y_rest[1]))
     carried = 0.0
     for _ in range(MAX_PHASES):
@@ -751,7 +918,7 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
             horizon = v2  # the upper ball flies freely: its apex is exactly v2 away
             horizon_event = EVENT_APEX
         event, tau, x1, x2, v1, v2 = advance_phase(
-            kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared, entered_by, carried
+            kind, t, x1, x2, v1, v2, horizon, horizon_event, stepping, entered_by, carried
         )
         if kind == BOTH:  # the state leaves it with the rounding of its offset (see below)
             carried = both_offset

@@ -17,7 +17,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.integrate import odeint, solve_ivp
 
 from twoball.errors import Status
 from twoball.model import Drop
@@ -102,6 +101,8 @@ def solve(
 
 
 def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense_output):
+    from scipy.integrate import solve_ivp  # here: scipy adds 0.4 s to every start of twoball
+
     rhs, jacobian = _right_hand_side(drop)
     z01, z12 = drop.zeta01, drop.zeta12
 
@@ -256,6 +257,8 @@ def _solve_odeint(drop, apexes, horizon, t_end, rtol, atol, dense_output):
     The grid is integrated in windows of ODEINT_WINDOW and stops after the window in which the
     wanted apex appears, so it does not integrate far past what was asked.
     """
+    from scipy.integrate import odeint  # here: scipy adds 0.4 s to every start of twoball
+
     rhs, jacobian = _right_hand_side(drop)
     per_window = int(round(ODEINT_WINDOW / ODEINT_STEP))
     y0 = np.array([drop.x1_0, drop.x2_0, 0.0, 0.0])

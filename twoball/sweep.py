@@ -3,8 +3,8 @@
 The grid is cut into chunks; each chunk is computed by the exact solver (docs/model.md, "What is
 measured"), calling its compiled kernel case by case for the apex heights and times and the
 contact count only (no contact intervals, no phases are recorded). Chunks run in parallel
-(local processes, or a Dask distributed cluster) and each is written to the store as soon as it
-finishes, then marked done.
+(local threads, each writing its own chunks, or a Dask distributed cluster whose results this
+process writes) and each is written to the store as soon as it finishes, then marked done.
 
 Why Zarr (v3): every chunk is its own file, written independently; a reader takes one slice by
 reading only the chunks it touches, and a run that was killed restarts by skipping the chunks
@@ -51,8 +51,9 @@ SCHEDULER_TIMEOUT = "10s"  # to connect to a Dask scheduler
 PROGRESS_DIR = "_progress"  # a Zarr group holding one empty file per finished chunk
 # Drops a sweep undertakes without --force: over an hour on 2 cores at the rate below.
 MAX_DROPS = 100_000_000
-# Drops per second one local thread computes, end to end (the paper's 50^3 cube: about
-# 22 000-25 000/s on 2 threads, docs/performance.md); the plan's estimate.
+# Drops per second one local thread computes, end to end, for the plan's estimate: cautious (the
+# paper's 50^3 cube runs at 40 000-95 000/s on 2 threads depending on the machine's load,
+# docs/performance.md; heavier corners of the domain take longer per drop).
 DROPS_PER_WORKER_SECOND = 11_000
 
 HEIGHT_UNITS = "m1 g / k (dimensionless height X = z k / (m1 g))"
@@ -406,10 +407,16 @@ def _open_or_create(grid: Grid, store: Path) -> set[str]:
         building = store.with_name(store.name + ".creating")
         shutil.rmtree(building, ignore_errors=True)  # left by a run killed while creating
         template = _template(grid, grid.command(store))
-        # byte shuffle + zstd: 15 % smaller than plain zstd on these smooth float fields
-        compressor = BloscCodec(cname="zstd", clevel=9, shuffle="shuffle")
+        # byte shuffle + zstd: 15 % smaller than plain zstd on these smooth float fields; level
+        # 7 stores the paper's cube 0.2 % larger than level 9 for a quarter of its CPU (0.11
+        # against 0.43 s, a third of the time the kernel takes to compute the cube)
+        compressor = BloscCodec(cname="zstd", clevel=7, shuffle="shuffle")
+        # chunk files named c.I.J.K in the variable's directory: nested c/I/J/K directories
+        # cost two directory creations per chunk and variable, more than writing the chunk
+        flat = {"name": "default", "separator": "."}
         encoding = {
-            name: {"chunks": grid.chunks, "compressors": [compressor]} for name in VARIABLES
+            name: {"chunks": grid.chunks, "compressors": [compressor], "chunk_key_encoding": flat}
+            for name in VARIABLES
         }
         template.to_zarr(building, compute=False, encoding=encoding, consolidated=False)
         zarr.open_group(building / PROGRESS_DIR, mode="w")  # a group, so readers skip it
@@ -421,17 +428,28 @@ def _chunk_key(grid: Grid, index: tuple[slice, slice, slice]) -> str:
     return ".".join(str(part.start // c) for part, c in zip(index, grid.chunks, strict=True))
 
 
-def _write_chunk(grid: Grid, store: Path, index, arrays: dict[str, np.ndarray]) -> None:
-    """Write one finished chunk, then its done-marker (a marker is never ahead of the data)."""
-    import xarray as xr
+def _open_variables(store: Path) -> dict:
+    """The cube's data variables as Zarr arrays, opened once for all the chunks' writes."""
+    import zarr
 
-    data_vars = {
-        name: (DIMS, arrays[name].astype(_stored_type(grid, name), copy=False))
-        for name in VARIABLES
-    }
-    region = dict(zip(DIMS, index, strict=True))
-    xr.Dataset(data_vars).to_zarr(store, region=region, mode="r+", consolidated=False)
+    group = zarr.open_group(str(store), mode="r+")
+    return {name: group[name] for name in VARIABLES}
+
+
+def _write_chunk(grid: Grid, store: Path, variables: dict, index, arrays: dict) -> None:
+    """Write one finished chunk, then its done-marker (a marker is never ahead of the data).
+
+    Straight into the Zarr arrays (the stored types are plain: no encoding to apply); through
+    xarray's region writes each chunk cost ~0.1 s of opening and checking the store, twice the
+    time the compiled kernel takes to compute it.
+    """
+    for name, target in variables.items():
+        target[index] = arrays[name].astype(_stored_type(grid, name), copy=False)
     (store / PROGRESS_DIR / _chunk_key(grid, index)).touch()
+
+
+def _compute_and_write(grid: Grid, store: Path, variables: dict, index) -> None:
+    _write_chunk(grid, store, variables, index, compute_chunk(grid, index))
 
 
 def sweep(
@@ -496,6 +514,7 @@ def sweep(
     lock = _lock(store)
     try:
         done = _open_or_create(grid, store)
+        variables = _open_variables(store)
         todo = [index for index in grid.chunk_slices() if _chunk_key(grid, index) not in done]
         bar = tqdm(
             total=grid.size,
@@ -515,16 +534,20 @@ def sweep(
                     client.submit(compute_chunk, grid, index, pure=False): index for index in todo
                 }
                 for future in as_completed(list(futures)):
-                    _write_chunk(grid, store, futures[future], future.result())
+                    _write_chunk(grid, store, variables, futures[future], future.result())
                     bar.update(_cases(futures[future]))
             elif todo:
                 # Threads, not processes: the batch path (exact.run_block) runs compiled with
-                # the GIL released, so threads compute in parallel with no start-up cost.
+                # the GIL released, so threads compute in parallel with no start-up cost. Each
+                # thread writes its own chunks, so writing one chunk overlaps computing others.
                 threads = min(workers or os.cpu_count() or 1, len(todo))
                 with ThreadPoolExecutor(threads) as pool:
-                    futures = {pool.submit(compute_chunk, grid, index): index for index in todo}
+                    futures = {
+                        pool.submit(_compute_and_write, grid, store, variables, index): index
+                        for index in todo
+                    }
                     for future in threads_completed(futures):
-                        _write_chunk(grid, store, futures[future], future.result())
+                        future.result()
                         bar.update(_cases(futures[future]))
         import warnings
 
