@@ -166,6 +166,25 @@ def test_report_on_an_array_inside_a_store_is_one_line(tmp_path):
     assert made.returncode == 0, made.stderr
     line = _one_line_error(_run("report", "--paper-cube", str(store / "h1")))
     assert "array inside a store" in line and "h1" in line
+    # the store itself, too small for the paper's claims: one line, not a numpy traceback
+    line = _one_line_error(_run("report", "--paper-cube", str(store)))
+    assert "must reach tau_ratio above 0.85" in line and "0.1 to 0.1" in line
+
+
+def test_a_hertz_integrator_failure_is_one_line_and_status_1(monkeypatch, capsys):
+    """DOP853 failing in a contact phase printed a RuntimeError traceback (exit 1)."""
+    from twoball import cli, hertz
+
+    class Failing(hertz.DOP853):
+        def step(self):
+            self.status = "failed"
+            return "Required step size is less than spacing between numbers."
+
+    monkeypatch.setattr(hertz, "DOP853", Failing)
+    assert cli.main(["stack", "--mass-ratios", "0.2", "--force", "hertz"]) == 1
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("twoball: solver failed:")
+    assert "integrator failed" in lines[0]
 
 
 def test_many_contacts_without_the_studies_extra_is_one_line(tmp_path):
