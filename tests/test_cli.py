@@ -107,6 +107,8 @@ def test_help_states_the_enforced_ranges():
     low, high = Parameters.param["mu"].bounds
     assert f"m2/m1 in [{low:g}, {high:g}]" in text
     assert "(0, 1]" not in text and "> 0" not in text
+    stack = " ".join(_run("stack", "--help").stdout.split())
+    assert "one restitution in [0.01, 1]" in stack and "products in [1e-09, 1e+06]" in stack
     doc = " ".join(twoball.simulate.__doc__.split())
     assert "in [0.01, 1]" in doc and "in [1e-09, 1e+06]" in doc and "(0, 1]" not in doc
 

@@ -201,6 +201,8 @@ def _numbers(text: str) -> list[float]:
 
 
 def _add_stack(subparsers: argparse._SubParsersAction) -> None:
+    from twoball.stack import HERTZ_LARGEST_MASS, HERTZ_SMALLEST_RESTITUTION
+
     parser = subparsers.add_parser(
         "stack", help="drop a stack of N balls and print the top ball's bounces"
     )
@@ -208,13 +210,21 @@ def _add_stack(subparsers: argparse._SubParsersAction) -> None:
         "--mass-ratios",
         type=_numbers,
         required=True,
-        help="m_i/m_(i-1) bottom up, comma-separated: N-1 values for N balls",
+        help="m_i/m_(i-1) bottom up, comma-separated: N-1 values for N balls, each and their "
+        f"products in {allowed_range('mu')} (hertz: products up to {HERTZ_LARGEST_MASS:g})",
     )
     parser.add_argument(
-        "--eps", type=_numbers, default=[0.9], help="one restitution, or N: floor first"
+        "--eps",
+        type=_numbers,
+        default=[0.9],
+        help=f"one restitution in {allowed_range('eps')}, or N: floor first (hertz: from "
+        f"{HERTZ_SMALLEST_RESTITUTION:g})",
     )
     parser.add_argument(
-        "--tau-ratios", type=_numbers, default=[0.2], help="one gap td/tau_f, or N-1 (0.2)"
+        "--tau-ratios",
+        type=_numbers,
+        default=[0.2],
+        help=f"one gap td/tau_f in {allowed_range('tau_ratio')}, or N-1 (0.2)",
     )
     parser.add_argument(
         "--height",
