@@ -1,6 +1,7 @@
 """The command line: JSON output, and one line with exit status 2 for bad input."""
 
 import json
+import os
 import subprocess
 import sys
 
@@ -79,3 +80,127 @@ def test_stack_bad_input_exits_2_naming_it():
     assert completed.stderr.strip() == (
         "twoball: error: eps must hold one value or 3 (the floor's, then each pair's); got 2"
     )
+
+
+def _one_line_error(completed, status=2):
+    assert completed.returncode == status, (completed.stdout, completed.stderr)
+    assert "Traceback" not in completed.stderr
+    lines = completed.stderr.strip().splitlines()
+    assert len(lines) == 1, completed.stderr
+    return lines[0]
+
+
+def test_version():
+    completed = _run("--version")
+    assert (
+        completed.returncode == 0 and completed.stdout.strip() == f"twoball {twoball.__version__}"
+    )
+
+
+def test_help_states_the_enforced_ranges():
+    """The help said eps in (0, 1] and mu > 0 while [0.01, 1] and [1e-9, 1e6] were enforced."""
+    from twoball.model import Parameters
+
+    text = " ".join(_run("simulate", "--help").stdout.split())
+    low, high = Parameters.param["eps"].bounds
+    assert f"eps in [{low:g}, {high:g}]" in text
+    low, high = Parameters.param["mu"].bounds
+    assert f"m2/m1 in [{low:g}, {high:g}]" in text
+    assert "(0, 1]" not in text and "> 0" not in text
+    stack = " ".join(_run("stack", "--help").stdout.split())
+    assert "one restitution in [0.01, 1]" in stack and "products in [1e-09, 1e+06]" in stack
+    doc = " ".join(twoball.simulate.__doc__.split())
+    assert "in [0.01, 1]" in doc and "in [1e-09, 1e+06]" in doc and "(0, 1]" not in doc
+
+
+def test_until_names_what_it_takes():
+    line = _one_line_error(
+        _run("simulate", "--eps", "0.9", "--mu", "0.01", "--tau-ratio", "0.01", "--until", "third")
+    )
+    assert "--until" in line and "first, second or a time" in line
+
+
+def test_a_run_to_a_time_before_the_apexes_says_why_they_are_missing():
+    completed = _run(
+        "simulate", "--eps", "0.9", "--mu", "0.01", "--tau-ratio", "0.01", "--until", "100"
+    )
+    assert completed.returncode == 0, completed.stderr
+    reason = [line for line in completed.stdout.splitlines() if line.startswith("reason")]
+    assert reason and "no apex of the upper ball before t = 100" in reason[0]
+    assert twoball.simulate(0.9, 0.01, 0.01, until=100.0).apex_h == []  # and truly none
+
+
+def test_stack_beyond_the_domain_exits_2_with_one_line():
+    """twoball stack --height 1e30 printed h1 = 2.3e30 (linear) or a traceback (hertz)."""
+    for force in ("linear", "hertz"):
+        line = _one_line_error(
+            _run("stack", "--mass-ratios", "0.2", "--height", "1e30", "--force", force)
+        )
+        assert "height must be at most" in line
+
+
+@pytest.mark.parametrize("store", [".", "", "/", ".."])
+def test_a_sweep_store_must_be_named(store, tmp_path):
+    completed = subprocess.run(
+        [sys.executable, "-m", "twoball", "sweep", store, "--eps", "0.9", "--mu", "0.1",
+         "--tau-ratio", "0.1", "--quiet"],
+        capture_output=True, text=True, timeout=120, cwd=tmp_path,
+    )  # fmt: skip
+    assert "store" in _one_line_error(completed)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_sweep_that_cannot_write_names_the_store_given(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    store = str(blocker / "x.zarr")
+    line = _one_line_error(
+        _run("sweep", store, "--eps", "0.9", "--mu", "0.1", "--tau-ratio", "0.1", "--quiet")
+    )
+    assert line.startswith(f"twoball: error: {store}: ")
+
+
+def test_report_on_an_array_inside_a_store_is_one_line(tmp_path):
+    store = tmp_path / "small.zarr"
+    made = _run(
+        "sweep", str(store), "--eps", "0.8:0.9:2", "--mu", "0.1", "--tau-ratio", "0.1", "--quiet"
+    )
+    assert made.returncode == 0, made.stderr
+    line = _one_line_error(_run("report", "--paper-cube", str(store / "h1")))
+    assert "array inside a store" in line and "h1" in line
+    # the store itself, too small for the paper's claims: one line, not a numpy traceback
+    line = _one_line_error(_run("report", "--paper-cube", str(store)))
+    assert "must reach tau_ratio above 0.85" in line and "0.1 to 0.1" in line
+
+
+def test_a_hertz_integrator_failure_is_one_line_and_status_1(monkeypatch, capsys):
+    """DOP853 failing in a contact phase printed a RuntimeError traceback (exit 1)."""
+    from twoball import cli, hertz
+
+    class Failing(hertz.DOP853):
+        def step(self):
+            self.status = "failed"
+            return "Required step size is less than spacing between numbers."
+
+    monkeypatch.setattr(hertz, "DOP853", Failing)
+    assert cli.main(["stack", "--mass-ratios", "0.2", "--force", "hertz"]) == 1
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("twoball: solver failed:")
+    assert "integrator failed" in lines[0]
+
+
+def test_many_contacts_without_the_studies_extra_is_one_line(tmp_path):
+    """Without mpmath the worker processes printed their tracebacks."""
+    fake = tmp_path / "mpmath"
+    fake.mkdir()
+    (fake / "__init__.py").write_text(
+        'raise ModuleNotFoundError("No module named \'mpmath\'", name="mpmath")\n'
+    )
+    environment = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    completed = subprocess.run(
+        [sys.executable, "-m", "twoball", "many-contacts", "--out", str(tmp_path / "mc"),
+         "--count", "1"],
+        capture_output=True, text=True, timeout=120, env=environment,
+    )  # fmt: skip
+    line = _one_line_error(completed)
+    assert "'studies' extra" in line

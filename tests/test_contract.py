@@ -104,3 +104,62 @@ def test_an_apex_above_the_energy_at_release_is_an_error_not_a_value(monkeypatch
     drop = result.drop
     assert result.success and len(result.apex_h) >= 2
     assert max(result.apex_h) < (drop.x1_0 + drop.mu * drop.x2_0 + 0.5) / drop.mu
+
+
+def test_sample_times_outside_the_run_are_refused_not_extrapolated():
+    """t_eval = [-1, 5, 1e9] gave x1 = -5e17 at t = 1e9: a free fall through the floor."""
+    with pytest.raises(ParameterError, match="t_eval must hold times >= 0"):
+        twoball.simulate(0.9, 0.01, 0.01, t_eval=[-1.0, 5.0])
+    result = twoball.simulate(0.9, 0.01, 0.01, dense_output=True)
+    span = f"time span [0, {result.end_time:.10g}]"
+    with pytest.raises(ParameterError, match=re.escape(span)) as caught:
+        twoball.simulate(0.9, 0.01, 0.01, t_eval=[5.0, 1e9])
+    assert str(caught.value).startswith("t_eval must lie within")
+    with pytest.raises(ParameterError, match=re.escape(span)) as caught:
+        result.evaluate([-1.0, 1e9])
+    assert str(caught.value).startswith("t must lie within")
+    # the end itself is inside: the second apex, as the run found it
+    at_end = result.evaluate([0.0, result.end_time])
+    assert at_end.x2[1] == pytest.approx(result.h2, rel=1e-12) and at_end.x1[0] == 1e4
+
+
+def test_after_a_proven_rest_every_later_time_is_that_rest():
+    """A run that ends at rest is proven to stay there: later samples are the static rest
+    (x1 = -(1 + mu), x2 = x1 - mu; docs/model.md, "Bodies, coordinates, forces")."""
+    rest = twoball.simulate(0.02, 0.3, 0.0, height=100.0, t_eval=[1.0, 1e5])
+    assert rest.status is Status.REST
+    assert rest.trajectory.x1[1] == pytest.approx(-1.3, abs=1e-9)
+    assert rest.trajectory.x2[1] == pytest.approx(-1.6, abs=1e-9)
+
+
+@pytest.mark.parametrize("t_eval", ["abc", [1.0, "2"], [1.0, True]])
+def test_sample_times_that_are_not_numbers_name_t_eval(t_eval):
+    with pytest.raises(ParameterError, match="t_eval must be a one-dimensional array"):
+        twoball.simulate(0.9, 0.01, 0.01, t_eval=t_eval)
+
+
+@pytest.mark.parametrize(
+    ("changed", "named"),
+    [
+        ({"eps": "0.9"}, "eps"),
+        ({"height": "1e4"}, "height"),
+        ({"eps": True}, "eps"),
+        ({"mu": np.bool_(True)}, "mu"),
+        ({"eps12": "0.9"}, "eps12"),
+        ({"tau_ratio": b"0.01"}, "tau_ratio"),
+    ],
+)
+def test_text_and_booleans_are_not_numbers(changed, named):
+    """eps = '0.9' and height = '1e4' ran, and eps = True ran as 1.0."""
+    drop = {"eps": 0.9, "mu": 0.01, "tau_ratio": 0.01} | changed
+    with pytest.raises(ParameterError, match=f"^{named} must be a real number"):
+        twoball.simulate(**drop)
+
+
+def test_numpy_numbers_are_numbers():
+    plain = twoball.simulate(0.9, 0.01, 0.01, height=1e4)
+    numpy = twoball.simulate(
+        np.float64(0.9), np.float64(0.01), np.float32(0.01), height=np.int64(10000)
+    )
+    assert numpy.h2 == twoball.simulate(0.9, 0.01, float(np.float32(0.01))).h2
+    assert plain.h1 == pytest.approx(numpy.h1, rel=1e-4)

@@ -159,3 +159,73 @@ def test_the_check_values_of_the_specification():
     assert hertz.damping_factor(0.9) == pytest.approx(0.16648, abs=1e-5)
     assert hertz.damping_factor(0.5) == pytest.approx(1.43275, abs=1e-5)
     assert hertz.floor_contact_time(1.0, 0.5) == pytest.approx(3.218, abs=1e-3)
+
+
+def test_hertz_refuses_heights_beyond_the_domain():
+    """H = 1e30 ended in a traceback (RuntimeError: DOP853 failed); now refused up front, as
+    the linear force is, with the largest height (docs/model.md, "Stacks of N balls")."""
+    from twoball.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="height must be at most .* and the hertz force"):
+        simulate_stack([0.2], 0.9, 0.2, force="hertz", height=1e30)
+    with pytest.raises(ParameterError, match="tau_ratios must be at most"):
+        simulate_stack([0.2], 0.9, 1e7, force="hertz")  # ran 3 minutes, then failed
+
+
+def test_hertz_refuses_overdamped_slow_impacts_with_the_smallest_height():
+    """H = 1e-9 ran 50 s and failed: the damping lam = Lambda(eps) / v, calibrated at the impact
+    speed v, overdamps the settling. The smallest height in the message is where lam, computed
+    here from the ICM chain's closing speeds, is 50."""
+    from twoball.errors import ParameterError
+    from twoball.stack import check_stack
+
+    with pytest.raises(ParameterError, match="height must be at least") as caught:
+        simulate_stack([0.2], 0.9, 0.2, force="hertz", height=1e-9)
+    smallest = float(str(caught.value).split("at least ")[1].split(" ")[0])
+    impact = math.sqrt(2.0 * smallest)
+    closing = impact + 0.9 * impact  # ball 1 falling at impact meets ball 0 rising at 0.9 impact
+    lam = hertz.damping_factor(0.9) / min(impact, closing)
+    assert lam == pytest.approx(50.0, rel=2e-3)
+    check_stack([0.2], 0.9, 0.2, force="hertz", height=smallest * 1.01)
+    with pytest.raises(ParameterError, match="height must be at least"):
+        check_stack([0.2], 0.9, 0.2, force="hertz", height=smallest * 0.99)
+    with pytest.raises(ParameterError, match=r"\[1e-09, 10000\] with the hertz force"):
+        simulate_stack([1e6], 0.9, 0.2, force="hertz")  # ran a minute, then failed
+
+
+def test_an_integrator_failure_is_a_solver_error(monkeypatch):
+    """DOP853 failing in a contact phase raised a RuntimeError (a traceback on the command
+    line); it is the run's status FAILED: SolverError, or success False with throw=False."""
+    from twoball.errors import SolverError
+
+    class Failing(hertz.DOP853):
+        def step(self):
+            self.status = "failed"
+            return "Required step size is less than spacing between numbers."
+
+    monkeypatch.setattr(hertz, "DOP853", Failing)
+    with pytest.raises(SolverError, match="integrator failed"):
+        simulate_stack([0.2], 0.9, 0.2, force="hertz")
+    result = simulate_stack([0.2], 0.9, 0.2, force="hertz", throw=False)
+    assert not result.success and result.status is Status.FAILED and result.h1 is None
+
+
+def test_the_step_budget_bounds_a_run_that_cannot_end(monkeypatch):
+    """A run to a time far beyond the second apex bounced on (Hunt-Crossley grows elastic as
+    the impacts slow) for 100 000 steps, 90 s. The budget is counted, not timed: a run that
+    exceeds it stops at MAX_STEPS steps, loudly."""
+    from twoball.errors import SolverError
+
+    calls = []
+    real = hertz.DOP853.step
+
+    def counted(self):
+        calls.append(1)
+        return real(self)
+
+    monkeypatch.setattr(hertz, "MAX_STEPS", 500)
+    monkeypatch.setattr(hertz.DOP853, "step", counted)
+    with pytest.raises(SolverError, match="phase or step limit") as caught:
+        simulate_stack([0.2], 0.9, 0.2, force="hertz", until=1e300)
+    assert "eps = 1" not in str(caught.value)
+    assert len(calls) <= 500

@@ -113,7 +113,7 @@ def test_icm_with_separate_restitutions_follows_the_collision_steps():
         ("tau_ratio", float("nan"), "tau_ratio"),
         ("height", 0.0, "height must be a finite number in (0, inf)"),
         ("height", float("-inf"), "height"),
-        ("mu", "heavy", "mu must be a number in [1e-09, 1e+06]"),
+        ("mu", "heavy", "mu must be a real number in [1e-09, 1e+06]"),
     ],
 )
 def test_bad_parameters_name_the_parameter_and_range(name, value, text):

@@ -231,3 +231,131 @@ def test_failure_is_loud(monkeypatch):
     finally:
         jit.use_compiled_kernels()
     assert not result.success and result.status is Status.PHASE_LIMIT
+
+
+# --- the domain double precision can carry, as simulate's (docs/model.md, "Stacks of N balls") --
+
+
+def _rounding_by_hand(height, masses, top):
+    """docs/model.md's stack domain, written out here: 2.2e-16 max(X_top, 1) over the smallest
+    overlap, max(sqrt(2H m_red), weight above) per contact (the floor's: sqrt(2H) and 1), and
+    at least 1e-3 of it."""
+    overlaps = [max(math.sqrt(2.0 * height), 1.0)]
+    for c in range(1, len(masses)):
+        reduced = masses[c] * masses[c - 1] / (masses[c] + masses[c - 1])
+        overlaps.append(max(math.sqrt(2.0 * height * reduced), sum(masses[c:])))
+    return 2.220446049250313e-16 * max(top, 1.0) * max(1.0 / min(overlaps), 1e-3)
+
+
+def _largest_height_by_hand(masses):
+    low, high = 0.0, 30.0
+    for _ in range(100):
+        middle = 0.5 * (low + high)
+        if _rounding_by_hand(10.0**middle, masses, 10.0**middle) > 1e-6:
+            high = middle
+        else:
+            low = middle
+    return 10.0**low
+
+
+@pytest.mark.parametrize("ratios", [[0.2], [0.2, 0.2], [1e-4, 1e-4], [3.0, 0.5, 2.0]])
+def test_heights_beyond_the_domain_are_refused_as_simulate_refuses_them(ratios):
+    """H = 1e30 returned h1 = 2.3e30 (simulate refuses it); the largest height accepted is the
+    one the formula of docs/model.md gives, evaluated here independently."""
+    largest = _largest_height_by_hand(np.cumprod([1.0, *ratios]))
+    check_stack(ratios, 0.9, 0.0 if len(ratios) < 3 else 1e-6, height=largest * 0.99)
+    with pytest.raises(ParameterError, match="height must be at most") as caught:
+        simulate_stack(ratios, 0.9, 0.2, height=1e30)
+    assert f"{largest:.3g}" in str(caught.value) and "double precision" in str(caught.value)
+    with pytest.raises(ParameterError, match="height must be at most"):
+        check_stack(ratios, 0.9, 0.0 if len(ratios) < 3 else 1e-6, height=largest * 1.01)
+    if len(ratios) == 1:  # two balls: the same limit as simulate's
+        with pytest.raises(ParameterError) as single:
+            twoball.simulate(0.9, ratios[0], 0.0, height=1e30)
+        assert f"{largest:.3g}" in str(single.value)
+
+
+def test_a_gap_beyond_the_domain_is_refused_as_simulate_refuses_it():
+    """A gap of 1e7 gave h1 = 1.8e14 where simulate refuses gaps above 2.34e5 (mu = 0.2)."""
+    with pytest.raises(ParameterError, match="tau_ratio must be at most 2.34e") as single:
+        twoball.simulate(0.9, 0.2, 1e7)
+    with pytest.raises(ParameterError, match="tau_ratios must be at most 2.34e") as pair:
+        simulate_stack([0.2], 0.9, 1e7)
+    assert str(single.value).split(" must")[1].split("(got")[0].replace("mu = 0.2", "") == (
+        str(pair.value).split(" must")[1].split("(got")[0].replace("mass_ratios = [0.2]", "")
+    )
+    masses = [1.0, 0.2, 0.04]
+    made = check_stack([0.2, 0.2], 0.9, [1e5, 1e4])
+    assert _rounding_by_hand(1e4, masses, made.x_start[-1]) <= 1e-6
+    with pytest.raises(ParameterError, match=r"tau_ratios \(their sum\) must be at most"):
+        simulate_stack([0.2, 0.2], 0.9, [1e7, 1.0])
+
+
+def test_two_balls_prove_rest_as_simulate_does():
+    """eps = 0.01 under a ball 1e6 times heavier: simulate proves rest, the stack reached the
+    phase limit (its cluster-energy test counts a slow overdamped mode far too loosely). Now
+    both end at rest with no apex, and the stack's state at its end is simulate's then."""
+    single = twoball.simulate(0.01, 1e6, 0.2, dense_output=True)
+    pair = simulate_stack([1e6], 0.01, 0.2)
+    assert single.status is Status.REST and pair.status is Status.REST
+    assert pair.h1 is None and single.h1 is None
+    assert pair.contacts_first == [single.floor_contacts_first, single.contacts_first]
+    sampled = simulate_stack([1e6], 0.01, 0.2, t_eval=[pair.end_time]).trajectory
+    there = single.evaluate([pair.end_time])  # simulate's rest holds for every later time
+    assert sampled.x[0, 0] == pytest.approx(there.x1[0], rel=1e-9, abs=1e-6)
+    assert sampled.x[0, 1] == pytest.approx(there.x2[0], rel=1e-9, abs=1e-6)
+
+
+def test_sample_times_outside_the_run_are_refused():
+    with pytest.raises(ParameterError, match="t_eval must hold times >= 0"):
+        simulate_stack([0.2], 0.9, 0.2, t_eval=[-1.0, 5.0])
+    first = simulate_stack([0.2], 0.9, 0.2)
+    with pytest.raises(ParameterError, match=r"t_eval must lie within the run's time span \[0, "):
+        simulate_stack([0.2], 0.9, 0.2, t_eval=[5.0, 1e9])
+    inside = simulate_stack([0.2], 0.9, 0.2, t_eval=[0.0, first.end_time]).trajectory
+    assert inside.x[-1, 1] == pytest.approx(first.h2, rel=1e-12)
+    with pytest.raises(ParameterError, match="t_eval must be a one-dimensional array"):
+        simulate_stack([0.2], 0.9, 0.2, t_eval="abc")
+
+
+@pytest.mark.parametrize(
+    ("arguments", "words"),
+    [
+        (("0.2", 0.9, 0.2), "mass_ratios[0] must be a real number"),
+        (([0.2], "0.9", 0.2), "eps must be a real number"),
+        (([0.2], True, 0.2), "eps must be a real number"),
+        (([0.2], 0.9, [True]), "tau_ratios must be a real number"),
+        (
+            ([0.2], 0.9, [0.2, 0.2]),
+            "tau_ratios must hold one value (one per pair, and there is one)",
+        ),
+    ],
+)
+def test_text_and_booleans_are_not_numbers(arguments, words):
+    with pytest.raises(ParameterError) as caught:
+        simulate_stack(*arguments)
+    assert words in str(caught.value)
+    with pytest.raises(ParameterError, match="height must be a real number"):
+        simulate_stack([0.2], 0.9, 0.2, height="1e4")
+    exact = simulate_stack([0.2], 0.9, 0.2)
+    numpy_numbers = simulate_stack(np.array([0.2]), np.float64(0.9), np.float32(0.2))
+    assert numpy_numbers.h1 == simulate_stack([0.2], 0.9, float(np.float32(0.2))).h1
+    assert exact.h1 is not None
+
+
+def test_a_phase_limit_says_what_is_true(monkeypatch):
+    """The message said "e.g. an elastic floor, eps = 1" whatever eps was."""
+    from twoball import jit
+    from twoball import stack as stack_module
+
+    monkeypatch.setattr(stack_module, "MAX_PHASES", 3)
+    jit.use_python_kernels()
+    try:
+        with pytest.raises(SolverError) as damped:
+            simulate_stack([0.2], 0.9, 0.2)
+        with pytest.raises(SolverError) as elastic:
+            simulate_stack([0.2], [1.0, 0.9], 0.2)
+    finally:
+        jit.use_compiled_kernels()
+    assert "eps = 1" not in str(damped.value) and "phase or step limit" in str(damped.value)
+    assert "the floor is elastic, eps = 1" in str(elastic.value)

@@ -22,7 +22,7 @@ import sys
 from collections.abc import Callable
 
 from twoball.errors import ParameterError, SolverError
-from twoball.model import DEFAULT_HEIGHT, Parameters
+from twoball.model import DEFAULT_HEIGHT, Parameters, allowed_range
 from twoball.sweep import DIMS as SWEEP_AXES
 from twoball.sweep import MAX_DROPS as MAX_SWEEP_DROPS
 from twoball.sweep import parse_number
@@ -91,7 +91,23 @@ def _until(text: str) -> str | float:
     """``--until``: "first", "second" or a number (argparse reports anything else)."""
     if text in ("first", "second"):
         return text
-    return _number(text)
+    try:
+        return parse_number(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"takes first, second or a time (a number > 0); got {text!r}"
+        ) from None
+
+
+def _store(text: str) -> str:
+    """A sweep's store: a directory with a name of its own (not ".", "..", "" or "/", which
+    name the directory the store would sit in, not the store)."""
+    text = _path(text)
+    if os.path.basename(os.path.normpath(text)) in ("", ".", "..", os.sep):
+        raise argparse.ArgumentTypeError(
+            f"must name the store's own directory, such as cube.zarr; got {text!r}"
+        )
+    return text
 
 
 _WORKERS = _integer_in(1, 1024)
@@ -102,19 +118,37 @@ _WORKERS = _integer_in(1, 1024)
 
 def _add_simulate(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("simulate", help="simulate one drop and print its bounces")
-    parser.add_argument("--eps", type=_number, required=True, help="restitution eps in (0, 1]")
-    parser.add_argument("--mu", type=_number, required=True, help="mass ratio m2/m1 > 0")
-    parser.add_argument("--tau-ratio", type=_number, required=True, help="tau_d/tau_f >= 0")
     parser.add_argument(
-        "--eps12", type=_number, default=None, help="ball-ball restitution (default: eps)"
+        "--eps", type=_number, required=True, help=f"restitution eps in {allowed_range('eps')}"
     )
     parser.add_argument(
-        "--height", type=_number, default=DEFAULT_HEIGHT, help="dimensionless drop height H > 0"
+        "--mu", type=_number, required=True, help=f"mass ratio m2/m1 in {allowed_range('mu')}"
+    )
+    parser.add_argument(
+        "--tau-ratio",
+        type=_number,
+        required=True,
+        help=f"tau_d/tau_f in {allowed_range('tau_ratio')}",
+    )
+    parser.add_argument(
+        "--eps12",
+        type=_number,
+        default=None,
+        help=f"ball-ball restitution in {allowed_range('eps12')} (default: eps)",
+    )
+    parser.add_argument(
+        "--height",
+        type=_number,
+        default=DEFAULT_HEIGHT,
+        help=f"dimensionless drop height H in {allowed_range('height')}, within the domain "
+        "double precision carries (docs/model.md)",
     )
     parser.add_argument(
         "--method", default="exact", help="exact, LSODA, Radau, BDF, DOP853, RK45, odeint or CVODE"
     )
-    parser.add_argument("--until", type=_until, default="second", help="first, second or a time")
+    parser.add_argument(
+        "--until", type=_until, default="second", help="first, second (apex) or a time"
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.set_defaults(func=_simulate)
 
@@ -131,7 +165,16 @@ def _simulate(args: argparse.Namespace) -> int:
         until=args.until,
         method=args.method,
     )
-    return _print_summary(result.summary(), args.json)
+    summary = result.summary()
+    wanted = 1 if args.until == "first" else 2
+    if summary["reason"] is None and len(result.apex_h) < wanted:
+        # a run to a time that ended before the apexes: say so rather than print bare dashes
+        summary["reason"] = (
+            f"no apex of the upper ball before t = {args.until:g} (--until)"
+            if len(result.apex_h) == 0
+            else f"no second apex of the upper ball before t = {args.until:g} (--until)"
+        )
+    return _print_summary(summary, args.json)
 
 
 def _print_summary(summary: dict, as_json: bool) -> int:
@@ -158,6 +201,8 @@ def _numbers(text: str) -> list[float]:
 
 
 def _add_stack(subparsers: argparse._SubParsersAction) -> None:
+    from twoball.stack import HERTZ_LARGEST_MASS, HERTZ_SMALLEST_RESTITUTION
+
     parser = subparsers.add_parser(
         "stack", help="drop a stack of N balls and print the top ball's bounces"
     )
@@ -165,16 +210,28 @@ def _add_stack(subparsers: argparse._SubParsersAction) -> None:
         "--mass-ratios",
         type=_numbers,
         required=True,
-        help="m_i/m_(i-1) bottom up, comma-separated: N-1 values for N balls",
+        help="m_i/m_(i-1) bottom up, comma-separated: N-1 values for N balls, each and their "
+        f"products in {allowed_range('mu')} (hertz: products up to {HERTZ_LARGEST_MASS:g})",
     )
     parser.add_argument(
-        "--eps", type=_numbers, default=[0.9], help="one restitution, or N: floor first"
+        "--eps",
+        type=_numbers,
+        default=[0.9],
+        help=f"one restitution in {allowed_range('eps')}, or N: floor first (hertz: from "
+        f"{HERTZ_SMALLEST_RESTITUTION:g})",
     )
     parser.add_argument(
-        "--tau-ratios", type=_numbers, default=[0.2], help="one gap td/tau_f, or N-1 (0.2)"
+        "--tau-ratios",
+        type=_numbers,
+        default=[0.2],
+        help=f"one gap td/tau_f in {allowed_range('tau_ratio')}, or N-1 (0.2)",
     )
     parser.add_argument(
-        "--height", type=_number, default=DEFAULT_HEIGHT, help="dimensionless drop height H > 0"
+        "--height",
+        type=_number,
+        default=DEFAULT_HEIGHT,
+        help=f"dimensionless drop height H in {allowed_range('height')}, within the domain "
+        "double precision carries (docs/model.md)",
     )
     parser.add_argument("--force", default="linear", help="linear (exact) or hertz")
     parser.add_argument("--until", type=_until, default="second", help="first, second or a time")
@@ -263,7 +320,7 @@ def _add_sweep(subparsers: argparse._SubParsersAction) -> None:
         description="Sweep the exact solver over a grid of (eps, mu, tau_ratio). A run that is "
         "stopped (even by kill -9) resumes when started again with the same arguments.",
     )
-    parser.add_argument("store", type=_path, help="output Zarr directory (e.g. cube.zarr)")
+    parser.add_argument("store", type=_store, help="output Zarr directory (e.g. cube.zarr)")
     for name in SWEEP_AXES:
         doc = Parameters.param[name].doc
         parser.add_argument(
@@ -307,7 +364,19 @@ def _sweep(args: argparse.Namespace) -> int:
             f"refusing {undertaking}: more than {MAX_SWEEP_DROPS:,} drops needs --force"
         )
     print(f"sweep {args.store}: {undertaking}", flush=True)  # on stdout: --quiet keeps it
-    sweep(grid, args.store, scheduler=args.scheduler, workers=args.workers, progress=not args.quiet)
+    try:
+        sweep(
+            grid, args.store, scheduler=args.scheduler, workers=args.workers,
+            progress=not args.quiet,
+        )  # fmt: skip
+    except OSError as error:
+        # a file the sweep makes beside or inside the store (STORE.lock, a chunk): name the
+        # store the user gave, and the file only in passing
+        if error.filename is None or error.filename == args.store:
+            raise
+        raise OSError(
+            error.errno, f"cannot write the store ({error.strerror}: {error.filename})", args.store
+        ) from None
     print(f"{args.store}: {grid.size} cases, {len(grid.chunk_slices())} chunks, complete")
     return 0
 
@@ -404,6 +473,7 @@ def _add_many_contacts(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _many_contacts(args: argparse.Namespace) -> int:
+    from twoball.studies import truth  # noqa: F401  (mpmath, here: not in each worker)
     from twoball.studies.many_contacts import run_study
 
     run_study(args.out, count=args.count, workers=args.workers)
@@ -430,7 +500,10 @@ def _one_line(text: object) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``twoball`` parser with every command."""
+    from twoball import __version__
+
     parser = _Parser(prog="twoball", description="The two-ball bounce, solved exactly.")
+    parser.add_argument("--version", action="version", version=f"twoball {__version__}")
     subparsers = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for add in COMMANDS:
         add(subparsers)

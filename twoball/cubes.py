@@ -3,6 +3,7 @@ by ``twoball sweep``), so that a plain wheel carries them."""
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
@@ -63,4 +64,14 @@ def load_cube(name: str | os.PathLike):
     if not (path / "zarr.json").is_file():
         what = "does not exist" if not path.exists() else "is not a Zarr store (no zarr.json)"
         raise ParameterError(f"cannot open the cube {path}: it {what}")
+    try:
+        node = json.loads((path / "zarr.json").read_text()).get("node_type")
+    except (OSError, ValueError, AttributeError):
+        node = None
+    if node != "group":
+        what = "an array inside a store" if node == "array" else "not a Zarr group"
+        raise ParameterError(
+            f"cannot open the cube {path}: it is {what}; give the store's directory "
+            "(what twoball sweep wrote, e.g. cube.zarr)"
+        )
     return xr.open_zarr(path, consolidated=False)

@@ -47,13 +47,21 @@ _MESSAGES = {
     Status.DONE: "",
     Status.REST: "the upper ball came to rest on the lower one",
     Status.STUCK: "root finder made no progress (please report: this is a bug)",
-    Status.PHASE_LIMIT: "phase or step limit reached: the contacts never settle (e.g. an "
-    "elastic floor, eps = 1, under a ball that never leaves), so no rest can be proven",
+    Status.PHASE_LIMIT: "phase or step limit reached: the contacts did not settle within the "
+    "solver's budget, so neither the apex asked for nor a rest was reached",
     Status.FAILED: "integrator failed",
     Status.NO_APEX: "no further apex before the integration horizon",
     Status.IMPOSSIBLE: "an apex that is not finite or above what the energy at release allows "
     "(the input is beyond what double precision resolves)",
 }
+
+
+def phase_limit_hint(floor_eps: float) -> str:
+    """What is known about a run that reached the phase limit, for its message: an elastic
+    floor (eps = 1) under a ball that never leaves it never settles; otherwise nothing more."""
+    if floor_eps == 1.0:
+        return " (the floor is elastic, eps = 1: a ball that never leaves it never settles)"
+    return ""
 
 
 class SolverError(RuntimeError):

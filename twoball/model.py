@@ -9,8 +9,10 @@ definition of what is allowed.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
+import numpy as np
 import param
 
 from twoball.errors import ParameterError
@@ -72,8 +74,9 @@ def _declared_bounds(name: str) -> tuple[float | None, float | None, bool, bool]
 _BOUNDS = {name: _declared_bounds(name) for name in ("eps", "eps12", "mu", "tau_ratio", "height")}
 
 
-def _allowed_range(name: str) -> str:
-    """The allowed range of a declared parameter, written as an interval."""
+def allowed_range(name: str) -> str:
+    """The allowed range of a declared parameter, written as an interval (the one source for
+    error messages, docstrings and the command line's help)."""
     low, high, low_closed, high_closed = _BOUNDS[name]
     left = ("[" if low_closed else "(") + ("-inf" if low is None else f"{low:g}")
     closing = "]" if high_closed and high is not None else ")"
@@ -81,17 +84,40 @@ def _allowed_range(name: str) -> str:
     return f"{left}, {right}"
 
 
-def check_value(name: str, value: object) -> float:
+def with_ranges(function):
+    """Write the declared ranges into ``function``'s docstring: each ``RANGE(name)`` becomes
+    :func:`allowed_range` of that parameter, so the documentation cannot drift from the
+    declarations."""
+    doc = function.__doc__ or ""
+    for name in _BOUNDS:
+        doc = doc.replace(f"RANGE({name})", allowed_range(name))
+    function.__doc__ = doc
+    return function
+
+
+def check_value(name: str, value: object, *, text: bool = True) -> float:
     """Return ``value`` as a float if it lies in the declared range of ``name``, else raise.
 
     Raises ``ValueError`` naming the parameter and its allowed range (NaN and infinities included).
+    A boolean is never a number here (True is not a restitution of 1). ``text``: a string is
+    parsed as a number (what a URL or a typed field holds: the app's case); with False (the
+    library's entry points, :func:`check_parameters`, ``simulate_stack``) a real number is
+    required, a Python or numpy int or float, and '0.9' is refused.
     """
-    try:
+    if isinstance(value, (str, bytes, np.str_)) and text:
+        try:
+            number = float(value)
+        except ValueError:
+            raise ParameterError(
+                f"{name} must be a number in {allowed_range(name)}; got {value!r}"
+            ) from None
+    elif is_real_number(value):
         number = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
+    else:
         raise ParameterError(
-            f"{name} must be a number in {_allowed_range(name)}; got {value!r}"
-        ) from None
+            f"{name} must be a real number in {allowed_range(name)} (not text or a boolean); "
+            f"got {value!r}"
+        )
     low, high, low_closed, high_closed = _BOUNDS[name]
     ok = math.isfinite(number)
     if ok and low is not None:
@@ -100,9 +126,19 @@ def check_value(name: str, value: object) -> float:
         ok = number <= high if high_closed else number < high
     if not ok:
         raise ParameterError(
-            f"{name} must be a finite number in {_allowed_range(name)}; got {value!r}"
+            f"{name} must be a finite number in {allowed_range(name)}; got {value!r}"
         )
     return number
+
+
+def is_real_number(value: object) -> bool:
+    """True for a real number: an int or float of Python or numpy (or a 0-d array of one), not a
+    string, bytes or a boolean."""
+    if isinstance(value, (bool, np.bool_, str, bytes)):
+        return False
+    if isinstance(value, np.ndarray):
+        return value.ndim == 0 and value.dtype.kind in "iuf"
+    return isinstance(value, (numbers.Real, np.integer, np.floating))
 
 
 @dataclass(frozen=True)
@@ -126,6 +162,7 @@ class Drop:
     x2_0: float
 
 
+@with_ranges
 def check_parameters(
     eps: float,
     mu: float,
@@ -139,13 +176,17 @@ def check_parameters(
     Parameters
     ----------
     eps, eps12 : float
-        Restitution of the floor and of the ball contact, in (0, 1]; ``eps12`` defaults to eps.
+        Restitution of the floor and of the ball contact, in RANGE(eps); ``eps12`` defaults to
+        eps.
     mu : float
-        Mass ratio m2/m1 > 0.
+        Mass ratio m2/m1 in RANGE(mu).
     tau_ratio : float
-        tau_d/tau_f >= 0.
+        tau_d/tau_f in RANGE(tau_ratio).
     height : float
-        Dimensionless drop height H > 0.
+        Dimensionless drop height H in RANGE(height).
+
+    A drop must also lie in the domain double precision can carry (docs/model.md), which
+    bounds the height and the gap together.
 
     Returns
     -------
@@ -170,11 +211,11 @@ def check_parameters(
     ...
     twoball.errors.ParameterError: eps must be a finite number in [0.01, 1]; got 1.5
     """
-    eps = check_value("eps", eps)
-    eps12 = eps if eps12 is None else check_value("eps12", eps12)
-    mu = check_value("mu", mu)
-    tau_ratio = check_value("tau_ratio", tau_ratio)
-    height = check_value("height", height)
+    eps = check_value("eps", eps, text=False)
+    eps12 = eps if eps12 is None else check_value("eps12", eps12, text=False)
+    mu = check_value("mu", mu, text=False)
+    tau_ratio = check_value("tau_ratio", tau_ratio, text=False)
+    height = check_value("height", height, text=False)
     zeta01, zeta12 = damping_ratios(eps, eps12, mu)
     tau_f = floor_contact_time(zeta01)
     x2_0 = initial_gap_height(height, tau_ratio * tau_f)
@@ -189,32 +230,84 @@ def rounding_ratio(height: float, mu: float, x2_0: float) -> float:
     height, over the smaller of the two contacts' typical overlaps (impact or static
     compression), and at least 1e-3 times the rounding relative to the floor's static
     compression (1), which the balls' last, gentle contacts and their rest depend on."""
-    floor_overlap = max(math.sqrt(2.0 * height), 1.0)
-    ball_overlap = max(math.sqrt(2.0 * height * mu / (1.0 + mu)), mu)
-    largest = max(x2_0, 1.0)
-    return MACHINE_EPSILON * largest * max(1.0 / min(floor_overlap, ball_overlap), 1e-3)
+    return chain_rounding_ratio(height, (1.0, mu), x2_0)
+
+
+def contact_overlaps(height: float, masses, force: str = "linear") -> list[float]:
+    """Each contact's typical overlap in a stack of balls with these masses (ball 0's is 1),
+    floor first (docs/model.md, "The domain double precision can carry" and "Stacks of N
+    balls"): the larger of its compression at an impact at sqrt(2H) and its static compression.
+    Linear: the impact's is sqrt(2H m) with m the contact's reduced mass, the static one the
+    weight above it; Hertz: (5/4 m 2H)^(2/5) and that weight to the 2/3. The floor's static
+    compression is taken as 1 (ball 0's own weight), as for two balls."""
+    masses = [float(m) for m in masses]
+    overlaps = []
+    for c in range(len(masses)):
+        reduced = 1.0 if c == 0 else masses[c - 1] * masses[c] / (masses[c - 1] + masses[c])
+        weight = 1.0 if c == 0 else sum(masses[c:])
+        if force == "hertz":
+            impact = (1.25 * reduced * 2.0 * height) ** 0.4
+            static = weight ** (2.0 / 3.0)
+        else:
+            impact = math.sqrt(2.0 * height * reduced)
+            static = weight
+        overlaps.append(max(impact, static))
+    return overlaps
+
+
+def chain_rounding_ratio(height: float, masses, x_top: float, force: str = "linear") -> float:
+    """:func:`rounding_ratio` for a stack of balls (docs/model.md, "Stacks of N balls"): machine
+    epsilon times the highest ball's height at release, over the smallest contact overlap
+    (:func:`contact_overlaps`), and at least 1e-3 times it relative to the floor's static
+    compression. For two balls, masses (1, mu), it is :func:`rounding_ratio`."""
+    smallest = min(contact_overlaps(height, masses, force))
+    return MACHINE_EPSILON * max(x_top, 1.0) * max(1.0 / smallest, 1e-3)
 
 
 def _outside_domain(mu: float, tau_ratio: float, height: float, tau_f: float) -> str:
     """The error for a drop beyond :data:`RESOLUTION`: the largest height, or gap, allowed."""
+    return domain_error(
+        height,
+        (1.0, mu),
+        tau_ratio * tau_f,
+        tau_f,
+        gap_name="tau_ratio",
+        masses_text=f"mu = {mu:g}",
+    )
+
+
+def domain_error(
+    height: float,
+    masses,
+    delay: float,
+    tau_f: float,
+    *,
+    gap_name: str,
+    masses_text: str,
+    force: str = "linear",
+) -> str:
+    """The error for a drop (or stack) beyond :data:`RESOLUTION`: the largest height allowed
+    with the balls released touching, or, where the gap is what raises the top ball too high,
+    the largest gap (``delay`` is the top ball's total delay, sum td_i)."""
     where = 'docs/model.md, "The domain double precision can carry"'
-    if rounding_ratio(height, mu, height) > RESOLUTION:
-        low, high = 0.0, 300.0  # log10 of the height: the ratio grows with it at tau_ratio = 0
-        for _ in range(60):
+    if chain_rounding_ratio(height, masses, height, force) > RESOLUTION:
+        low, high = -300.0, 300.0  # log10 of the height: the ratio grows with it at no gap
+        for _ in range(80):
             middle = 0.5 * (low + high)
-            if rounding_ratio(10.0**middle, mu, 10.0**middle) > RESOLUTION:
+            if chain_rounding_ratio(10.0**middle, masses, 10.0**middle, force) > RESOLUTION:
                 high = middle
             else:
                 low = middle
         return (
-            f"height must be at most {10.0**low:.3g} for mu = {mu:g} (got {height:g}): beyond "
+            f"height must be at most {10.0**low:.3g} for {masses_text} (got {height:g}): beyond "
             f"it double precision cannot resolve the contacts ({where})"
         )
-    x2_max = RESOLUTION / rounding_ratio(height, mu, 1.0)  # the ratio is linear in X2(0)
-    tau_max = math.sqrt(2.0) * (math.sqrt(x2_max) - math.sqrt(height)) / tau_f
+    top_max = RESOLUTION / chain_rounding_ratio(height, masses, 1.0, force)  # linear in X_top
+    gap_max = math.sqrt(2.0) * (math.sqrt(top_max) - math.sqrt(height)) / tau_f
     return (
-        f"tau_ratio must be at most {tau_max:.3g} for height = {height:g} and mu = {mu:g} "
-        f"(got {tau_ratio:g}): beyond it double precision cannot resolve the contacts ({where})"
+        f"{gap_name} must be at most {gap_max:.3g} for height = {height:g} and {masses_text} "
+        f"(got {delay / tau_f:g}): beyond it double precision cannot resolve the contacts "
+        f"({where})"
     )
 
 

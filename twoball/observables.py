@@ -13,7 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from twoball.errors import Status
+from twoball.errors import ParameterError, Status
 from twoball.model import Drop, icm_height
 
 FLOOR_CONTACT, BALL_CONTACT = 0, 1
@@ -117,7 +117,8 @@ class Result:
         """
         if self.dense is None:
             raise ValueError("evaluate needs a run with dense_output=True")
-        times = np.atleast_1d(np.asarray(t, dtype=float))
+        times = as_times("t", t)
+        check_span("t", times, self.end_time, self.status is Status.REST and self.method == "exact")
         return trajectory_of(times, self.dense(times))
 
     def _apex(self, values: list[float], index: int) -> float | None:
@@ -214,6 +215,39 @@ class Result:
             "delayed_rebound": self.delayed_rebound,
             "reason": self.reason,
         }
+
+
+def as_times(name: str, values: object) -> np.ndarray:
+    """``values`` as a one-dimensional array of finite times, or ParameterError naming ``name``
+    (strings and booleans are not times)."""
+    items = np.atleast_1d(np.asarray(values, dtype=object))
+    if items.ndim != 1 or items.size == 0:
+        raise ParameterError(f"{name} must be a non-empty one-dimensional array of finite times")
+    from twoball.model import is_real_number
+
+    for item in items:
+        if not is_real_number(item) or not math.isfinite(float(item)):
+            raise ParameterError(
+                f"{name} must be a one-dimensional array of finite times; got {item!r} in it"
+            )
+    return items.astype(float)
+
+
+def check_span(name: str, times: np.ndarray, end_time: float, open_ended: bool) -> None:
+    """Refuse times outside the run, [0, end_time]: before the release there is no motion, and
+    after the run's end the solution would be extrapolated (a ball in free fall through the
+    floor). ``open_ended``: the run ended at a proven rest, whose last phase holds for ever, so
+    any later time is the state at rest."""
+    low, high = float(times.min()), float(times.max())
+    if low < 0.0 and end_time == math.inf:
+        raise ParameterError(f"{name} must hold times >= 0 (from the release); got {low:g}")
+    # a few ulp of slack: a run to a time ends there up to the rounding of its clock
+    if low < 0.0 or (high > end_time + 1e-12 * max(abs(end_time), 1.0) and not open_ended):
+        span = f"[0, {end_time:.10g}]" if not open_ended else "[0, inf) (the run ended at rest)"
+        raise ParameterError(
+            f"{name} must lie within the run's time span {span}; got times from {low:g} to "
+            f"{high:g} (run further with until=... to sample later times)"
+        )
 
 
 def relative_error(value, reference_value) -> float:

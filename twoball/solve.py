@@ -4,13 +4,18 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numpy.typing import ArrayLike
 
 from twoball import exact, reference
-from twoball.errors import ParameterError, SolverError, Status
-from twoball.model import DEFAULT_HEIGHT, apex_bound, check_parameters
-from twoball.observables import Result, contact_intervals, trajectory_of
+from twoball.errors import ParameterError, SolverError, Status, phase_limit_hint
+from twoball.model import (
+    DEFAULT_HEIGHT,
+    apex_bound,
+    check_parameters,
+    is_real_number,
+    with_ranges,
+)
+from twoball.observables import Result, as_times, check_span, contact_intervals, trajectory_of
 
 METHODS = ("exact", *reference.METHODS, "CVODE")  # CVODE needs the cvode extra
 UNTIL = {"first": 1, "second": 2}
@@ -18,6 +23,7 @@ UNTIL = {"first": 1, "second": 2}
 NO_APEX_LIMIT = 2**62
 
 
+@with_ranges
 def simulate(
     eps: float,
     mu: float,
@@ -38,14 +44,15 @@ def simulate(
     Parameters
     ----------
     eps, eps12 : float
-        Restitution of the floor and of the ball contact, in (0, 1]; ``eps12`` defaults to
+        Restitution of the floor and of the ball contact, in RANGE(eps); ``eps12`` defaults to
         ``eps``.
     mu : float
-        Mass ratio m2/m1 > 0.
+        Mass ratio m2/m1 in RANGE(mu).
     tau_ratio : float
-        tau_d/tau_f >= 0 (docs/model.md, "Initial condition").
+        tau_d/tau_f in RANGE(tau_ratio) (docs/model.md, "Initial condition").
     height : float
-        Dimensionless drop height H > 0.
+        Dimensionless drop height H in RANGE(height); with the gap, within the domain double
+        precision can carry (docs/model.md, "The domain double precision can carry").
     until : "first", "second" or float
         The apex of the upper ball to run to, or a dimensionless time. A run also ends early
         when the upper ball comes to rest on the lower one (``Result.status`` is ``REST``).
@@ -100,9 +107,8 @@ def simulate(
             raise ParameterError(f"{name} must be a finite number in (0, 1); got {tol!r}")
     times = None
     if t_eval is not None:
-        times = np.atleast_1d(np.asarray(t_eval, dtype=float))
-        if times.ndim != 1 or not np.isfinite(times).all():
-            raise ParameterError("t_eval must be a one-dimensional array of finite times")
+        times = as_times("t_eval", t_eval)
+        check_span("t_eval", times, math.inf, False)  # no time before the release
     keep = dense_output or times is not None
     if method == "exact":
         if rtol is not None or atol is not None:
@@ -119,10 +125,15 @@ def simulate(
             outcome = cvode.solve(drop, apexes, t_end, rtol, atol)
         else:
             outcome = reference.solve(drop, method, apexes, t_end, rtol, atol, keep)
+    if outcome.status is Status.PHASE_LIMIT and outcome.message:
+        outcome = outcome._replace(message=outcome.message + phase_limit_hint(drop.eps))
     failure = _failure(outcome.message, outcome.apex_h, drop)
     if failure:
         outcome = outcome._replace(status=Status.IMPOSSIBLE, message=failure)
     trajectory = None
+    if times is not None:
+        at_rest = outcome.status is Status.REST and method == "exact"
+        check_span("t_eval", times, float(outcome.end_time), at_rest)
     if keep:
         times = outcome.plot_times if times is None else times
         trajectory = trajectory_of(times, outcome.evaluate(times))
@@ -165,12 +176,9 @@ def stop_rule(until: str | float) -> tuple[int, float]:
         if until not in UNTIL:
             raise ParameterError(f"until must be 'first', 'second' or a time > 0; got {until!r}")
         return UNTIL[until], math.inf
-    try:
-        t_end = float(until)
-    except (TypeError, ValueError):
-        raise ParameterError(
-            f"until must be 'first', 'second' or a time > 0; got {until!r}"
-        ) from None
+    if not is_real_number(until):  # a boolean or bytes is no time
+        raise ParameterError(f"until must be 'first', 'second' or a time > 0; got {until!r}")
+    t_end = float(until)
     if not (math.isfinite(t_end) and t_end > 0.0):
         raise ParameterError(f"until must be 'first', 'second' or a finite time > 0; got {until!r}")
     return NO_APEX_LIMIT, t_end

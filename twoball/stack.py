@@ -40,10 +40,20 @@ from typing import NamedTuple
 import numpy as np
 
 from twoball import exact
-from twoball.errors import ParameterError, SolverError, Status
+from twoball.errors import ParameterError, SolverError, Status, phase_limit_hint
 from twoball.exact import ROUNDING
 from twoball.jit import njit
-from twoball.model import DEFAULT_HEIGHT, check_value, decay_ratio, floor_contact_time
+from twoball.model import (
+    DEFAULT_HEIGHT,
+    MASS_RATIO_RANGE,
+    RESOLUTION,
+    chain_rounding_ratio,
+    check_value,
+    decay_ratio,
+    domain_error,
+    floor_contact_time,
+)
+from twoball.observables import as_times, check_span
 from twoball.solve import stop_rule
 
 MAX_BALLS = 16
@@ -56,6 +66,13 @@ MAX_BALLS = 16
 TOUCHING_LIMIT_BALLS = 4
 SMALLEST_GAP = 1e-9
 HERTZ_SMALLEST_RESTITUTION = 0.05  # below it the Hunt-Crossley clamp chatters
+# The largest Hunt-Crossley damping lam (the contacts' settling speed is of order 1): measured at
+# eps = 0.9 with two balls, lam = 3.7 (H = 1e-3) takes 0.2 s, 37 (1e-5) 1 s, 372 (1e-7) 22 s,
+# 3700 (1e-9) runs out of steps after 50 s; eps = 0.05 at H = 1e-3 (lam 450) takes 85 s.
+HERTZ_LARGEST_DAMPING = 50.0
+# The heaviest ball relative to ball 0 with the Hertz force: 1e4 takes 4 s, 1e6 runs out of
+# steps after 60 s (the light ball 0 rings fast under it).
+HERTZ_LARGEST_MASS = 1e4
 MAX_STEPS_PER_PHASE = 100_000
 MAX_PHASES = 1_000_000
 
@@ -364,13 +381,14 @@ def _energy_root(store, cid, vec):
 
 @njit
 def advance_phase(
-    t, x0, v0, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried
+    t, x0, v0, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried, pair
 ):
     """Advance one phase, started at time t, to its first event.
 
     Returns (event, index, tau, x, v): a contact switch (index the contact), an apex (index the
     ball; horizon_ball's apex is ``horizon`` away, or -1 for the end of the run), the end, rest,
-    a stuck root finder or the step limit.
+    a stuck root finder or the step limit. ``pair`` is :func:`twoball.exact.prepare` of a
+    two-ball stack (a placeholder for more balls): its rest proof is used for N = 2.
     """
     n = masses.size
     phase = _phase(active, x0, v0, store, masses, zeta)
@@ -458,6 +476,8 @@ def advance_phase(
                 margin = -store.eta_rest[phase.cid[0], c] - store.c_rest[phase.cid[0], c] * root_z
                 if not margin > tol_rest:
                     margin_ok = False
+            if not margin_ok and n == 2:
+                margin_ok = _pair_at_rest(pair, x, v, phase.size[0], phase.speed[0], tau, carried)
             if margin_ok:
                 return EV_REST, -1, tau, x, v
         if tau + step >= horizon:
@@ -470,6 +490,21 @@ def advance_phase(
         tau += step
         last_step = step
     return EV_STEPS, -1, tau, x0.copy(), v0.copy()
+
+
+@njit
+def _pair_at_rest(pair, x, v, size, speed, tau, carried):
+    """Rest of two balls, both contacts active, proven as :func:`twoball.exact.run` proves it
+    (docs/model.md, "What is measured"): per mode, with the tight bound of a strongly overdamped
+    mode (:func:`twoball.exact._overdamped_bound`). The cluster's total energy, which the test
+    above uses, bounds a slow overdamped mode far too loosely (eps = 0.01 under a heavy upper
+    ball: rest proven at t = 3310 by twoball.simulate, never by that energy)."""
+    params, _, _, _, rest, _, x_inv, blocks, companions, y_rest, rates, mode_rows = pair
+    block_states = exact._block_states(x[0], x[1], v[0], v[1], x_inv, companions, y_rest)
+    roots = exact._energy_roots(exact.BOTH, v[0], v[1], 0.0, 0.0, params, blocks, block_states)
+    offset = abs(y_rest[0]) + abs(y_rest[1])
+    tol = ROUNDING * params[exact.P_NOISE] * (size + offset + speed * (1.0 + tau) + tau * tau)
+    return exact._at_rest(roots, params, rest, rates, mode_rows, block_states, tol + carried)
 
 
 class StackRun(NamedTuple):
@@ -513,6 +548,8 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases):
     status = STATUS_PHASES
     entered_by = -1
     carried = 0.0
+    # the two-ball solver's rest proof, for N = 2 (for more balls a placeholder of the same type)
+    pair = exact.prepare(masses[1] if n == 2 else 1.0, zeta[0], zeta[1] if n == 2 else 0.1)
     for _ in range(MAX_PHASES):
         if record_phases:
             phases = exact._room_for_one(phases, n_phases)
@@ -530,7 +567,7 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases):
             if free and 0.0 < v[ball] < horizon:
                 horizon, horizon_ball = v[ball], ball  # a free ball's apex is v away
         event, index, tau, x, v = advance_phase(
-            t, x, v, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried
+            t, x, v, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried, pair
         )
         # A state that leaves a grounded cluster of several contacts carries the rounding of its
         # closed form about the static rest (see twoball.exact.run).
@@ -657,7 +694,7 @@ class Stack:
 def _checked(declared: str, shown: str, value: object) -> float:
     """``value`` checked against the declared range of ``declared``, errors naming ``shown``."""
     try:
-        return check_value(declared, value)
+        return check_value(declared, value, text=False)
     except ParameterError as error:
         raise ParameterError(str(error).replace(declared, shown, 1)) from None
 
@@ -671,6 +708,10 @@ def _values(name: str, declared: str, values: object, count: int, what: str) -> 
     if len(items) == 1:
         return [_checked(declared, name, items[0])] * count
     if len(items) != count:
+        if count == 1:
+            raise ParameterError(
+                f"{name} must hold one value ({what}, and there is one); got {len(items)}"
+            )
         raise ParameterError(f"{name} must hold one value or {count} ({what}); got {len(items)}")
     return [_checked(declared, f"{name}[{i}]", item) for i, item in enumerate(items)]
 
@@ -706,12 +747,13 @@ def check_stack(
     balls = len(ratios) + 1
     restitutions = _values("eps", "eps", eps, balls, "the floor's, then each pair's")
     gaps = _values("tau_ratios", "tau_ratio", tau_ratios, balls - 1, "one per pair")
-    height = check_value("height", height)
+    height = check_value("height", height, text=False)
     masses = np.cumprod([1.0, *ratios])
-    if masses.min() < 1e-9 or masses.max() > 1e6:
+    low, high = MASS_RATIO_RANGE
+    if masses.min() < low or masses.max() > high:
         raise ParameterError(
-            "the masses relative to ball 0 (products of mass_ratios) must lie in [1e-09, 1e+06]; "
-            f"got {masses.min():.3g} to {masses.max():.3g}"
+            "the masses relative to ball 0 (products of mass_ratios) must lie in "
+            f"[{low:g}, {high:g}]; got {masses.min():.3g} to {masses.max():.3g}"
         )
     if force == "linear" and balls >= TOUCHING_LIMIT_BALLS and min(gaps) < SMALLEST_GAP:
         raise ParameterError(
@@ -725,6 +767,15 @@ def check_stack(
             f"eps must be at least {HERTZ_SMALLEST_RESTITUTION:g} with the hertz force "
             f"(tested range [{HERTZ_SMALLEST_RESTITUTION:g}, 1]); got {min(restitutions):g}"
         )
+    if force == "hertz" and masses.max() > HERTZ_LARGEST_MASS:
+        raise ParameterError(
+            "the masses relative to ball 0 (products of mass_ratios) must lie in "
+            f"[{low:g}, {HERTZ_LARGEST_MASS:g}] with the hertz force; got up to "
+            f"{masses.max():.3g} (heavier, the light balls below ring too fast to follow: "
+            "docs/stacks.md, Limits)"
+        )
+    if force == "hertz":
+        _check_hertz_damping(masses, restitutions, height)
     zeta = np.empty(balls)
     zeta[0] = decay_ratio(restitutions[0])
     for i in range(1, balls):
@@ -732,8 +783,58 @@ def check_stack(
         zeta[i] = decay_ratio(restitutions[i]) * math.sqrt(reduced)
     tau_f = floor_contact_time(zeta[0])
     x_start = release_heights(height, gaps, tau_f)
+    _check_domain(ratios, masses, restitutions, gaps, height, force, tau_f, x_start)
     return Stack(
         tuple(ratios), tuple(restitutions), tuple(gaps), height, masses, zeta, tau_f, x_start
+    )
+
+
+def _check_hertz_damping(masses, restitutions, height) -> None:
+    """Refuse a Hertz stack whose Hunt-Crossley damping, calibrated at its impact speeds, is
+    above :data:`HERTZ_LARGEST_DAMPING` (a slow impact: the contacts then settle overdamped, too
+    slowly to follow). lam scales as 1/sqrt(H), so the message gives the smallest height."""
+    from twoball import hertz
+
+    eps = np.asarray(restitutions, dtype=float)
+    speeds = hertz.calibration_speeds(masses, eps, height)
+    factors = np.array([hertz.damping_factor(float(e)) for e in eps])
+    with np.errstate(divide="ignore"):
+        lam = float(np.max(np.where(factors > 0.0, factors / speeds, 0.0)))
+    if lam <= HERTZ_LARGEST_DAMPING:
+        return
+    smallest = height * (lam / HERTZ_LARGEST_DAMPING) ** 2
+    raise ParameterError(
+        f"height must be at least {smallest:.3g} for eps = {', '.join(f'{e:g}' for e in eps)} "
+        f"with the hertz force (got {height:g}): at a slower impact the Hunt-Crossley damping "
+        f"calibrated to eps (lam = Lambda(eps)/v, here up to {lam:.3g}, at most "
+        f"{HERTZ_LARGEST_DAMPING:g}) overdamps the contacts' settling, which the solver cannot "
+        "follow in its step budget (docs/stacks.md, Limits)"
+    )
+
+
+def _check_domain(ratios, masses, restitutions, gaps, height, force, tau_f, x_start) -> None:
+    """Refuse a stack beyond the domain double precision can carry, as ``simulate`` refuses a
+    drop (docs/model.md, "Stacks of N balls", the domain): the rounding of the top ball's
+    height at release, over the smallest contact overlap, at most :data:`RESOLUTION`."""
+    if force == "hertz":
+        from twoball import hertz
+
+        tau_f = hertz.floor_contact_time(restitutions[0], height)
+        x_start = release_heights(height, gaps, tau_f)
+    if chain_rounding_ratio(height, masses, x_start[-1], force) <= RESOLUTION:
+        return
+    shown = ", ".join(f"{r:g}" for r in ratios)
+    raise ParameterError(
+        domain_error(
+            height,
+            masses,
+            sum(gaps) * tau_f,
+            tau_f,
+            gap_name="tau_ratios (their sum)" if len(gaps) > 1 else "tau_ratios",
+            masses_text=f"mass_ratios = [{shown}]"
+            + (" and the hertz force" if force == "hertz" else ""),
+            force=force,
+        )
     )
 
 
@@ -875,9 +976,8 @@ def simulate_stack(
     apexes_wanted, t_end = stop_rule(until)
     times = None
     if t_eval is not None:
-        times = np.atleast_1d(np.asarray(t_eval, dtype=float))
-        if times.ndim != 1 or not np.isfinite(times).all():
-            raise ParameterError("t_eval must be a one-dimensional array of finite times")
+        times = as_times("t_eval", t_eval)
+        check_span("t_eval", times, math.inf, False)  # no time before the release
     if force == "hertz":
         from twoball import hertz
 
@@ -902,12 +1002,19 @@ def simulate_stack(
             status=Status(out.status),
             trajectory=trajectory,
         )
+    if times is not None and result.status.success:
+        # after the end the closed form (linear) would be extrapolated, or nothing sampled
+        # (Hertz); after a proven rest every later state is that rest's
+        check_span("t_eval", times, result.end_time, result.status is Status.REST)
     bound = _apex_bound(stack, force)
     top = [h for _, h in result.apexes[-1]]
     if any(not math.isfinite(h) or h > bound * (1.0 + 1e-9) for h in top):
         result.status = Status.IMPOSSIBLE
     if throw and not result.success:
-        raise SolverError(f"the stack run failed on {stack}: {result.status.message}", result)
+        message = result.status.message
+        if result.status is Status.PHASE_LIMIT:
+            message += phase_limit_hint(stack.eps[0])
+        raise SolverError(f"the stack run failed on {stack}: {message}", result)
     return result
 
 

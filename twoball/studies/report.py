@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from twoball.errors import ParameterError
+
 CLOSE_UP = {"eps": 0.9, "mu": 0.01, "tau_ratio": 0.01}  # the paper's close-up figure
 
 
@@ -44,6 +46,11 @@ def sweep_rows(cube) -> list[Row]:
     missing = int(np.isnan(data.h2.values).sum())
     grid = _grid_words(cube)
     tau = cube.tau_ratio.values
+    if not (tau > 0.85).any():  # nothing to check the paper's claim on (a traceback before)
+        raise ParameterError(
+            "the paper cube must reach tau_ratio above 0.85 (the paper's claim on h1 and the ICM "
+            f"there); this one spans {tau.min():g} to {tau.max():g}"
+        )
     high_gap = data.h1_over_icm.sel(tau_ratio=tau[tau > 0.85]).values
     within = np.abs(high_gap - 1.0) <= 0.05
     worst = float(np.nanmax(np.abs(high_gap - 1.0)))
