@@ -375,3 +375,19 @@ def test_the_batch_path_runs_the_same_as_plain_python_and_states_rest():
     rest = compiled["status"][0] == int(twoball.errors.Status.REST)
     assert rest.any() and np.isnan(compiled["h2"][0][rest]).all()
     assert (compiled["status"][1] == 0).all()
+
+
+def test_default_chunks_are_whole_planes_of_about_chunk_drops():
+    """Whole (mu, tau_ratio) planes, as many eps values a chunk as make ~CHUNK_DROPS drops,
+    at least one and no more than the grid has."""
+    from twoball.sweep import CHUNK_DROPS
+
+    def grid(eps: str, mu: str, tau_ratio: str) -> Grid:
+        names = ("eps", "mu", "tau_ratio")
+        return Grid(*(parse_axis(n, t) for n, t in zip(names, (eps, mu, tau_ratio), strict=True)))
+
+    paper = grid("0.5:1:50", "0.01:1/3:50", "0.01:1:50")
+    assert paper.chunks == (5, 50, 50) and CHUNK_DROPS == 5 * 50 * 50
+    assert grid("0.5:1:3", "0.01:0.3:150", "0.01:1:100").chunks == (1, 150, 100)  # big planes
+    assert grid("0.5:1:4", "0.01:0.3:10", "0.01:1:10").chunks == (4, 10, 10)  # the whole grid
+    assert len(paper.chunk_slices()) == 10

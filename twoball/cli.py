@@ -332,7 +332,11 @@ def _add_sweep(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--eps12", type=_number, default=None, help="ball-ball restitution (default: eps)"
     )
-    parser.add_argument("--chunks", default=None, help="chunk sizes E,M,T (default 1,all,all)")
+    parser.add_argument(
+        "--chunks",
+        default=None,
+        help="chunk sizes E,M,T (default: whole mu-tau planes, ~12 500 drops a chunk)",
+    )
     parser.add_argument(
         "--dtype", choices=("float64", "float32"), default="float64", help="stored floats"
     )
