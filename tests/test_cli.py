@@ -204,3 +204,17 @@ def test_many_contacts_without_the_studies_extra_is_one_line(tmp_path):
     )  # fmt: skip
     line = _one_line_error(completed)
     assert "'studies' extra" in line
+
+
+def test_a_stack_run_to_a_time_before_the_top_balls_apexes_says_why():
+    """The top ball of this stack first rises to h1 after t = 500 (the library says when), so
+    a run to t = 500 has no apex of it, and says so."""
+    from twoball.stack import simulate_stack
+
+    assert simulate_stack([0.2, 0.2], 0.9, 0.2).apexes[-1][0][0] > 500  # the premise
+    completed = _run("stack", "--mass-ratios", "0.2,0.2", "--until", "500")
+    assert completed.returncode == 0, completed.stderr
+    reason = [line for line in completed.stdout.splitlines() if line.startswith("reason")]
+    assert reason and "no apex of the top ball before t = 500" in reason[0]
+    finished = _run("stack", "--mass-ratios", "0.2,0.2")
+    assert not [line for line in finished.stdout.splitlines() if line.startswith("reason")]

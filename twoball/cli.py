@@ -166,15 +166,17 @@ def _simulate(args: argparse.Namespace) -> int:
         method=args.method,
     )
     summary = result.summary()
-    wanted = 1 if args.until == "first" else 2
-    if summary["reason"] is None and len(result.apex_h) < wanted:
-        # a run to a time that ended before the apexes: say so rather than print bare dashes
-        summary["reason"] = (
-            f"no apex of the upper ball before t = {args.until:g} (--until)"
-            if len(result.apex_h) == 0
-            else f"no second apex of the upper ball before t = {args.until:g} (--until)"
-        )
+    if summary["reason"] is None:
+        summary["reason"] = _missing_apexes(args.until, len(result.apex_h), "upper ball")
     return _print_summary(summary, args.json)
+
+
+def _missing_apexes(until: str | float, found: int, ball: str) -> str | None:
+    """Why a run to a time shows fewer apexes than asked (rather than bare dashes), or None."""
+    if found >= (1 if until == "first" else 2) or isinstance(until, str):
+        return None
+    which = "apex" if found == 0 else "second apex"
+    return f"no {which} of the {ball} before t = {until:g} (--until)"
 
 
 def _print_summary(summary: dict, as_json: bool) -> int:
@@ -250,7 +252,12 @@ def _stack(args: argparse.Namespace) -> int:
         force=args.force,
         until=args.until,
     )
-    return _print_summary(result.summary(), args.json)
+    summary = result.summary()
+    top_apexes = len(result.apexes[-1])
+    reason = _missing_apexes(args.until, top_apexes, "top ball")
+    if reason is not None or result.status.name == "REST":
+        summary["reason"] = reason or "the stack came to rest"
+    return _print_summary(summary, args.json)
 
 
 # bench
