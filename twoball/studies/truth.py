@@ -25,6 +25,7 @@ handles benign cases (a few contacts, no rest) in seconds per case. Call :func:`
 from __future__ import annotations
 
 import math
+import random
 from dataclasses import dataclass
 
 import mpmath
@@ -178,6 +179,7 @@ def solve_truth(
     height: float = DEFAULT_HEIGHT,
     apexes: int = 2,
     nudge: tuple[int, int] | None = None,
+    round_heights: int | None = None,
 ) -> Truth:
     """Apexes and contacts of one drop at 40 digits, independently of the exact solver.
 
@@ -186,8 +188,12 @@ def solve_truth(
     ``nudge=(component, ulps)`` moves one component of the state (x1, x2, v1, v2) by that many
     double ulps at the first apex, to measure how sensitive the rest of the run is to the
     rounding of the state there (docs/accuracy.md, "Many-contact drops").
+    ``round_heights=seed`` moves the heights x1, x2 by half a double ulp, up or down at random
+    (seeded), at every switch before the first apex: the least rounding a solver that hands
+    absolute heights from phase to phase makes there.
     """
     drop = check_parameters(eps, mu, tau_ratio, eps12=eps12, height=height)
+    coin = random.Random(round_heights)
     with mpmath.workdps(DIGITS):
         mu_, z01, z12 = (mpmath.mpf(v) for v in (drop.mu, drop.zeta01, drop.zeta12))
         phases = {}
@@ -232,6 +238,10 @@ def solve_truth(
                 if len(apex_t) == apexes:
                     return Truth(apex_t, apex_h, contacts, contacts_first)
                 continue
+            if round_heights is not None and not apex_t:
+                for component in (0, 1):
+                    half_ulp = 0.5 * math.ulp(float(y[component]))
+                    y[component] += coin.choice((-half_ulp, half_ulp))
             bit = 1 << event
             if kind & bit:
                 contacts.append((event, started[event], t))
