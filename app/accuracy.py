@@ -1,7 +1,7 @@
 """Scene 4, accuracy: error against run time of every integrator at the current drop.
 
 The work is :func:`twoball.studies.precision.work_precision` (a few seconds); it runs in a thread
-only while the scene is on screen, with a loading indicator, and a newer request supersedes an
+only while the scene is on screen, with a line saying so, and a newer request supersedes an
 older one.
 """
 
@@ -18,7 +18,7 @@ from bokeh.palettes import Category10
 
 from twoball.studies.precision import work_precision
 
-from .scene import Scene, font_sizes, later
+from .scene import Scene, font_sizes
 
 ERROR_FLOOR = 1e-17  # a relative error of 0 (the exact solver against itself) is drawn here
 FAILED_ERROR = 10.0  # where failed runs and missed bounces are drawn
@@ -48,7 +48,11 @@ class AccuracyScene(Scene):
         self.table = pn.pane.Markdown(
             pn.bind(self._table, self.param.revision), sizing_mode="stretch_width"
         )
+        # what is being computed, said in words (Panel's loading overlay, set back from the
+        # computation's callback, sometimes stayed on in the browser though the plots arrived)
+        self.status = pn.pane.Markdown("", sizing_mode="stretch_width")
         self.view = pn.Column(
+            self.status,
             pn.pane.Markdown(
                 "Relative error of h1 and h2 (the larger) against the exact solver, and the "
                 "run time to the second apex, for each scipy integrator at rtol = atol = "
@@ -73,9 +77,12 @@ class AccuracyScene(Scene):
     def _start(self) -> None:
         self._stale = False
         self._request += 1
-        self.view.loading = True
-        if pn.state.curdoc is not None and pn.state.curdoc.session_context is not None:
-            pn.state.execute(functools.partial(self._compute_in_thread, self._request))
+        self.status.object = (
+            "*Computing: every method at every tolerance on this drop (a few seconds)...*"
+        )
+        document = pn.state.curdoc
+        if document is not None and document.session_context is not None:
+            pn.state.execute(functools.partial(self._compute_in_thread, self._request, document))
         else:  # no server (a script or a test): compute now
             self._show(self._request, self._work())
 
@@ -84,18 +91,18 @@ class AccuracyScene(Scene):
         self.computations += 1
         return work_precision(s.eps, s.mu, s.tau_ratio, eps12=s.eps12, height=s.height)
 
-    async def _compute_in_thread(self, request: int) -> None:
+    async def _compute_in_thread(self, request: int, document) -> None:
         rows = await asyncio.to_thread(self._work)
-        # shown on the session's next tick, under its document lock: shown from the coroutine
-        # itself, the plots arrived but the loading overlay sometimes stayed on
-        later(lambda: self._show(request, rows))
+        # Shown on the next tick of this session's own document, under its lock: Panel runs the
+        # coroutine with no current document (or another session's).
+        document.add_next_tick_callback(functools.partial(self._show, request, rows))
 
     def _show(self, request: int, rows: list[dict]) -> None:
         if request != self._request:
             return  # superseded by a newer drop
         self.rows = rows
         self.param.trigger("revision")
-        self.view.loading = False
+        self.status.object = ""
 
     def _plot(self, revision: bool) -> hv.Overlay:
         time_dim = hv.Dimension("seconds", label="run time per drop [s]")

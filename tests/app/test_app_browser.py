@@ -53,8 +53,9 @@ def test_each_scene_loads_without_console_errors(browser, app_server, artifacts,
         assert active_tab(page) == TAB_TITLES[scene]
         if scene == "accuracy":  # computed in the background after the page is up
             page.get_by_text("DOP853").first.wait_for(timeout=120_000)
-            # and the overlay that says it is computing goes away
-            page.wait_for_function(LOADING_GONE_JS, timeout=30_000)
+            # and the line that says it is computing goes away, with no overlay left on
+            page.get_by_text("Computing: every method").wait_for(state="hidden", timeout=30_000)
+            page.wait_for_function(LOADING_GONE_JS, timeout=5_000)
         if scene == "closeup":
             page.get_by_text("4 ball contacts").wait_for()
         if scene == "map":
