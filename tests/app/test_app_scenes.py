@@ -229,7 +229,7 @@ def test_accuracy_computes_only_when_opened():
     # tighter tolerance, smaller error against the exact solver
     assert lsoda[1e-9]["rel_err_h1"] < lsoda[1e-3]["rel_err_h1"]
     assert "LSODA" in scene.table.object
-    assert scene.view.loading is False
+    assert scene.view.loading is False and scene.status.object == ""  # done: nothing pending
 
 
 def test_bad_typed_values_show_a_message_and_keep_a_valid_state():
