@@ -14,7 +14,7 @@ from typing import NamedTuple
 import numpy as np
 
 from twoball.errors import ParameterError, Status
-from twoball.model import Drop, icm_height
+from twoball.model import Drop, icm_height, is_real_number
 
 FLOOR_CONTACT, BALL_CONTACT = 0, 1
 # The one early end that is an answer, not a failure (docs/model.md, "What is measured").
@@ -220,11 +220,23 @@ class Result:
 def as_times(name: str, values: object) -> np.ndarray:
     """``values`` as a one-dimensional array of finite times, or ParameterError naming ``name``
     (strings and booleans are not times)."""
+    if isinstance(values, np.ndarray) and values.dtype.kind in "iuf":
+        # an array of numbers (the app's sampling grids): checked whole, not item by item,
+        # which took most of an evaluate() of 2001 times
+        items = np.atleast_1d(values)
+        if items.ndim != 1 or items.size == 0:
+            raise ParameterError(
+                f"{name} must be a non-empty one-dimensional array of finite times"
+            )
+        if not np.isfinite(items).all():
+            bad = items[~np.isfinite(items)][0]
+            raise ParameterError(
+                f"{name} must be a one-dimensional array of finite times; got {float(bad)!r} in it"
+            )
+        return items.astype(float)
     items = np.atleast_1d(np.asarray(values, dtype=object))
     if items.ndim != 1 or items.size == 0:
         raise ParameterError(f"{name} must be a non-empty one-dimensional array of finite times")
-    from twoball.model import is_real_number
-
     for item in items:
         if not is_real_number(item) or not math.isfinite(float(item)):
             raise ParameterError(
