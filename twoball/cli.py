@@ -21,7 +21,7 @@ import os
 import sys
 from collections.abc import Callable
 
-from twoball.errors import ParameterError, SolverError
+from twoball.errors import ParameterError, SolverError, Status
 from twoball.model import DEFAULT_HEIGHT, Parameters, allowed_range
 from twoball.sweep import DIMS as SWEEP_AXES
 from twoball.sweep import MAX_DROPS as MAX_SWEEP_DROPS
@@ -173,7 +173,7 @@ def _simulate(args: argparse.Namespace) -> int:
 
 def _missing_apexes(until: str | float, found: int, ball: str) -> str | None:
     """Why a run to a time shows fewer apexes than asked (rather than bare dashes), or None."""
-    if found >= (1 if until == "first" else 2) or isinstance(until, str):
+    if isinstance(until, str) or found >= 2:  # ran to an apex, or found both
         return None
     which = "apex" if found == 0 else "second apex"
     return f"no {which} of the {ball} before t = {until:g} (--until)"
@@ -255,7 +255,7 @@ def _stack(args: argparse.Namespace) -> int:
     summary = result.summary()
     top_apexes = len(result.apexes[-1])
     reason = _missing_apexes(args.until, top_apexes, "top ball")
-    if reason is not None or result.status.name == "REST":
+    if reason is not None or result.status is Status.REST:
         summary["reason"] = reason or "the stack came to rest"
     return _print_summary(summary, args.json)
 

@@ -52,7 +52,7 @@ PROGRESS_DIR = "_progress"  # a Zarr group holding one empty file per finished c
 # Drops a sweep undertakes without --force: over an hour on 2 cores at the rate below.
 MAX_DROPS = 100_000_000
 # Drops per second one local thread computes, end to end, for the plan's estimate: cautious (the
-# paper's 50^3 cube runs at 40 000-95 000/s on 2 threads depending on the machine's load,
+# paper's 50^3 cube runs at 40 000-150 000/s on 2 threads depending on the machine's load,
 # docs/performance.md; heavier corners of the domain take longer per drop).
 DROPS_PER_WORKER_SECOND = 11_000
 
