@@ -17,7 +17,7 @@ from .controls import Controls
 from .delayed_map import MapScene
 from .drop import DropScene
 from .lesson import Lesson
-from .scene import MODEL_PARAMETERS, Scene
+from .scene import MODEL_PARAMETERS, Built, Scene
 from .stack import StackScene
 from .state import SCENES, ExplorerState, read_query, url_query
 
@@ -90,7 +90,7 @@ html, body { font-size: 20px; }
 """
 
 
-class Explorer(pn.viewable.Viewer):
+class Explorer(Built):
     """One session of the app, built from a URL query (``{key: text}``)."""
 
     state = param.ClassSelector(class_=ExplorerState)
@@ -130,7 +130,6 @@ class Explorer(pn.viewable.Viewer):
             alert_type="info",
             sizing_mode="stretch_width",
         )
-        self._layout = pn.Column(self.cover, self.tabs, sizing_mode="stretch_width")
         self._cover()
         self.scenes[self.state.scene].active = True
 
@@ -205,10 +204,10 @@ class Explorer(pn.viewable.Viewer):
             *self._compiling_notice(), self.lesson, self.controls, sizing_mode="stretch_width"
         )
 
-    def __panel__(self) -> pn.viewable.Viewable:
+    def layout(self) -> pn.viewable.Viewable:
         """The scenes under their lesson cover (the controls go into the page's sidebar,
         :meth:`page`)."""
-        return self._layout
+        return pn.Column(self.cover, self.tabs, sizing_mode="stretch_width")
 
     def page(self) -> pn.template.BootstrapTemplate:
         """The served page: a template gives the viewport meta tag, a sidebar that folds away
