@@ -111,6 +111,8 @@ def test_every_step_opens_from_its_url(browser, app_server, artifacts, size):
         )
         try:
             page.get_by_text(f"Step {number} of {len(STEPS)}").wait_for()
+            # the app writes the whole state into the URL once the page has loaded
+            page.wait_for_function("() => location.search.includes('scene=')")
             assert _query(page)["scene"] == step.scene
             expect(page.get_by_text("Predict first.")).to_be_visible()
             page.get_by_text(step.choices[step.answer], exact=True).click()
