@@ -17,8 +17,14 @@ from twoball.model import damping_ratios, decay_ratio, restitution
 
 
 def _advance(kind, state, mu, z01, z12, horizon=np.inf):
+    """One phase from the absolute state (x1, x2, v1, v2); returns (event, tau, x1, x2, v1, v2).
+    The kernel carries (x1, eta, v1, eta') with eta = x2 - x1 (exact.state_at)."""
+    x1, x2, v1, v2 = state
     prepared = exact.prepare(mu, z01, z12)
-    return exact.advance_phase(kind, 0.0, *state, horizon, exact.EVENT_TIME, prepared)
+    event, tau, y1, eta, w1, deta = exact.advance_phase(
+        kind, 0.0, x1, x2 - x1, v1, v2 - v1, horizon, exact.EVENT_TIME, prepared
+    )
+    return event, tau, y1, y1 + eta, w1, w1 + deta
 
 
 @pytest.mark.parametrize("mu", [1e-5, 1e-3, 0.1, 1.0, 10.0, 1e3])

@@ -79,6 +79,10 @@ ROUNDING = 16.0 * MACHINE_EPSILON  # tolerance in units of relative rounding
 SUBSPACE_SWEEPS = 4  # refinement sweeps of the both-contact mode split (see _split_modes)
 OVERDAMPED_GAP = 0.1  # rates this far apart (relative) split a block into two exponentials
 OVERDAMPED_SAFETY = 1.0 + 1e-9  # covers the rounding of that split (relative ~ulp / gap)
+# _fall_deviation sums its series while tau (1 + 2 b) is at most this (terms shrink by ~4 each)
+FALL_SERIES_REACH = 0.25
+FALL_SERIES_TERMS = 40
+FALL_SERIES_STOP = 2.0**-56  # a bound on the next term, relative to the sum so far
 
 # Layout of the per-drop parameter vector passed to the kernel.
 P_MU, P_Z01, P_Z12, P_W2, P_F1, P_F2, P_NOISE = range(7)
@@ -415,12 +419,13 @@ def prepare(mu, z01, z12):
     c1[BALL, 0, 1] = _oscillator_bound(-nu2, -2 * z01 * nu2, b12, om12)
     c1[BALL, 1, 0] = _oscillator_bound(1.0, 0.0, b12, om12)
     c1[BALL, 1, 1] = _oscillator_bound(1.0, 2 * z12, b12, om12)
-    # both contacts: y' = A (y - y_rest), A from M q'' = -C q' - K q (docs/model.md, "Bodies,
-    # coordinates, forces")
+    # both contacts: y' = A (y - y_rest) for y = (X1, eta, X1', eta'), from M q'' = -C q' - K q
+    # (docs/model.md, "Bodies, coordinates, forces") with eta = X2 - X1; written in these
+    # coordinates directly, so that the split below resolves eta's small share of each mode
     a = np.zeros((4, 4))
     a[0, 2] = a[1, 3] = 1.0
-    a[2, 0], a[2, 1], a[2, 2], a[2, 3] = -2.0, 1.0, -2.0 * (z01 + z12), 2.0 * z12
-    a[3, 0], a[3, 1], a[3, 2], a[3, 3] = 1.0 / mu, -1.0 / mu, 2.0 * z12 / mu, -2.0 * z12 / mu
+    a[2, 0], a[2, 1], a[2, 2], a[2, 3] = -1.0, 1.0, -2.0 * z01, 2.0 * z12
+    a[3, 0], a[3, 1], a[3, 2], a[3, 3] = 1.0, -w2, 2.0 * z01, -2.0 * z12 * w2
     x, x_inv, blocks = _split_modes(a)
     companions = np.empty((2, 2, 2))
     for block in range(2):
@@ -428,9 +433,8 @@ def prepare(mu, z01, z12):
     functionals = np.zeros((2, 2, 4))
     functionals[0, 0, 0] = functionals[0, 1, 0] = 1.0  # X1, X1 + 2 z01 X1'
     functionals[0, 1, 2] = 2.0 * z01
-    functionals[1, 0, 0], functionals[1, 0, 1] = -1.0, 1.0  # X2 - X1, and its g
-    functionals[1, 1, 0], functionals[1, 1, 1] = -1.0, 1.0
-    functionals[1, 1, 2], functionals[1, 1, 3] = -2.0 * z12, 2.0 * z12
+    functionals[1, 0, 1] = functionals[1, 1, 1] = 1.0  # eta, eta + 2 z12 eta'
+    functionals[1, 1, 3] = 2.0 * z12
     rest = np.zeros((2, 2))
     rates = np.zeros((2, 2))
     for block in range(2):
@@ -452,7 +456,7 @@ def prepare(mu, z01, z12):
     params[P_F2] = mu  # -g12 at rest: the lower ball carries the upper one
     # rounding growth of the both-contact state through x and x^-1 (1-norm condition)
     params[P_NOISE] = np.abs(x).sum(axis=0).max() * np.abs(x_inv).sum(axis=0).max()
-    y_rest = np.array([-(1.0 + mu), -(1.0 + 2.0 * mu), 0.0, 0.0])
+    y_rest = np.array([-(1.0 + mu), -mu, 0.0, 0.0])  # X1 = -(1 + mu), X2 = -(1 + 2 mu)
     return params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, mode_rows
 
 
@@ -509,14 +513,14 @@ def _row4(m, i, a, b, c, d):
 
 
 @njit
-def _modes(x1, x2, v1, v2, x_inv, y_rest):
-    """Mode coordinates z = X^-1 (y - y_rest) of a both-contact state."""
-    d1, d2 = x1 - y_rest[0], x2 - y_rest[1]
+def _modes(x1, eta, v1, deta, x_inv, y_rest):
+    """Mode coordinates z = X^-1 (y - y_rest) of a both-contact state y = (x1, eta, v1, eta')."""
+    d1, d2 = x1 - y_rest[0], eta - y_rest[1]
     return (
-        _row4(x_inv, 0, d1, d2, v1, v2),
-        _row4(x_inv, 1, d1, d2, v1, v2),
-        _row4(x_inv, 2, d1, d2, v1, v2),
-        _row4(x_inv, 3, d1, d2, v1, v2),
+        _row4(x_inv, 0, d1, d2, v1, deta),
+        _row4(x_inv, 1, d1, d2, v1, deta),
+        _row4(x_inv, 2, d1, d2, v1, deta),
+        _row4(x_inv, 3, d1, d2, v1, deta),
     )
 
 
@@ -545,38 +549,70 @@ def _block_flow_of(block, z0, z1, tau):
 
 
 @njit
-def state_at(kind, tau, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest):
-    """Exact state (x1, x2, v1, v2, a1, a2) a time tau into a phase of the given kind."""
+def _fall_deviation(u0, v0, b, tau):
+    """D = u(tau) - (u0 + v0 tau - tau^2/2) and D' for u'' + 2 b u' + u = 0: how far the floor
+    has pushed the lower ball off its free fall, without the cancellation of subtracting two
+    nearly equal heights.
+
+    The upper ball falls freely meanwhile, so the overlap moves by eta' tau minus this; in a
+    collision the lower ball sits ~100 deep in the floor at H = 1e4 while the overlap is ~0.01,
+    and D (~ u0 tau^2/2) is formed here to its own rounding. Short phases sum the Taylor series
+    (u^(k+2) = -2 b u^(k+1) - u^(k)); longer ones, where D is as large as the heights, subtract.
+    """
+    growth = 1.0 + 2.0 * b
+    if tau * growth > FALL_SERIES_REACH:
+        u, v, _ = _oscillator(u0, v0, b, 1.0, tau)
+        return (u - u0) - tau * (v0 - 0.5 * tau), (v - v0) + tau
+    before, now = v0, -2.0 * b * v0 - u0  # u', u''
+    power, lower = 0.5 * tau * tau, tau  # tau^k/k!, tau^(k-1)/(k-1)! for k = 2
+    deviation, rate = (now + 1.0) * power, (now + 1.0) * lower
+    for k in range(3, FALL_SERIES_TERMS):
+        before, now = now, -2.0 * b * now - before
+        lower = power
+        power = power * tau / k
+        deviation += now * power
+        rate += now * lower
+        reach = (abs(now) + abs(before)) * growth
+        if reach * power <= FALL_SERIES_STOP * abs(deviation) and (
+            reach * lower <= FALL_SERIES_STOP * abs(rate)
+        ):
+            break
+    return deviation, rate
+
+
+@njit
+def state_at(kind, tau, x1, eta, v1, deta, params, x, x_inv, blocks, y_rest):
+    """Exact state (x1, eta, v1, eta', a1, eta'') a time tau into a phase of the given kind.
+
+    The state is carried in relative coordinates: the lower ball's height and velocity, and the
+    overlap eta = X2 - X1 and its rate. A ball contact depends on eta alone, which stays small
+    (~0.01) in a collision while both heights are ~100 deep in the floor; carried as the
+    difference of two absolute heights, it would be rounded to their ulp at every switch, the
+    largest loss of accuracy on drops with many contacts (docs/accuracy.md). Rounding of x1 and
+    v1 moves both balls together, which the contacts barely feel.
+    """
     mu, z01, z12, w2 = params[P_MU], params[P_Z01], params[P_Z12], params[P_W2]
     if kind == FREE:
-        return (
-            x1 + tau * (v1 - 0.5 * tau),
-            x2 + tau * (v2 - 0.5 * tau),
-            v1 - tau,
-            v2 - tau,
-            -1.0,
-            -1.0,
-        )
+        # gravity drops out of the relative motion: eta is linear in time
+        return x1 + tau * (v1 - 0.5 * tau), eta + tau * deta, v1 - tau, deta, -1.0, 0.0
     if kind == FLOOR:
         u, v, a = _oscillator(x1 + 1.0, v1, z01, 1.0, tau)
-        return u - 1.0, x2 + tau * (v2 - 0.5 * tau), v, v2 - tau, a, -1.0
+        pushed, pushed_rate = _fall_deviation(x1 + 1.0, v1, z01, tau)
+        return u - 1.0, eta + tau * deta - pushed, v, deta - pushed_rate, a, -1.0 - a
     if kind == BALL:
-        total = 1.0 + mu
-        xc = (x1 + mu * x2) / total
-        vc = (v1 + mu * v2) / total
-        eta, deta, ddeta = _oscillator(x2 - x1, v2 - v1, z12 * w2, w2, tau)
-        xc_t = xc + tau * (vc - 0.5 * tau)
-        vc_t = vc - tau
-        share1, share2 = mu / total, 1.0 / total
+        share1 = mu / (1.0 + mu)
+        xc = x1 + share1 * eta
+        vc = v1 + share1 * deta
+        eta_t, deta_t, ddeta = _oscillator(eta, deta, z12 * w2, w2, tau)
         return (
-            xc_t - share1 * eta,
-            xc_t + share2 * eta,
-            vc_t - share1 * deta,
-            vc_t + share2 * deta,
+            xc + tau * (vc - 0.5 * tau) - share1 * eta_t,
+            eta_t,
+            vc - tau - share1 * deta_t,
+            deta_t,
             -1.0 - share1 * ddeta,
-            -1.0 + share2 * ddeta,
+            ddeta,
         )
-    z0, z1, z2, z3 = _modes(x1, x2, v1, v2, x_inv, y_rest)
+    z0, z1, z2, z3 = _modes(x1, eta, v1, deta, x_inv, y_rest)
     n0, n1, r0, r1 = _block_flow_of(blocks[0], z0, z1, tau)
     n2, n3, r2, r3 = _block_flow_of(blocks[1], z2, z3, tau)
     return (
@@ -623,7 +659,7 @@ def _curvature_bound(kind, contact, part, c0, c1, c2, roots, rates, mode_rows, b
 
 @njit
 def _switching(
-    contact, active, x1, x2, v1, v2, a1, a2, params, bound_eta, bound_g, tol_state, clock
+    contact, active, x1, eta, v1, deta, a1, ddeta, params, bound_eta, bound_g, tol_state, clock
 ):
     """One contact's switching function: (F, F', tol, step certified above -tol); see
     :func:`contact_switch`."""
@@ -632,7 +668,7 @@ def _switching(
             active, x1, v1, a1, params[P_Z01], bound_eta, bound_g, tol_state, clock
         )
     return contact_switch(
-        active, x2 - x1, v2 - v1, a2 - a1, params[P_Z12], bound_eta, bound_g, tol_state, clock
+        active, eta, deta, ddeta, params[P_Z12], bound_eta, bound_g, tol_state, clock
     )
 
 
@@ -673,15 +709,14 @@ def _mode_energy_root(block, u, du):
 
 
 @njit
-def _energy_roots(kind, v1, v2, a1, a2, params, blocks, block_states):
+def _energy_roots(kind, v1, deta, a1, ddeta, params, blocks, block_states):
     """sqrt(2 E) of each oscillator of the phase (of w = y' for one contact; for both contacts,
     E = (u'^2 + det(B) u^2)/2 of each mode from its (u, u') in ``block_states``); each is
     non-increasing within the phase."""
     if kind == FLOOR:
         return math.sqrt(a1 * a1 + v1 * v1), 0.0
     if kind == BALL:
-        d, dd = v2 - v1, a2 - a1
-        return math.sqrt(dd * dd + params[P_W2] * d * d), 0.0
+        return math.sqrt(ddeta * ddeta + params[P_W2] * deta * deta), 0.0
     if kind == BOTH:
         return (
             _mode_energy_root(blocks[0], block_states[0], block_states[1]),
@@ -691,9 +726,9 @@ def _energy_roots(kind, v1, v2, a1, a2, params, blocks, block_states):
 
 
 @njit
-def _block_states(x1, x2, v1, v2, x_inv, companions, y_rest):
+def _block_states(x1, eta, v1, deta, x_inv, companions, y_rest):
     """(u, u') of each mode's oscillator in the both-contact phase: (u_1, u_1', u_2, u_2')."""
-    z0, z1, z2, z3 = _modes(x1, x2, v1, v2, x_inv, y_rest)
+    z0, z1, z2, z3 = _modes(x1, eta, v1, deta, x_inv, y_rest)
     return (
         companions[0][0][0] * z0 + companions[0][0][1] * z1,
         companions[0][1][0] * z0 + companions[0][1][1] * z1,
@@ -728,11 +763,12 @@ def _at_rest(roots, params, rest, rates, mode_rows, block_states, tol):
 
 @njit
 def advance_phase(
-    kind, t, x1, x2, v1, v2, horizon, horizon_event, prepared, entered_by=-1, carried=0.0
+    kind, t, x1, eta, v1, deta, horizon, horizon_event, prepared, entered_by=-1, carried=0.0
 ):
-    """Advance one phase, started at time t, to its first event.
+    """Advance one phase, started at time t from the state (x1, eta, v1, eta') of
+    :func:`state_at`, to its first event.
 
-    Returns (event, tau, x1, x2, v1, v2) with tau the time into the phase. horizon is a known
+    Returns (event, tau, x1, eta, v1, eta') with tau the time into the phase. horizon is a known
     event time (apex or end of the run) with its event code; prepared is what :func:`prepare`
     returned. With one contact active, that contact's oscillator moves on its own, so the time
     its force ends is found in closed form (:func:`_release_time`) and becomes the horizon; only
@@ -741,16 +777,18 @@ def advance_phase(
     params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, mode_rows = prepared
     z01, z12, w2_ball = params[P_Z01], params[P_Z12], params[P_W2]
     noise = params[P_NOISE] if kind == BOTH else 1.0
-    size = 1.0 + abs(x1) + abs(x2)
+    # the tolerances keep their scale of absolute heights and speeds: they bound the rounding of
+    # the switching functions' absolute parts, whatever coordinates carry the state
+    size = 1.0 + abs(x1) + abs(x1 + eta)
     # Without the ball contact the lower ball moves on its own, so the floor contact's rounding
     # is that of the lower ball alone (an upper ball far above must not blunt it).
     lower_alone = (kind & 2) == 0
     size_lower, speed_lower = 1.0 + abs(x1), abs(v1)
     if kind == BOTH:
-        # the closed form works about the static rest (y_rest ~ -mu for a heavy upper ball):
+        # the closed form works about the static rest (heights ~ -mu for a heavy upper ball):
         # its rounding scales with that offset too
-        size += abs(y_rest[0]) + abs(y_rest[1])
-    speed = abs(v1) + abs(v2)
+        size += abs(y_rest[0]) + abs(y_rest[0] + y_rest[1])
+    speed = abs(v1) + abs(v1 + deta)
     floor_on = (kind & 1) != 0
     ball_on = (kind & 2) != 0
     own = EVENT_FLOOR if kind == FLOOR else EVENT_BALL if kind == BALL else -1
@@ -758,7 +796,7 @@ def advance_phase(
     last_step = 0.0
     for _ in range(MAX_STEPS_PER_PHASE):
         y1, y2, w1, w2, a1, a2 = state_at(
-            kind, tau, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest
+            kind, tau, x1, eta, v1, deta, params, x, x_inv, blocks, y_rest
         )
         block_states = (0.0, 0.0, 0.0, 0.0)
         if kind == BOTH:
@@ -822,9 +860,7 @@ def advance_phase(
                 if kind == FLOOR:
                     release = _release_time(x1 + 1.0, v1, z01, 1.0, z01, 1.0 + level, horizon)
                 else:
-                    release = _release_time(
-                        x2 - x1, v2 - v1, z12 * w2_ball, w2_ball, z12, level, horizon
-                    )
+                    release = _release_time(eta, deta, z12 * w2_ball, w2_ball, z12, level, horizon)
                 if release < horizon:
                     horizon, horizon_event = release, own
                     step = min(step, horizon - tau)
@@ -833,7 +869,7 @@ def advance_phase(
         if event >= 0:
             if best != tau:  # else the state is the one just computed
                 y1, y2, w1, w2, _, _ = state_at(
-                    kind, best, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest
+                    kind, best, x1, eta, v1, deta, params, x, x_inv, blocks, y_rest
                 )
             return event, best, y1, y2, w1, w2
         if kind == BOTH and _at_rest(
@@ -842,14 +878,14 @@ def advance_phase(
             return EVENT_REST, tau, y1, y2, w1, w2
         if tau + step >= horizon:
             y1, y2, w1, w2, _, _ = state_at(
-                kind, horizon, x1, x2, v1, v2, params, x, x_inv, blocks, y_rest
+                kind, horizon, x1, eta, v1, deta, params, x, x_inv, blocks, y_rest
             )
             return horizon_event, horizon, y1, y2, w1, w2
         if not 0.0 < step < np.inf:
-            return EVENT_STUCK, tau, x1, x2, v1, v2
+            return EVENT_STUCK, tau, x1, eta, v1, deta
         tau += step
         last_step = step
-    return EVENT_STEPS, tau, x1, x2, v1, v2
+    return EVENT_STEPS, tau, x1, eta, v1, deta
 
 
 class RunOutcome(NamedTuple):
@@ -862,7 +898,7 @@ class RunOutcome(NamedTuple):
     ball_contacts_first: int  # ball contacts that start before the first apex
     floor_contacts_first: int
     contacts: np.ndarray  # (n, 3): contact, start, end (empty unless recorded)
-    # (n, 6): t, kind, x1, x2, v1, v2 at each phase start (empty unless recorded)
+    # (n, 6): t, kind, x1, eta, v1, eta' at each phase start (empty unless recorded)
     phases: np.ndarray
 
 
@@ -884,10 +920,18 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
     are empty otherwise); the apex table grows as apexes come, so a run to a time with no apex
     limit allocates only what it finds.
     """
+    # the state in the relative coordinates of state_at; eta is exact (Sterbenz) for a gap
+    # below the drop height
+    eta = x2 - x1
     v1 = 0.0
-    v2 = 0.0
+    deta = 0.0
     t = 0.0
     kind = FREE
+    # The upper ball's apex is found from its velocity v1 + eta', which after an apex is zero
+    # only to rounding; an apex is looked for again only once a ball contact has ended (only
+    # the ball contact can lift the upper ball), rather than zeroing eta' there, which would
+    # move the overlap's rate by the lower ball's rounding.
+    rising = False
     apexes = np.empty((min(apexes_wanted, 64), 2))  # rows: t, h
     n_apex = 0
     ball_first = 0
@@ -904,21 +948,22 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
     # overlap, or a contact that just opened closes again at once, for ever.
     stepping = constants(prepared)
     params, y_rest = stepping[0], stepping[9]
-    both_offset = ROUNDING * params[P_NOISE] * (abs(y_rest[0]) + abs(y_rest[1]))
+    both_offset = ROUNDING * params[P_NOISE] * (abs(y_rest[0]) + abs(y_rest[0] + y_rest[1]))
     carried = 0.0
     for _ in range(MAX_PHASES):
         if record_phases:
             phases = _room_for_one(phases, n_phases)
             row = phases[n_phases]
-            row[0], row[1], row[2], row[3], row[4], row[5] = t, kind, x1, x2, v1, v2
+            row[0], row[1], row[2], row[3], row[4], row[5] = t, kind, x1, eta, v1, deta
             n_phases += 1
         horizon = t_end - t
         horizon_event = EVENT_TIME
-        if (kind & 2) == 0 and v2 > 0.0 and v2 < horizon:
+        v2 = v1 + deta
+        if rising and (kind & 2) == 0 and v2 > 0.0 and v2 < horizon:
             horizon = v2  # the upper ball flies freely: its apex is exactly v2 away
             horizon_event = EVENT_APEX
-        event, tau, x1, x2, v1, v2 = advance_phase(
-            kind, t, x1, x2, v1, v2, horizon, horizon_event, stepping, entered_by, carried
+        event, tau, x1, eta, v1, deta = advance_phase(
+            kind, t, x1, eta, v1, deta, horizon, horizon_event, stepping, entered_by, carried
         )
         if kind == BOTH:  # the state leaves it with the rounding of its offset (see below)
             carried = both_offset
@@ -927,6 +972,7 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
         if event in (EVENT_FLOOR, EVENT_BALL):
             bit = 1 << event
             if kind & bit:
+                rising = rising or event == EVENT_BALL
                 if record_contacts:
                     contacts = _room_for_one(contacts, n_contacts)
                     row = contacts[n_contacts]
@@ -941,10 +987,10 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
                         floor_first += 1
             kind ^= bit
         elif event == EVENT_APEX:
-            v2 = 0.0
+            rising = False
             apexes = _room_for_one(apexes, n_apex)
             apexes[n_apex, 0] = t
-            apexes[n_apex, 1] = x2
+            apexes[n_apex, 1] = x1 + eta
             n_apex += 1
             if n_apex == apexes_wanted:
                 status = STATUS_DONE
@@ -1018,7 +1064,7 @@ def sample(phases, times, prepared):
         index = max(np.searchsorted(starts, times[i], side="right") - 1, 0)
         row = phases[index]
         kind = int(row[1])
-        x1, x2, v1, v2, _, _ = state_at(
+        x1, eta, v1, deta, _, _ = state_at(
             kind,
             times[i] - row[0],
             row[2],
@@ -1032,8 +1078,10 @@ def sample(phases, times, prepared):
             y_rest,
         )
         f01 = max(-(x1 + 2.0 * z01 * v1), 0.0) if kind & 1 else 0.0
-        f12 = max(-((x2 - x1) + 2.0 * z12 * (v2 - v1)), 0.0) if kind & 2 else 0.0
-        out[i, 0], out[i, 1], out[i, 2], out[i, 3], out[i, 4], out[i, 5] = x1, x2, v1, v2, f01, f12
+        f12 = max(-(eta + 2.0 * z12 * deta), 0.0) if kind & 2 else 0.0
+        row_out = out[i]
+        row_out[0], row_out[1], row_out[2], row_out[3] = x1, x1 + eta, v1, v1 + deta
+        row_out[4], row_out[5] = f01, f12
     return out
 
 

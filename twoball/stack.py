@@ -500,9 +500,12 @@ def _pair_at_rest(pair, x, v, size, speed, tau, carried):
     above uses, bounds a slow overdamped mode far too loosely (eps = 0.01 under a heavy upper
     ball: rest proven at t = 3310 by twoball.simulate, never by that energy)."""
     params, _, _, _, rest, _, x_inv, blocks, companions, y_rest, rates, mode_rows = pair
-    block_states = exact._block_states(x[0], x[1], v[0], v[1], x_inv, companions, y_rest)
+    # the two-ball solver's modes are in its relative coordinates (x1, eta, v1, eta')
+    block_states = exact._block_states(
+        x[0], x[1] - x[0], v[0], v[1] - v[0], x_inv, companions, y_rest
+    )
     roots = exact._energy_roots(exact.BOTH, v[0], v[1], 0.0, 0.0, params, blocks, block_states)
-    offset = abs(y_rest[0]) + abs(y_rest[1])
+    offset = abs(y_rest[0]) + abs(y_rest[0] + y_rest[1])
     tol = ROUNDING * params[exact.P_NOISE] * (size + offset + speed * (1.0 + tau) + tau * tau)
     return exact._at_rest(roots, params, rest, rates, mode_rows, block_states, tol + carried)
 
