@@ -83,6 +83,7 @@ OVERDAMPED_SAFETY = 1.0 + 1e-9  # covers the rounding of that split (relative ~u
 FALL_SERIES_REACH = 0.25
 FALL_SERIES_TERMS = 40
 FALL_SERIES_STOP = 2.0**-56  # a bound on the next term, relative to the sum so far
+FALL_UNDERDAMPED = 0.01  # 1 - b^2 above which a long floor phase uses the oscillating form
 
 # Layout of the per-drop parameter vector passed to the kernel.
 P_MU, P_Z01, P_Z12, P_W2, P_F1, P_F2, P_NOISE = range(7)
@@ -116,6 +117,33 @@ def _decay_pair(b, w2, tau):
         )
     decay = math.exp(-b * tau)
     return decay, tau * decay
+
+
+@njit
+def _decay_pair_less_one(b, w2, tau):
+    """(C - 1, S) for the decay pair (C, S) of :func:`_decay_pair`, C - 1 formed without
+    cancellation, so that a short phase moves a state by its change alone (no rounding of the
+    state's own size)."""
+    d = w2 - b * b
+    if d > 0.0:
+        om = math.sqrt(d)
+        angle = om * tau
+        decay_less_one = math.expm1(-b * tau)
+        half = math.sin(0.5 * angle)
+        return (
+            decay_less_one * math.cos(angle) - 2.0 * half * half,
+            (1.0 + decay_less_one) * math.sin(angle) / om,
+        )
+    if d < 0.0:
+        om = math.sqrt(-d)
+        slow_rate = w2 / (b + om)  # b - om without cancellation
+        slow_less_one = math.expm1(-slow_rate * tau)
+        return (
+            0.5 * (slow_less_one + math.expm1(-(slow_rate + 2.0 * om) * tau)),
+            (1.0 + slow_less_one) * (-math.expm1(-2.0 * om * tau)) / (2.0 * om),
+        )
+    decay_less_one = math.expm1(-b * tau)
+    return decay_less_one, tau * (1.0 + decay_less_one)
 
 
 @njit
@@ -296,11 +324,27 @@ def _split_modes(a):
         for _ in range(SUBSPACE_SWEEPS):
             x[:, lo : lo + 2] = _orthonormal_pair(a_inv @ np.ascontiguousarray(x[:, lo : lo + 2]))
             x[:, hi : hi + 2] = _orthonormal_pair(a @ np.ascontiguousarray(x[:, hi : hi + 2]))
+    # Within each invariant plane, rotate the basis so that the block's diagonal entries are
+    # equal (the standardised form of a real Schur block): its determinant is then
+    # b00^2 - b01 b10 with no cancellation. An arbitrary orthonormal basis of the fast mode's
+    # elongated orbit gives diagonal entries of +-300 whose products cancel to a determinant of
+    # ~3000 (mu ~ 3e-4), and that frequency error, 1e-14 relative, drifts the fast mode's phase
+    # contact by contact (docs/accuracy.md).
+    full = np.linalg.inv(x) @ a @ x
+    for k in (0, 2):
+        b00, b01, b10, b11 = full[k, k], full[k, k + 1], full[k + 1, k], full[k + 1, k + 1]
+        angle = 0.5 * math.atan2(-(b00 - b11), b01 + b10)
+        c, s = math.cos(angle), math.sin(angle)
+        first = x[:, k].copy()
+        x[:, k] = c * first + s * x[:, k + 1]
+        x[:, k + 1] = -s * first + c * x[:, k + 1]
     x_inv = np.linalg.inv(x)
     blocks = np.empty((2, 2, 2))
     full = x_inv @ a @ x
     blocks[0] = full[0:2, 0:2]
     blocks[1] = full[2:4, 2:4]
+    for k in range(2):  # equal to rounding; made exactly equal
+        blocks[k, 0, 0] = blocks[k, 1, 1] = 0.5 * (blocks[k, 0, 0] + blocks[k, 1, 1])
     return x, x_inv, blocks
 
 
@@ -543,9 +587,37 @@ def _flow(b00, b01, b10, b11, z0, z1, tau):
 
 
 @njit
+def _block_change(block, z0, z1, tau):
+    """(exp(B tau) - I) z and B exp(B tau) z for a 2x2 block (array or nested tuple): the
+    change of a mode's coordinates over tau, to the rounding of the change (see :func:`_flow`,
+    and :func:`_decay_pair_less_one` for C - 1)."""
+    b00, b01, b10, b11 = block[0][0], block[0][1], block[1][0], block[1][1]
+    half_trace = 0.5 * (b00 + b11)
+    cos_less_one, sin_part = _decay_pair_less_one(-half_trace, b00 * b11 - b01 * b10, tau)
+    d0 = cos_less_one * z0 + sin_part * ((b00 - half_trace) * z0 + b01 * z1)
+    d1 = cos_less_one * z1 + sin_part * (b10 * z0 + (b11 - half_trace) * z1)
+    n0, n1 = z0 + d0, z1 + d1
+    return d0, d1, b00 * n0 + b01 * n1, b10 * n0 + b11 * n1
+
+
+@njit
 def _block_flow_of(block, z0, z1, tau):
     """:func:`_flow` for a block given as an array or a nested tuple."""
     return _flow(block[0][0], block[0][1], block[1][0], block[1][1], z0, z1, tau)
+
+
+@njit
+def _sine_excess(x):
+    """sin(x) - x without cancellation (its series below |x| = 1)."""
+    if abs(x) >= 1.0:
+        return math.sin(x) - x
+    square = x * x
+    term = -x * square / 6.0
+    total = term
+    for k in range(2, 12):
+        term *= -square / ((2 * k) * (2 * k + 1))
+        total += term
+    return total
 
 
 @njit
@@ -554,15 +626,31 @@ def _fall_deviation(u0, v0, b, tau):
     has pushed the lower ball off its free fall, without the cancellation of subtracting two
     nearly equal heights.
 
-    The upper ball falls freely meanwhile, so the overlap moves by eta' tau minus this; in a
-    collision the lower ball sits ~100 deep in the floor at H = 1e4 while the overlap is ~0.01,
-    and D (~ u0 tau^2/2) is formed here to its own rounding. Short phases sum the Taylor series
-    (u^(k+2) = -2 b u^(k+1) - u^(k)); longer ones, where D is as large as the heights, subtract.
+    The upper ball falls freely meanwhile, so the overlap moves by eta' tau minus this. In a
+    collision the lower ball sits ~100 deep in the floor at H = 1e4 while the overlap is ~0.01;
+    when the upper ball comes down on a lower ball already in the floor, the overlap closes from
+    ~50 to 0 by the difference of D (~50) and eta' tau. So D is formed to its own rounding:
+    short phases sum the Taylor series (u^(k+2) = -2 b u^(k+1) - u^(k)); longer underdamped
+    ones write D = (C - 1) u0 + (S - tau) v0 + b S u0 + tau^2/2 with the decay pair (C, S) of
+    :func:`_decay_pair` and C - 1, S - tau formed without cancellation; the rest (overdamped or
+    near critical, and long) subtract.
     """
     growth = 1.0 + 2.0 * b
     if tau * growth > FALL_SERIES_REACH:
-        u, v, _ = _oscillator(u0, v0, b, 1.0, tau)
-        return (u - u0) - tau * (v0 - 0.5 * tau), (v - v0) + tau
+        d = 1.0 - b * b
+        if d < FALL_UNDERDAMPED:
+            u, v, _ = _oscillator(u0, v0, b, 1.0, tau)
+            return (u - u0) - tau * (v0 - 0.5 * tau), (v - v0) + tau
+        om = math.sqrt(d)
+        angle = om * tau
+        decay_less_one = math.expm1(-b * tau)
+        half = math.sin(0.5 * angle)
+        cos_less_one = decay_less_one * math.cos(angle) - 2.0 * half * half  # C - 1
+        sin_part = (1.0 + decay_less_one) * math.sin(angle) / om  # S
+        sin_less_tau = (1.0 + decay_less_one) * _sine_excess(angle) / om + tau * decay_less_one
+        deviation = cos_less_one * u0 + b * sin_part * u0 + sin_less_tau * v0 + 0.5 * tau * tau
+        rate = cos_less_one * v0 - sin_part * (u0 + b * v0) + tau
+        return deviation, rate
     before, now = v0, -2.0 * b * v0 - u0  # u', u''
     power, lower = 0.5 * tau * tau, tau  # tau^k/k!, tau^(k-1)/(k-1)! for k = 2
     deviation, rate = (now + 1.0) * power, (now + 1.0) * lower
@@ -595,31 +683,36 @@ def state_at(kind, tau, x1, eta, v1, deta, params, x, x_inv, blocks, y_rest):
     if kind == FREE:
         # gravity drops out of the relative motion: eta is linear in time
         return x1 + tau * (v1 - 0.5 * tau), eta + tau * deta, v1 - tau, deta, -1.0, 0.0
+    # Every kind adds the state's change over tau to the state, the change formed to its own
+    # rounding: a short phase then rounds each coordinate once, by its ulp, rather than by the
+    # few ulps of a closed form of the state's whole size (h1 and h2 follow the release speed,
+    # which many contacts would otherwise blur).
     if kind == FLOOR:
-        u, v, a = _oscillator(x1 + 1.0, v1, z01, 1.0, tau)
         pushed, pushed_rate = _fall_deviation(x1 + 1.0, v1, z01, tau)
-        return u - 1.0, eta + tau * deta - pushed, v, deta - pushed_rate, a, -1.0 - a
+        x1_t = x1 + (tau * (v1 - 0.5 * tau) + pushed)
+        v1_t = v1 + (pushed_rate - tau)
+        a1 = -2.0 * z01 * v1_t - (x1_t + 1.0)
+        return x1_t, eta + (tau * deta - pushed), v1_t, deta - pushed_rate, a1, -1.0 - a1
     if kind == BALL:
         share1 = mu / (1.0 + mu)
-        xc = x1 + share1 * eta
-        vc = v1 + share1 * deta
         eta_t, deta_t, ddeta = _oscillator(eta, deta, z12 * w2, w2, tau)
+        vc = v1 + share1 * deta
         return (
-            xc + tau * (vc - 0.5 * tau) - share1 * eta_t,
+            x1 + (share1 * (eta - eta_t) + tau * (vc - 0.5 * tau)),
             eta_t,
-            vc - tau - share1 * deta_t,
+            v1 + (share1 * (deta - deta_t) - tau),
             deta_t,
             -1.0 - share1 * ddeta,
             ddeta,
         )
     z0, z1, z2, z3 = _modes(x1, eta, v1, deta, x_inv, y_rest)
-    n0, n1, r0, r1 = _block_flow_of(blocks[0], z0, z1, tau)
-    n2, n3, r2, r3 = _block_flow_of(blocks[1], z2, z3, tau)
+    d0, d1, r0, r1 = _block_change(blocks[0], z0, z1, tau)
+    d2, d3, r2, r3 = _block_change(blocks[1], z2, z3, tau)
     return (
-        y_rest[0] + _row4(x, 0, n0, n1, n2, n3),
-        y_rest[1] + _row4(x, 1, n0, n1, n2, n3),
-        _row4(x, 2, n0, n1, n2, n3),
-        _row4(x, 3, n0, n1, n2, n3),
+        x1 + _row4(x, 0, d0, d1, d2, d3),
+        eta + _row4(x, 1, d0, d1, d2, d3),
+        v1 + _row4(x, 2, d0, d1, d2, d3),
+        deta + _row4(x, 3, d0, d1, d2, d3),
         _row4(x, 2, r0, r1, r2, r3),
         _row4(x, 3, r0, r1, r2, r3),
     )
