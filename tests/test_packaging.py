@@ -90,7 +90,8 @@ def test_unwritable_cache_directory_is_not_fatal(tmp_path):
     )
     assert out.returncode == 0, out.stderr
     chosen, configured = out.stdout.split()
-    assert chosen == configured and Path(chosen).parent == tmp_path
+    # a private directory, in it the subdirectory of these sources (twoball.jit.sources_key)
+    assert chosen == configured and Path(chosen).parent.parent == tmp_path
 
 
 def test_prebuilt_cache_that_cannot_be_written_is_copied(tmp_path, monkeypatch):
@@ -108,3 +109,20 @@ def test_prebuilt_cache_that_cannot_be_written_is_copied(tmp_path, monkeypatch):
     chosen = jit.choose_cache_dir()
     assert chosen.parent == tmp_path / "tmp"
     assert (chosen / "kernels" / "exact.nbi").read_text() == "index"
+
+
+def test_the_kernel_cache_is_keyed_on_every_kernel_module(tmp_path, monkeypatch):
+    """An edit to any kernel module (here twoball/stack.py, whose kernels carry the code of
+    twoball/exact.py's) moves the disk cache to a fresh directory: numba itself would check only
+    the timestamp of each kernel's own file and serve stale code of the modules it calls."""
+    from twoball import jit
+
+    for name in jit.KERNEL_MODULES:
+        module = name.rpartition(".")[2]
+        (tmp_path / f"{module}.py").write_bytes((jit.PACKAGE / f"{module}.py").read_bytes())
+    monkeypatch.setattr(jit, "PACKAGE", tmp_path)
+    before = jit.sources_key()
+    assert jit.CACHE_DIR is False or Path(jit.CACHE_DIR).name == before
+    with open(tmp_path / "stack.py", "a") as handle:
+        handle.write("\n# an edit\n")
+    assert jit.sources_key() != before

@@ -12,6 +12,12 @@ as long again for the N-ball one) and keeps the machine code on disk, beside the
   directory under the temporary directory and that is used; without ``NUMBA_CACHE_DIR``, numba's
   default beside the sources, else ``~/.cache/twoball-numba``, else the temporary directory. If
   nothing can be written at all, the kernels compile in every process without a disk cache.
+- A cache never serves machine code of older sources. numba checks only the timestamp of the
+  file a kernel is defined in, but a kernel carries the code of every kernel it calls, and
+  those of :mod:`twoball.stack` call :mod:`twoball.exact`'s. So the cache lives in a
+  subdirectory named by a hash of all the kernel modules' sources (:func:`sources_key`): an
+  edit to any of them starts a fresh cache. (Older subdirectories are left behind; delete them
+  at will.)
 - A program that cannot wait for the compiler (the app's first start) calls
   :func:`use_python_kernels`: every kernel is replaced by its pure-Python function (numba keeps
   it as ``py_func``; the calls between kernels follow, since they look each other up in their
@@ -21,6 +27,7 @@ as long again for the N-ball one) and keeps the machine code on disk, beside the
 
 from __future__ import annotations
 
+import hashlib
 import importlib
 import logging
 import os
@@ -54,6 +61,14 @@ def _private_directory() -> Path:
     return Path(tempfile.gettempdir()) / f"twoball-numba-{os.getuid()}"
 
 
+def sources_key() -> str:
+    """A hash of the sources of every kernel module (:data:`KERNEL_MODULES`)."""
+    digest = hashlib.sha256()
+    for name in KERNEL_MODULES:
+        digest.update((PACKAGE / f"{name.rpartition('.')[2]}.py").read_bytes())
+    return digest.hexdigest()[:16]
+
+
 def choose_cache_dir() -> Path | None | bool:
     """Where numba's cache goes: a directory, None for numba's default (``__pycache__`` beside
     the sources), or False when nothing can be written (no disk cache)."""
@@ -75,7 +90,13 @@ def choose_cache_dir() -> Path | None | bool:
     return False
 
 
-CACHE_DIR = choose_cache_dir()
+_BASE = choose_cache_dir()
+if _BASE is None:
+    CACHE_DIR: Path | bool = PACKAGE / "__pycache__" / "numba" / sources_key()
+elif _BASE is False:
+    CACHE_DIR = False
+else:
+    CACHE_DIR = _BASE / sources_key()
 CACHING = CACHE_DIR is not False
 
 import numba  # noqa: E402 (after the cache directory is in the environment numba reads)
