@@ -330,9 +330,13 @@ def _split_modes(a):
     # elongated orbit gives diagonal entries of +-300 whose products cancel to a determinant of
     # ~3000 (mu ~ 3e-4), and that frequency error, 1e-14 relative, drifts the fast mode's phase
     # contact by contact (docs/accuracy.md).
+    # A real pair keeps its basis: there b00^2 - b01 b10 would cancel instead (the slow rate of a
+    # strongly overdamped mode is det / (b + om), relative to det).
     full = np.linalg.inv(x) @ a @ x
     for k in (0, 2):
         b00, b01, b10, b11 = full[k, k], full[k, k + 1], full[k + 1, k], full[k + 1, k + 1]
+        if 0.25 * (b00 - b11) ** 2 + b01 * b10 >= 0.0:
+            continue  # real eigenvalues
         angle = 0.5 * math.atan2(-(b00 - b11), b01 + b10)
         c, s = math.cos(angle), math.sin(angle)
         first = x[:, k].copy()
@@ -343,8 +347,10 @@ def _split_modes(a):
     full = x_inv @ a @ x
     blocks[0] = full[0:2, 0:2]
     blocks[1] = full[2:4, 2:4]
-    for k in range(2):  # equal to rounding; made exactly equal
-        blocks[k, 0, 0] = blocks[k, 1, 1] = 0.5 * (blocks[k, 0, 0] + blocks[k, 1, 1])
+    for k in range(2):  # a complex pair's diagonal: equal to rounding, made exactly equal
+        b00, b01, b10, b11 = blocks[k, 0, 0], blocks[k, 0, 1], blocks[k, 1, 0], blocks[k, 1, 1]
+        if 0.25 * (b00 - b11) ** 2 + b01 * b10 < 0.0:
+            blocks[k, 0, 0] = blocks[k, 1, 1] = 0.5 * (b00 + b11)
     return x, x_inv, blocks
 
 
@@ -689,9 +695,15 @@ def state_at(kind, tau, x1, eta, v1, deta, params, x, x_inv, blocks, y_rest):
     # which many contacts would otherwise blur).
     if kind == FLOOR:
         pushed, pushed_rate = _fall_deviation(x1 + 1.0, v1, z01, tau)
-        x1_t = x1 + (tau * (v1 - 0.5 * tau) + pushed)
-        v1_t = v1 + (pushed_rate - tau)
-        a1 = -2.0 * z01 * v1_t - (x1_t + 1.0)
+        if tau * (1.0 + 2.0 * z01) > FALL_SERIES_REACH:
+            # a long phase: the push undoes much of the fall (a ball settling in the floor
+            # while the other flies), so the lower ball's own closed form is the accurate one
+            u, v1_t, a1 = _oscillator(x1 + 1.0, v1, z01, 1.0, tau)
+            x1_t = u - 1.0
+        else:
+            x1_t = x1 + (tau * (v1 - 0.5 * tau) + pushed)
+            v1_t = v1 + (pushed_rate - tau)
+            a1 = -2.0 * z01 * v1_t - (x1_t + 1.0)
         return x1_t, eta + (tau * deta - pushed), v1_t, deta - pushed_rate, a1, -1.0 - a1
     if kind == BALL:
         share1 = mu / (1.0 + mu)
@@ -1072,6 +1084,15 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
                     row[0], row[1], row[2] = event, start[event], t
                     n_contacts += 1
             else:
+                # A contact closing meets its overlap at zero. Found as a root, the overlap there
+                # is zero only to the rounding of its terms (the upper ball's fall from thousands
+                # above: ~1e-12, where a stiff ball contact's whole compression is ~1): carried
+                # into the contact, that start would outweigh every other error of the bounce.
+                # So the root is taken as exact (a shift of the switch by rounding / speed).
+                if event == EVENT_FLOOR and v1 < 0.0:
+                    x1 = 0.0
+                elif event == EVENT_BALL and deta < 0.0:
+                    eta = 0.0
                 start[event] = t
                 if n_apex == 0:
                     if event == EVENT_BALL:
