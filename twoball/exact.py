@@ -11,10 +11,20 @@ closed-form solution:
 - both contacts: a two-degree-of-freedom damped system, split by a real similarity into two
   decoupled 2x2 blocks (its two modes), each advanced like a damped oscillator.
 
+The state handed from phase to phase is (X1, eta, X1', eta') with eta = X2 - X1 the overlap
+(:func:`state_at`), and each phase adds the state's change, formed to its own rounding, to the
+state. A contact depends on its overlap alone, which stays ~0.01 in a collision while the
+heights are ~100 deep in the floor; carried as two absolute heights it would be rounded to
+their ulp at every switch. A closing contact starts at zero overlap: the root is taken as
+exact rather than the rounding of its terms. docs/accuracy.md, "Many-contact drops", says what
+each of these choices gained.
+
 Every oscillator, scalar or block, is written in a form that is exact across the damping branch
 switch (under-, critically and overdamped) without cancellation, so modes that are close to
 defective (eps near exp(-2)) cost no accuracy. The two eigenvalue pairs of the both-contact
-phase are grouped so that the two closest eigenvalues share a block.
+phase are grouped so that the two closest eigenvalues share a block, and a complex pair's block
+is standardised (equal diagonal entries), so that its frequency is not the small difference of
+large products.
 
 Switching times (a contact switching on or off, an apex of the upper ball) are the first roots of
 the switching functions F(t) of docs/model.md, "Bodies, coordinates, forces": for an inactive
@@ -1003,7 +1013,9 @@ class RunOutcome(NamedTuple):
     ball_contacts_first: int  # ball contacts that start before the first apex
     floor_contacts_first: int
     contacts: np.ndarray  # (n, 3): contact, start, end (empty unless recorded)
-    # (n, 6): t, kind, x1, eta, v1, eta' at each phase start (empty unless recorded)
+    # (n, 7): t, kind, x1, eta, v1, eta' at each phase start and the phase's own duration tau
+    # (the difference of two rounded start times is not; benchmarks/phase_audit.py needs it);
+    # empty unless recorded
     phases: np.ndarray
 
 
@@ -1044,7 +1056,7 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
     start = np.zeros(2)
     contacts = np.empty((64 if record_contacts else 0, 3))
     n_contacts = 0
-    phases = np.empty((64 if record_phases else 0, 6))
+    phases = np.empty((64 if record_phases else 0, 7))
     n_phases = 0
     status = STATUS_PHASES
     entered_by = -1  # the contact whose switch began the current phase
@@ -1070,6 +1082,8 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
         event, tau, x1, eta, v1, deta = advance_phase(
             kind, t, x1, eta, v1, deta, horizon, horizon_event, stepping, entered_by, carried
         )
+        if record_phases:
+            phases[n_phases - 1, 6] = tau
         if kind == BOTH:  # the state leaves it with the rounding of its offset (see below)
             carried = both_offset
         entered_by = event if event in (EVENT_FLOOR, EVENT_BALL) else -1
