@@ -130,30 +130,33 @@ def _decay_pair(b, w2, tau):
 
 
 @njit
-def _decay_pair_less_one(b, w2, tau):
-    """(C - 1, S) for the decay pair (C, S) of :func:`_decay_pair`, C - 1 formed without
-    cancellation, so that a short phase moves a state by its change alone (no rounding of the
-    state's own size)."""
+def _decay_triple(b, w2, tau):
+    """(C, C - 1, S) for the decay pair (C, S) of :func:`_decay_pair`, C - 1 formed without
+    cancellation: a short phase can then move a state by its change alone (rounded to the
+    change's size, not the state's), and a long one that has decayed by its final value."""
     d = w2 - b * b
     if d > 0.0:
         om = math.sqrt(d)
         angle = om * tau
         decay_less_one = math.expm1(-b * tau)
         half = math.sin(0.5 * angle)
+        cosine = math.cos(angle)
         return (
-            decay_less_one * math.cos(angle) - 2.0 * half * half,
+            math.exp(-b * tau) * cosine,
+            decay_less_one * cosine - 2.0 * half * half,
             (1.0 + decay_less_one) * math.sin(angle) / om,
         )
     if d < 0.0:
         om = math.sqrt(-d)
         slow_rate = w2 / (b + om)  # b - om without cancellation
-        slow_less_one = math.expm1(-slow_rate * tau)
+        slow = math.exp(-slow_rate * tau)
         return (
-            0.5 * (slow_less_one + math.expm1(-(slow_rate + 2.0 * om) * tau)),
-            (1.0 + slow_less_one) * (-math.expm1(-2.0 * om * tau)) / (2.0 * om),
+            0.5 * slow * (1.0 + math.exp(-2.0 * om * tau)),
+            0.5 * (math.expm1(-slow_rate * tau) + math.expm1(-(slow_rate + 2.0 * om) * tau)),
+            slow * (-math.expm1(-2.0 * om * tau)) / (2.0 * om),
         )
-    decay_less_one = math.expm1(-b * tau)
-    return decay_less_one, tau * (1.0 + decay_less_one)
+    decay = math.exp(-b * tau)
+    return decay, math.expm1(-b * tau), tau * decay
 
 
 @njit
@@ -604,22 +607,36 @@ def _flow(b00, b01, b10, b11, z0, z1, tau):
 
 @njit
 def _block_change(block, z0, z1, tau):
-    """(exp(B tau) - I) z and B exp(B tau) z for a 2x2 block (array or nested tuple): the
-    change of a mode's coordinates over tau, to the rounding of the change (see :func:`_flow`,
-    and :func:`_decay_pair_less_one` for C - 1)."""
+    """For a 2x2 block (array or nested tuple): exp(B tau) z, its change (exp(B tau) - I) z,
+    each to its own rounding (:func:`_decay_triple`), and B exp(B tau) z; see :func:`_flow`."""
     b00, b01, b10, b11 = block[0][0], block[0][1], block[1][0], block[1][1]
     half_trace = 0.5 * (b00 + b11)
-    cos_less_one, sin_part = _decay_pair_less_one(-half_trace, b00 * b11 - b01 * b10, tau)
-    d0 = cos_less_one * z0 + sin_part * ((b00 - half_trace) * z0 + b01 * z1)
-    d1 = cos_less_one * z1 + sin_part * (b10 * z0 + (b11 - half_trace) * z1)
-    n0, n1 = z0 + d0, z1 + d1
-    return d0, d1, b00 * n0 + b01 * n1, b10 * n0 + b11 * n1
+    cos_part, cos_less_one, sin_part = _decay_triple(-half_trace, b00 * b11 - b01 * b10, tau)
+    p0 = sin_part * ((b00 - half_trace) * z0 + b01 * z1)
+    p1 = sin_part * (b10 * z0 + (b11 - half_trace) * z1)
+    n0, n1 = cos_part * z0 + p0, cos_part * z1 + p1
+    return (
+        n0,
+        n1,
+        cos_less_one * z0 + p0,
+        cos_less_one * z1 + p1,
+        b00 * n0 + b01 * n1,
+        b10 * n0 + b11 * n1,
+    )
 
 
 @njit
-def _block_flow_of(block, z0, z1, tau):
-    """:func:`_flow` for a block given as an array or a nested tuple."""
-    return _flow(block[0][0], block[0][1], block[1][0], block[1][1], z0, z1, tau)
+def _from_modes(row, start, rest, n0, n1, n2, n3, d0, d1, d2, d3):
+    """One coordinate of a both-contact state from its modes: the start plus the change, or the
+    static rest plus the modes' values, whichever sums smaller terms (the change after a short
+    phase; the values once the modes have decayed, as in a strongly damped phase)."""
+    change = row[0] * d0 + row[1] * d1 + row[2] * d2 + row[3] * d3
+    change_size = abs(row[0] * d0) + abs(row[1] * d1) + abs(row[2] * d2) + abs(row[3] * d3)
+    value_size = abs(rest) + abs(row[0] * n0) + abs(row[1] * n1) + abs(row[2] * n2)
+    value_size += abs(row[3] * n3)
+    if change_size <= value_size:
+        return start + change
+    return rest + (row[0] * n0 + row[1] * n1 + row[2] * n2 + row[3] * n3)
 
 
 @njit
@@ -728,13 +745,13 @@ def state_at(kind, tau, x1, eta, v1, deta, params, x, x_inv, blocks, y_rest):
             ddeta,
         )
     z0, z1, z2, z3 = _modes(x1, eta, v1, deta, x_inv, y_rest)
-    d0, d1, r0, r1 = _block_change(blocks[0], z0, z1, tau)
-    d2, d3, r2, r3 = _block_change(blocks[1], z2, z3, tau)
+    n0, n1, d0, d1, r0, r1 = _block_change(blocks[0], z0, z1, tau)
+    n2, n3, d2, d3, r2, r3 = _block_change(blocks[1], z2, z3, tau)
     return (
-        x1 + _row4(x, 0, d0, d1, d2, d3),
-        eta + _row4(x, 1, d0, d1, d2, d3),
-        v1 + _row4(x, 2, d0, d1, d2, d3),
-        deta + _row4(x, 3, d0, d1, d2, d3),
+        _from_modes(x[0], x1, y_rest[0], n0, n1, n2, n3, d0, d1, d2, d3),
+        _from_modes(x[1], eta, y_rest[1], n0, n1, n2, n3, d0, d1, d2, d3),
+        _from_modes(x[2], v1, 0.0, n0, n1, n2, n3, d0, d1, d2, d3),
+        _from_modes(x[3], deta, 0.0, n0, n1, n2, n3, d0, d1, d2, d3),
         _row4(x, 2, r0, r1, r2, r3),
         _row4(x, 3, r0, r1, r2, r3),
     )
