@@ -14,7 +14,8 @@ import mpmath
 import pytest
 
 import twoball
-from twoball.studies.many_contacts import HEIGHT, conditioning, within_rule
+from twoball.studies.conditioning import conditioning, within_rule
+from twoball.studies.many_contacts import HEIGHT
 from twoball.studies.truth import solve_truth
 
 SAMPLE = Path(__file__).resolve().parents[1] / "docs" / "many_contacts.csv"
@@ -28,7 +29,7 @@ def _sample_rows() -> list[dict]:
 def _measured(eps: float, mu: float, tau_ratio: float, h1_truth, h2_truth, contacts_truth: int):
     """A study row for the solver as it is now, against a given reference."""
     result = twoball.simulate(eps, mu, tau_ratio, height=HEIGHT)
-    cond = conditioning(eps, mu, tau_ratio)
+    cond = conditioning(eps, mu, tau_ratio, height=HEIGHT)
     with mpmath.workdps(40):
         h1, h2 = mpmath.mpf(h1_truth), mpmath.mpf(h2_truth)
         errors = [float(abs((result.h1 - h1) / h1)), float(abs((result.h2 - h2) / h2))]
@@ -67,8 +68,6 @@ def test_the_sample_is_reproducible_and_in_range():
 
 
 def test_the_rule_rejects_an_error_far_above_the_conditioning():
-    from twoball.studies.many_contacts import within_rule
-
     row = {
         "contacts_first": 7,
         "contacts_first_truth": 7,

@@ -6,12 +6,10 @@ A seeded sample of drops at H = 1e4 with mu in [1e-4, 1e-3], tau_d/tau_f in [1e-
 log-uniform) and eps in [0.6, 1], keeping those with at least MIN_CONTACTS ball contacts before
 the first apex. For each: the exact solver's relative error in h1 and h2 against
 :func:`twoball.studies.truth.solve_truth`, the contact counts of both, and the drop's
-conditioning: how far h1 and h2 move (relative) when one input (eps, mu, tau_ratio, H) moves by
-one ulp, estimated by a central difference over DIFFERENCE_ULPS ulps (wide enough that the
-solver's own rounding noise, divided by the step, is far below the derivative) and summed over
-the four inputs. The reference's h1 and h2 are written too (25 digits), so that a change to the
-solver can be checked against them in a second (tests/test_many_contacts.py) instead of the
-reference's minutes.
+conditioning (:mod:`twoball.studies.conditioning`, which states the rule the rows are held
+to). The reference's h1 and h2 are written too (25 digits), so that a change to the solver can
+be checked against them in a second (tests/test_many_contacts.py) instead of the reference's
+minutes.
 
 Run ``twoball many-contacts --out docs`` (writes many_contacts.csv; about 4 minutes on 2
 cores).
@@ -20,7 +18,6 @@ cores).
 from __future__ import annotations
 
 import csv
-import math
 import time
 from pathlib import Path
 
@@ -28,13 +25,13 @@ import numpy as np
 
 from twoball.errors import ParameterError
 from twoball.solve import simulate
+from twoball.studies.conditioning import conditioning, within_rule
 from twoball.workers import Workers
 
 HEIGHT = 1e4
 SEED = 10
 SAMPLE = 20
 MIN_CONTACTS = 6
-DIFFERENCE_ULPS = 2.0**16
 COLUMNS = (
     "eps",
     "mu",
@@ -52,20 +49,6 @@ COLUMNS = (
 TRUTH_DIGITS = 25
 
 
-TOLERANCE = 2e-10  # h1 and h2 within this of truth, relative (docs/accuracy.md)
-CONDITIONING_FACTOR = 10.0  # and within this many times their conditioning
-
-
-def within_rule(row: dict) -> bool:
-    """Contact counts equal; each error <= TOLERANCE and <= CONDITIONING_FACTOR x conditioning."""
-    if row["contacts_first"] != row["contacts_first_truth"]:
-        return False
-    return all(
-        row[f"rel_err_{h}"] <= min(TOLERANCE, CONDITIONING_FACTOR * row[f"cond_{h}"])
-        for h in ("h1", "h2")
-    )
-
-
 def sample_drops(count: int = SAMPLE, seed: int = SEED) -> list[tuple[float, float, float]]:
     """The first ``count`` seeded drops with at least MIN_CONTACTS ball contacts."""
     rng = np.random.default_rng(seed)
@@ -80,29 +63,6 @@ def sample_drops(count: int = SAMPLE, seed: int = SEED) -> list[tuple[float, flo
     return drops
 
 
-def _heights(eps: float, mu: float, tau_ratio: float, height: float) -> np.ndarray:
-    result = simulate(eps, mu, tau_ratio, height=height)
-    return np.array([result.h1, result.h2])
-
-
-def conditioning(eps: float, mu: float, tau_ratio: float) -> np.ndarray:
-    """Relative move of (h1, h2) per one-ulp move of each input, summed over the inputs."""
-    base = _heights(eps, mu, tau_ratio, HEIGHT)
-    inputs = [eps, mu, tau_ratio, HEIGHT]
-    total = np.zeros(2)
-    for index, value in enumerate(inputs):
-        if value == 0.0:
-            continue
-        step = DIFFERENCE_ULPS * math.ulp(value)
-        up = min(value + step, 1.0) if index == 0 else value + step  # eps stays in (0, 1]
-        down = value - step
-        args_up, args_down = list(inputs), list(inputs)
-        args_up[index], args_down[index] = up, down
-        slope = (_heights(*args_up) - _heights(*args_down)) / (up - down)
-        total += np.abs(slope) * math.ulp(value) / np.abs(base)
-    return total
-
-
 def measure(drop: tuple[float, float, float]) -> dict:
     """One drop: exact vs truth, contact counts, conditioning."""
     import mpmath
@@ -114,7 +74,7 @@ def measure(drop: tuple[float, float, float]) -> dict:
     start = time.perf_counter()
     truth = solve_truth(eps, mu, tau_ratio, height=HEIGHT)
     seconds = time.perf_counter() - start
-    cond = conditioning(eps, mu, tau_ratio)
+    cond = conditioning(eps, mu, tau_ratio, height=HEIGHT)
     return {
         "eps": eps,
         "mu": mu,

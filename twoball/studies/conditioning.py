@@ -1,0 +1,60 @@
+"""How well a drop is posed in double precision, and the accuracy rule measured against it.
+
+A drop's conditioning (cond_h1, cond_h2) is how far h1 and h2 move, relative, when one input
+(eps, mu, tau_ratio, H) moves by one ulp, summed over the inputs: the least error any solver
+handed those inputs as doubles can promise. Each term is a central difference over
+DIFFERENCE_ULPS ulps, wide enough that the exact solver's own rounding, divided by the step, is
+far below the derivative.
+
+The rule (issue 10, docs/accuracy.md): the same contacts as the 40-digit reference, and each of
+h1, h2 within TOLERANCE and within CONDITIONING_FACTOR times its conditioning.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from twoball.model import DEFAULT_HEIGHT
+from twoball.solve import simulate
+
+DIFFERENCE_ULPS = 2.0**16
+TOLERANCE = 2e-10  # h1 and h2 within this of the reference, relative
+CONDITIONING_FACTOR = 10.0  # and within this many times their conditioning
+
+
+def _heights(eps: float, mu: float, tau_ratio: float, height: float) -> np.ndarray:
+    result = simulate(eps, mu, tau_ratio, height=height)
+    return np.array([result.h1, result.h2])
+
+
+def conditioning(
+    eps: float, mu: float, tau_ratio: float, *, height: float = DEFAULT_HEIGHT
+) -> np.ndarray:
+    """(cond_h1, cond_h2): relative move of h1 and h2 per one-ulp move of each input, summed."""
+    base = _heights(eps, mu, tau_ratio, height)
+    inputs = [eps, mu, tau_ratio, height]
+    total = np.zeros(2)
+    for index, value in enumerate(inputs):
+        if value == 0.0:
+            continue
+        step = DIFFERENCE_ULPS * math.ulp(value)
+        up = min(value + step, 1.0) if index == 0 else value + step  # eps stays in (0, 1]
+        down = value - step
+        args_up, args_down = list(inputs), list(inputs)
+        args_up[index], args_down[index] = up, down
+        slope = (_heights(*args_up) - _heights(*args_down)) / (up - down)
+        total += np.abs(slope) * math.ulp(value) / np.abs(base)
+    return total
+
+
+def within_rule(row: dict) -> bool:
+    """Contact counts equal; each error <= TOLERANCE and <= CONDITIONING_FACTOR x conditioning
+    (``row`` has contacts_first, contacts_first_truth, rel_err_h1/h2 and cond_h1/h2)."""
+    if row["contacts_first"] != row["contacts_first_truth"]:
+        return False
+    return all(
+        row[f"rel_err_{h}"] <= min(TOLERANCE, CONDITIONING_FACTOR * row[f"cond_{h}"])
+        for h in ("h1", "h2")
+    )
