@@ -54,6 +54,13 @@ def test_bad_input_exits_2_with_one_line(arguments, named):
     assert "Traceback" not in completed.stderr and completed.stdout == ""
 
 
+def test_many_contacts_bad_seed_exits_2_naming_it(tmp_path):
+    completed = _run("many-contacts", "--out", str(tmp_path), "--seed", "-1")
+    lines = completed.stderr.strip().splitlines()
+    assert completed.returncode == 2 and len(lines) == 1 and "--seed" in lines[0]
+    assert not any(tmp_path.iterdir())  # nothing written
+
+
 def test_unknown_command_exits_2():
     completed = _run("fly")
     assert completed.returncode == 2 and len(completed.stderr.strip().splitlines()) == 1

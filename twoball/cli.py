@@ -479,6 +479,12 @@ def _add_many_contacts(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--count", type=_integer_in(1, 1000), default=20, help="drops in the sample (20)"
     )
+    parser.add_argument(
+        "--seed",
+        type=_integer_in(0, 2**32 - 1),
+        default=10,
+        help="seed of the sample (10, the one docs/accuracy.md quotes)",
+    )
     parser.add_argument("--workers", type=_WORKERS, default=2, help="worker processes (2)")
     parser.set_defaults(func=_many_contacts)
 
@@ -487,7 +493,7 @@ def _many_contacts(args: argparse.Namespace) -> int:
     from twoball.studies import truth  # noqa: F401  (mpmath, here: not in each worker)
     from twoball.studies.many_contacts import run_study
 
-    run_study(args.out, count=args.count, workers=args.workers)
+    run_study(args.out, count=args.count, seed=args.seed, workers=args.workers)
     return 0
 
 

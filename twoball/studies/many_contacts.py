@@ -91,7 +91,7 @@ def measure(drop: tuple[float, float, float]) -> dict:
     }
 
 
-def run_study(out: Path, *, count: int = SAMPLE, workers: int = 2) -> list[dict]:
+def run_study(out: Path, *, count: int = SAMPLE, seed: int = SEED, workers: int = 2) -> list[dict]:
     """Measure the seeded sample on ``workers`` processes and write many_contacts.csv into
     ``out``; returns the rows."""
     if count < 1:
@@ -100,7 +100,7 @@ def run_study(out: Path, *, count: int = SAMPLE, workers: int = 2) -> list[dict]
         raise ParameterError(f"workers must be at least 1; got {workers!r}")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    drops = sample_drops(count)
+    drops = sample_drops(count, seed)
     rows: list[dict] = [{}] * len(drops)
     with Workers(min(workers, len(drops)), measure) as pool:
         for index, row, _ in pool.results([(drop,) for drop in drops]):
