@@ -261,15 +261,8 @@ class DropScene(Scene):
             second = f"h2 = {units.height(r.h2)}, h2/h1 = {r.h2_over_h1:.4f}"
             verdict = "**delayed rebound** (h2 > h1)" if r.delayed_rebound else "no delayed rebound"
         first = "no first bounce" if r.h1 is None else f"h1 = {units.height(r.h1)}"
-        # in words too: a delayed rebound can start below the release height (balls held
-        # nearly touching), which a class expecting the textbook's high bounce should be told
-        rises = ""
-        if r.h1 is not None:
-            rises = f"The upper ball rises to {r.h1_over_drop:.2f} times its release height"
-            rises += "." if r.h2 is None else f", then to {r.h2_over_drop:.2f} times."
         return (
             f"{first}, {second}; {verdict}  \n"
-            f"{rises}  \n"
             f"ICM apex (dotted green): {units.height(r.h_icm)}; upper ball released at "
             f"(dashed): {units.height(r.x2_0)}; ball contacts in the first bounce: "
             f"{r.contacts_first}"
