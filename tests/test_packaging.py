@@ -126,3 +126,25 @@ def test_the_kernel_cache_is_keyed_on_every_kernel_module(tmp_path, monkeypatch)
     with open(tmp_path / "stack.py", "a") as handle:
         handle.write("\n# an edit\n")
     assert jit.sources_key() != before
+
+
+def test_a_child_process_uses_the_parents_kernel_cache(tmp_path):
+    """compile_in_background fills the cache from a child process, which inherits the
+    NUMBA_CACHE_DIR this process set (the keyed directory): it must use that directory, not
+    one keyed again inside it, or the server finds nothing and compiles everything itself (a
+    first start took 130 s instead of ~40, and a page served meanwhile asked a CDN for Panel's
+    stylesheets)."""
+    code = "from twoball import jit; print(jit.CACHE_DIR)"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    parent = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert parent.returncode == 0, parent.stderr
+    keyed = parent.stdout.strip()
+    assert Path(keyed).parent == tmp_path / "cache"
+    child = subprocess.run(
+        [sys.executable, "-c", code],
+        env={**os.environ, "NUMBA_CACHE_DIR": keyed},
+        capture_output=True,
+        text=True,
+    )
+    assert child.returncode == 0, child.stderr
+    assert child.stdout.strip() == keyed

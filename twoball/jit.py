@@ -93,8 +93,10 @@ def choose_cache_dir() -> Path | None | bool:
 _BASE = choose_cache_dir()
 if _BASE is None:
     CACHE_DIR: Path | bool = PACKAGE / "__pycache__" / "numba" / sources_key()
-elif _BASE is False:
-    CACHE_DIR = False
+elif _BASE is False or _BASE.name == sources_key():
+    # already keyed: a process started by this one (compile_in_background) inherits
+    # NUMBA_CACHE_DIR as set below and must fill the same directory, not one inside it
+    CACHE_DIR = _BASE
 else:
     CACHE_DIR = _BASE / sources_key()
 CACHING = CACHE_DIR is not False

@@ -38,3 +38,39 @@ def test_a_message_to_a_page_that_just_closed_is_dropped(monkeypatch):
     drop_messages_to_closed_sockets()  # twice: still one wrapper
     assert panel.io.document.dispatch_tornado.__wrapped__.__name__ == "dispatch_tornado"
     assert panel.io.document.dispatch_tornado(connection, msg=message) == []
+
+
+def test_a_write_task_failing_on_a_closed_page_is_a_warning_not_a_traceback(caplog):
+    """The other half of the race: the writes Panel had started before the tab closed fail
+    later, in tasks nobody awaits; asyncio logged them with a traceback."""
+    import asyncio
+    import gc
+
+    from app.app_hooks import closed_socket_handler
+
+    passed_on = []
+    loop = asyncio.new_event_loop()
+    try:
+        loop.set_exception_handler(
+            closed_socket_handler(lambda loop, context: passed_on.append(context))
+        )
+
+        async def write_to_a_closed_page():
+            raise WebSocketClosedError()
+
+        async def other_failure():
+            raise RuntimeError("a real bug")
+
+        async def start_and_forget():
+            loop.create_task(write_to_a_closed_page())
+            loop.create_task(other_failure())
+            await asyncio.sleep(0.01)
+
+        with caplog.at_level("WARNING", logger="bokeh.twoball"):
+            loop.run_until_complete(start_and_forget())
+            gc.collect()  # the unretrieved tasks are reported when collected
+        assert "dropped" in caplog.text
+        # a real failure still reaches the previous handler, with its exception
+        assert [type(c.get("exception")) for c in passed_on] == [RuntimeError]
+    finally:
+        loop.close()

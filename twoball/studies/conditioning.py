@@ -6,7 +6,7 @@ handed those inputs as doubles can promise. Each term is a central difference ov
 DIFFERENCE_ULPS ulps, wide enough that the exact solver's own rounding, divided by the step, is
 far below the derivative.
 
-The rule (issue 10, docs/accuracy.md): the same contacts as the 40-digit reference, and each of
+The rule (docs/accuracy.md, section 1): the same contacts as the 40-digit reference, and each of
 h1, h2 within TOLERANCE and within CONDITIONING_FACTOR times its conditioning.
 """
 
