@@ -45,6 +45,7 @@ def test_a_write_task_failing_on_a_closed_page_is_a_warning_not_a_traceback(capl
     later, in tasks nobody awaits; asyncio logged them with a traceback."""
     import asyncio
     import gc
+    import threading
 
     from app.app_hooks import closed_socket_handler
 
@@ -66,9 +67,14 @@ def test_a_write_task_failing_on_a_closed_page_is_a_warning_not_a_traceback(capl
             loop.create_task(other_failure())
             await asyncio.sleep(0.01)
 
-        with caplog.at_level("WARNING", logger="bokeh.twoball"):
+        def run() -> None:  # in a thread: Playwright's loop may be running in this one
             loop.run_until_complete(start_and_forget())
             gc.collect()  # the unretrieved tasks are reported when collected
+
+        with caplog.at_level("WARNING", logger="bokeh.twoball"):
+            thread = threading.Thread(target=run)
+            thread.start()
+            thread.join()
         assert "dropped" in caplog.text
         # a real failure still reaches the previous handler, with its exception
         assert [type(c.get("exception")) for c in passed_on] == [RuntimeError]
