@@ -116,6 +116,17 @@ _WORKERS = _integer_in(1, 1024)
 # simulate
 
 
+def _add_height(parser: argparse.ArgumentParser) -> None:
+    """``--height`` of one drop or stack, its allowed range in the help (simulate, stack)."""
+    parser.add_argument(
+        "--height",
+        type=_number,
+        default=DEFAULT_HEIGHT,
+        help=f"dimensionless drop height H in {allowed_range('height')}, within the domain "
+        "double precision carries (docs/model.md)",
+    )
+
+
 def _add_simulate(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("simulate", help="simulate one drop and print its bounces")
     parser.add_argument(
@@ -136,13 +147,7 @@ def _add_simulate(subparsers: argparse._SubParsersAction) -> None:
         default=None,
         help=f"ball-ball restitution in {allowed_range('eps12')} (default: eps)",
     )
-    parser.add_argument(
-        "--height",
-        type=_number,
-        default=DEFAULT_HEIGHT,
-        help=f"dimensionless drop height H in {allowed_range('height')}, within the domain "
-        "double precision carries (docs/model.md)",
-    )
+    _add_height(parser)
     parser.add_argument(
         "--method", default="exact", help="exact, LSODA, Radau, BDF, DOP853, RK45, odeint or CVODE"
     )
@@ -228,13 +233,7 @@ def _add_stack(subparsers: argparse._SubParsersAction) -> None:
         default=[0.2],
         help=f"one gap td/tau_f in {allowed_range('tau_ratio')}, or N-1 (0.2)",
     )
-    parser.add_argument(
-        "--height",
-        type=_number,
-        default=DEFAULT_HEIGHT,
-        help=f"dimensionless drop height H in {allowed_range('height')}, within the domain "
-        "double precision carries (docs/model.md)",
-    )
+    _add_height(parser)
     parser.add_argument("--force", default="linear", help="linear (exact) or hertz")
     parser.add_argument("--until", type=_until, default="second", help="first, second or a time")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
