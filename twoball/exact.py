@@ -576,6 +576,13 @@ def _row4(m, i, a, b, c, d):
 
 
 @njit
+def _rest_size(y_rest):
+    """|X1| + |X2| at the both-contact phase's static rest (``y_rest`` holds X1 and eta): the
+    offset its closed form works about, whose rounding the state carries."""
+    return abs(y_rest[0]) + abs(y_rest[0] + y_rest[1])
+
+
+@njit
 def _modes(x1, eta, v1, deta, x_inv, y_rest):
     """Mode coordinates z = X^-1 (y - y_rest) of a both-contact state y = (x1, eta, v1, eta')."""
     d1, d2 = x1 - y_rest[0], eta - y_rest[1]
@@ -919,7 +926,7 @@ def advance_phase(
     if kind == BOTH:
         # the closed form works about the static rest (heights ~ -mu for a heavy upper ball):
         # its rounding scales with that offset too
-        size += abs(y_rest[0]) + abs(y_rest[0] + y_rest[1])
+        size += _rest_size(y_rest)
     speed = abs(v1) + abs(v1 + deta)
     floor_on = (kind & 1) != 0
     ball_on = (kind & 2) != 0
@@ -1082,7 +1089,7 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
     # overlap, or a contact that just opened closes again at once, for ever.
     stepping = constants(prepared)
     params, y_rest = stepping[0], stepping[9]
-    both_offset = ROUNDING * params[P_NOISE] * (abs(y_rest[0]) + abs(y_rest[0] + y_rest[1]))
+    both_offset = ROUNDING * params[P_NOISE] * _rest_size(y_rest)
     carried = 0.0
     for _ in range(MAX_PHASES):
         if record_phases:

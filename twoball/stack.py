@@ -500,12 +500,11 @@ def _pair_at_rest(pair, x, v, size, speed, tau, carried):
     above uses, bounds a slow overdamped mode far too loosely (eps = 0.01 under a heavy upper
     ball: rest proven at t = 3310 by twoball.simulate, never by that energy)."""
     params, _, _, _, rest, _, x_inv, blocks, companions, y_rest, rates, mode_rows = pair
-    # the two-ball solver's modes are in its relative coordinates (x1, eta, v1, eta')
-    block_states = exact._block_states(
-        x[0], x[1] - x[0], v[0], v[1] - v[0], x_inv, companions, y_rest
-    )
-    roots = exact._energy_roots(exact.BOTH, v[0], v[1], 0.0, 0.0, params, blocks, block_states)
-    offset = abs(y_rest[0]) + abs(y_rest[0] + y_rest[1])
+    # the two-ball solver's state is in its relative coordinates (x1, eta, v1, eta')
+    eta, deta = x[1] - x[0], v[1] - v[0]
+    block_states = exact._block_states(x[0], eta, v[0], deta, x_inv, companions, y_rest)
+    roots = exact._energy_roots(exact.BOTH, v[0], deta, 0.0, 0.0, params, blocks, block_states)
+    offset = exact._rest_size(y_rest)
     tol = ROUNDING * params[exact.P_NOISE] * (size + offset + speed * (1.0 + tau) + tau * tau)
     return exact._at_rest(roots, params, rest, rates, mode_rows, block_states, tol + carried)
 
