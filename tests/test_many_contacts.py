@@ -14,7 +14,7 @@ import mpmath
 import pytest
 
 import twoball
-from twoball.studies.conditioning import conditioning, within_rule
+from twoball.studies.conditioning import against_reference, within_rule
 from twoball.studies.many_contacts import HEIGHT
 from twoball.studies.truth import solve_truth
 
@@ -26,23 +26,6 @@ def _sample_rows() -> list[dict]:
         return list(csv.DictReader(handle))
 
 
-def _measured(eps: float, mu: float, tau_ratio: float, h1_truth, h2_truth, contacts_truth: int):
-    """A study row for the solver as it is now, against a given reference."""
-    result = twoball.simulate(eps, mu, tau_ratio, height=HEIGHT)
-    cond = conditioning(eps, mu, tau_ratio, height=HEIGHT)
-    with mpmath.workdps(40):
-        h1, h2 = mpmath.mpf(h1_truth), mpmath.mpf(h2_truth)
-        errors = [float(abs((result.h1 - h1) / h1)), float(abs((result.h2 - h2) / h2))]
-    return {
-        "contacts_first": result.contacts_first,
-        "contacts_first_truth": contacts_truth,
-        "rel_err_h1": errors[0],
-        "rel_err_h2": errors[1],
-        "cond_h1": float(cond[0]),
-        "cond_h2": float(cond[1]),
-    }
-
-
 CASES = [
     pytest.param(0.9, 1e-3, 0.01, id="7-contacts", marks=pytest.mark.slow),
     pytest.param(0.9, 2e-4, 0.005, id="14-contacts", marks=pytest.mark.slow),
@@ -52,7 +35,9 @@ CASES = [
 @pytest.mark.parametrize(("eps", "mu", "tau_ratio"), CASES)
 def test_many_contact_drops_match_the_40_digit_reference(eps, mu, tau_ratio):
     truth = solve_truth(eps, mu, tau_ratio, height=HEIGHT)
-    row = _measured(eps, mu, tau_ratio, truth.h1, truth.h2, truth.contacts_first)
+    row = against_reference(
+        eps, mu, tau_ratio, truth.h1, truth.h2, truth.contacts_first, height=HEIGHT
+    )
     assert row["contacts_first"] >= 6
     assert within_rule(row), row
 
@@ -82,6 +67,18 @@ def test_the_rule_rejects_an_error_far_above_the_conditioning():
     assert not within_rule({**row, "rel_err_h2": 1e-12, "contacts_first_truth": 8})
 
 
+def test_a_row_against_a_reference_measures_the_relative_errors():
+    """against_reference's errors are |h - reference| / |reference|, read at full precision
+    from text; a reference without a second bounce makes h2's error infinite."""
+    drop = (0.9, 1e-3, 0.01)
+    result = twoball.simulate(*drop, height=HEIGHT)
+    with mpmath.workdps(40):
+        h1_off = mpmath.nstr(mpmath.mpf(result.h1) * (1 + mpmath.mpf("1e-13")), 30)
+    row = against_reference(*drop, h1_off, result.h2, result.contacts_first, height=HEIGHT)
+    assert row["rel_err_h1"] == pytest.approx(1e-13, rel=1e-6) and row["rel_err_h2"] == 0.0
+    assert against_reference(*drop, result.h1, None, 7, height=HEIGHT)["rel_err_h2"] == float("inf")
+
+
 def test_the_solver_meets_the_rule_on_the_documented_sample():
     """The exact solver as it is now, on every drop of docs/many_contacts.csv (what
     docs/accuracy.md quotes), against the 40-digit reference values stored there: equal contact
@@ -91,8 +88,8 @@ def test_the_solver_meets_the_rule_on_the_documented_sample():
     outside = []
     for row in rows:
         drop = tuple(float(row[key]) for key in ("eps", "mu", "tau_ratio"))
-        measured = _measured(
-            *drop, row["h1_truth"], row["h2_truth"], int(row["contacts_first_truth"])
+        measured = against_reference(
+            *drop, row["h1_truth"], row["h2_truth"], row["contacts_first_truth"], height=HEIGHT
         )
         assert measured["contacts_first"] >= 6
         if not within_rule(measured):

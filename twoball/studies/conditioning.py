@@ -17,11 +17,13 @@ import math
 import numpy as np
 
 from twoball.model import DEFAULT_HEIGHT
+from twoball.observables import relative_error
 from twoball.solve import simulate
 
 DIFFERENCE_ULPS = 2.0**16
 TOLERANCE = 2e-10  # h1 and h2 within this of the reference, relative
 CONDITIONING_FACTOR = 10.0  # and within this many times their conditioning
+REFERENCE_DIGITS = 25  # a reference height stored as text (40 digits computed)
 
 
 def _heights(eps: float, mu: float, tau_ratio: float, height: float) -> np.ndarray:
@@ -47,6 +49,48 @@ def conditioning(
         slope = (_heights(*args_up) - _heights(*args_down)) / (up - down)
         total += np.abs(slope) * math.ulp(value) / np.abs(base)
     return total
+
+
+def against_reference(
+    eps: float,
+    mu: float,
+    tau_ratio: float,
+    h1,
+    h2,
+    contacts_first: int,
+    *,
+    height: float = DEFAULT_HEIGHT,
+) -> dict:
+    """What :func:`within_rule` judges, for the exact solver as it is now on one drop: its ball
+    contacts in the first bounce and relative errors in h1 and h2 against reference values (the
+    40-digit reference's numbers, or their text as :func:`reference_text` stores them), and the
+    drop's conditioning."""
+    import mpmath
+
+    result = simulate(eps, mu, tau_ratio, height=height)
+    cond = conditioning(eps, mu, tau_ratio, height=height)
+    with mpmath.workdps(40):  # text of 25 digits is read at full precision
+        references = [None if h in (None, "") else mpmath.mpf(h) for h in (h1, h2)]
+        errors = [
+            relative_error(result.h1, references[0]),
+            relative_error(result.h2, references[1]),
+        ]
+    return {
+        "contacts_first": result.contacts_first,
+        "contacts_first_truth": int(contacts_first),
+        "rel_err_h1": errors[0],
+        "rel_err_h2": errors[1],
+        "cond_h1": float(cond[0]),
+        "cond_h2": float(cond[1]),
+    }
+
+
+def reference_text(value) -> str:
+    """A reference height as stored in the accuracy tables: REFERENCE_DIGITS digits ("" for a
+    bounce the reference does not have)."""
+    import mpmath
+
+    return "" if value is None else mpmath.nstr(value, REFERENCE_DIGITS)
 
 
 def within_rule(row: dict) -> bool:

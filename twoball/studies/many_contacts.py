@@ -25,7 +25,7 @@ import numpy as np
 
 from twoball.errors import ParameterError
 from twoball.solve import simulate
-from twoball.studies.conditioning import conditioning, within_rule
+from twoball.studies.conditioning import against_reference, reference_text, within_rule
 from twoball.workers import Workers
 
 HEIGHT = 1e4
@@ -46,7 +46,6 @@ COLUMNS = (
     "h1_truth",
     "h2_truth",
 )
-TRUTH_DIGITS = 25
 
 
 def sample_drops(count: int = SAMPLE, seed: int = SEED) -> list[tuple[float, float, float]]:
@@ -65,29 +64,23 @@ def sample_drops(count: int = SAMPLE, seed: int = SEED) -> list[tuple[float, flo
 
 def measure(drop: tuple[float, float, float]) -> dict:
     """One drop: exact vs truth, contact counts, conditioning."""
-    import mpmath
-
     from twoball.studies.truth import solve_truth
 
     eps, mu, tau_ratio = drop
-    result = simulate(eps, mu, tau_ratio, height=HEIGHT)
     start = time.perf_counter()
     truth = solve_truth(eps, mu, tau_ratio, height=HEIGHT)
     seconds = time.perf_counter() - start
-    cond = conditioning(eps, mu, tau_ratio, height=HEIGHT)
+    compared = against_reference(
+        eps, mu, tau_ratio, truth.h1, truth.h2, truth.contacts_first, height=HEIGHT
+    )
     return {
         "eps": eps,
         "mu": mu,
         "tau_ratio": tau_ratio,
-        "contacts_first": result.contacts_first,
-        "contacts_first_truth": truth.contacts_first,
-        "rel_err_h1": float(abs(result.h1 - truth.h1) / abs(truth.h1)),
-        "rel_err_h2": float(abs(result.h2 - truth.h2) / abs(truth.h2)),
-        "cond_h1": float(cond[0]),
-        "cond_h2": float(cond[1]),
+        **compared,
         "truth_seconds": round(seconds, 1),
-        "h1_truth": mpmath.nstr(truth.h1, TRUTH_DIGITS),
-        "h2_truth": mpmath.nstr(truth.h2, TRUTH_DIGITS),
+        "h1_truth": reference_text(truth.h1),
+        "h2_truth": reference_text(truth.h2),
     }
 
 

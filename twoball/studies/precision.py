@@ -303,7 +303,7 @@ def _title(with_truth: bool, height: float | None = None) -> str:
 def exact_against_truth(cases: dict[str, tuple[float, float, float]]) -> list[dict]:
     """The exact solver's relative errors in h1 and h2 against the 40-digit reference, with
     each case's conditioning (:mod:`twoball.studies.conditioning`)."""
-    from twoball.studies.conditioning import conditioning
+    from twoball.studies.conditioning import against_reference, reference_text
     from twoball.studies.truth import solve_truth
 
     rows = []
@@ -311,29 +311,17 @@ def exact_against_truth(cases: dict[str, tuple[float, float, float]]) -> list[di
         start = time.perf_counter()
         truth = solve_truth(*parameters)
         seconds = time.perf_counter() - start
-        result = simulate(*parameters)
-        cond = conditioning(*parameters)
+        compared = against_reference(*parameters, truth.h1, truth.h2, truth.contacts_first)
         rows.append(
             {
                 "case": case,
-                "h1_truth": _digits(truth.h1),
-                "h2_truth": _digits(truth.h2),
-                "rel_err_h1": relative_error(result.h1, truth.h1),
-                "rel_err_h2": relative_error(result.h2, truth.h2),
-                "contacts_first": result.contacts_first,
-                "contacts_first_truth": truth.contacts_first,
+                "h1_truth": reference_text(truth.h1),
+                "h2_truth": reference_text(truth.h2),
+                **compared,
                 "truth_seconds": seconds,
-                "cond_h1": float(cond[0]),
-                "cond_h2": float(cond[1]),
             }
         )
     return rows
-
-
-def _digits(value) -> str:
-    import mpmath
-
-    return "" if value is None else mpmath.nstr(value, 25)
 
 
 def run_study(out: Path, *, repeats: int = 3, budget: float = 20.0, truth: bool = True) -> None:
