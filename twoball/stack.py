@@ -769,14 +769,14 @@ def check_stack(
             f"eps must be at least {HERTZ_SMALLEST_RESTITUTION:g} with the hertz force "
             f"(tested range [{HERTZ_SMALLEST_RESTITUTION:g}, 1]); got {min(restitutions):g}"
         )
-    if force == "hertz" and masses.max() > HERTZ_LARGEST_MASS:
-        raise ParameterError(
-            "the masses relative to ball 0 (products of mass_ratios) must lie in "
-            f"[{low:g}, {HERTZ_LARGEST_MASS:g}] with the hertz force; got up to "
-            f"{masses.max():.3g} (heavier, the light balls below ring too fast to follow: "
-            "docs/stacks.md, Limits)"
-        )
     if force == "hertz":
+        if masses.max() > HERTZ_LARGEST_MASS:
+            raise ParameterError(
+                "the masses relative to ball 0 (products of mass_ratios) must lie in "
+                f"[{low:g}, {HERTZ_LARGEST_MASS:g}] with the hertz force; got up to "
+                f"{masses.max():.3g} (heavier, the light balls below ring too fast to follow: "
+                "docs/stacks.md, Limits)"
+            )
         _check_hertz_damping(masses, restitutions, height)
     zeta = np.empty(balls)
     zeta[0] = decay_ratio(restitutions[0])
