@@ -61,6 +61,24 @@ def test_many_contacts_bad_seed_exits_2_naming_it(tmp_path):
     assert not any(tmp_path.iterdir())  # nothing written
 
 
+def test_a_reader_that_stops_early_gets_no_traceback(monkeypatch):
+    """twoball simulate ... | head: the pipe closes before the summary is written; the command
+    ends quietly with SIGPIPE's status (it printed a BrokenPipeError traceback)."""
+    import io
+
+    from twoball import cli
+
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    stdout = io.TextIOWrapper(os.fdopen(write_end, "wb"), write_through=True)
+    monkeypatch.setattr(sys, "stdout", stdout)
+    try:
+        status = cli.main(["simulate", "--eps", "0.9", "--mu", "0.01", "--tau-ratio", "0.01"])
+    finally:
+        monkeypatch.undo()
+    assert status == 141
+
+
 def test_unknown_command_exits_2():
     completed = _run("fly")
     assert completed.returncode == 2 and len(completed.stderr.strip().splitlines()) == 1

@@ -530,7 +530,14 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``twoball`` console script; returns the exit status."""
     try:
         args = build_parser().parse_args(argv)
-        return args.func(args)
+        status = args.func(args)
+        sys.stdout.flush()  # a closed reader is found here, not at the interpreter's exit
+        return status
+    except BrokenPipeError:
+        # the reader stopped early (twoball ... | head): end quietly, as a Unix tool does, and
+        # send what is still buffered nowhere (Python's own recipe, docs: signal, SIGPIPE)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 128 + 13  # the status of a process ended by SIGPIPE
     except ParameterError as error:
         print(f"twoball: error: {_one_line(error)}", file=sys.stderr)
         return 2
