@@ -102,19 +102,17 @@ class Explorer(Built):
         super().__init__(state=state, **params)
         self.controls = Controls(state=self.state, messages=messages)
         self.lesson = Lesson(state=self.state)
-        self.scenes = {
-            name: entry.viewer(state=self.state) for name, entry in SCENE_REGISTRY.items()
+        # a scene is built when first shown (its widgets, figures and Bokeh models): a page
+        # costs the scene on screen, not all five (item 1 of docs/performance.md, "A class at
+        # once"); once built it stays rendered (a re-rendered tab, dynamic=True, left Bokeh
+        # ranges that no longer followed the units or a preset)
+        self.scenes: dict[str, Scene] = {}
+        self._holders = {
+            name: pn.Column(self._caption(name), sizing_mode="stretch_width")
+            for name in SCENE_REGISTRY
         }
         self.tabs = pn.Tabs(
-            *(
-                (
-                    SCENE_REGISTRY[name].title,
-                    pn.Column(self._caption(name), scene, sizing_mode="stretch_width"),
-                )
-                for name, scene in self.scenes.items()
-            ),
-            # all scenes stay rendered (only the one on screen computes): re-rendered tabs
-            # (dynamic=True) left Bokeh ranges that no longer followed the units or a preset
+            *((entry.title, self._holders[name]) for name, entry in SCENE_REGISTRY.items()),
             dynamic=False,
             active=SCENES.index(self.state.scene),
             sizing_mode="stretch_width",
@@ -131,7 +129,14 @@ class Explorer(Built):
             sizing_mode="stretch_width",
         )
         self._cover()
-        self.scenes[self.state.scene].active = True
+        self.scene(self.state.scene).active = True
+
+    def scene(self, name: str) -> Scene:
+        """The scene ``name``, built (and put into its tab) the first time it is asked for."""
+        if name not in self.scenes:
+            self.scenes[name] = SCENE_REGISTRY[name].viewer(state=self.state)
+            self._holders[name].append(self.scenes[name])
+        return self.scenes[name]
 
     @staticmethod
     def _caption(name: str) -> pn.pane.Markdown:
@@ -154,6 +159,7 @@ class Explorer(Built):
 
     @param.depends("state.scene", watch=True)
     def _scene_chosen(self) -> None:
+        self.scene(self.state.scene)
         for name, scene in self.scenes.items():
             scene.active = name == self.state.scene
         self.tabs.active = SCENES.index(self.state.scene)

@@ -14,7 +14,8 @@ from bokeh.document import Document
 
 import twoball
 from app.delayed_map import map_cube
-from app.explorer import Explorer
+from app.explorer import SCENE_REGISTRY, Explorer
+from app.state import SCENES
 from twoball import presets
 
 PAPER = {"eps": "0.9", "mu": "0.01", "tau_ratio": "0.01"}
@@ -27,7 +28,9 @@ def rendered(query: dict | None = None) -> Explorer:
 
 
 def computations(explorer: Explorer) -> dict[str, int]:
-    return {name: scene.computations for name, scene in explorer.scenes.items()}
+    """How often each scene computed (0 for a scene not built yet)."""
+    built = explorer.scenes
+    return {name: built[name].computations if name in built else 0 for name in SCENE_REGISTRY}
 
 
 @pytest.mark.parametrize("scene", ["drop", "closeup", "map", "stack"])
@@ -35,12 +38,14 @@ def test_a_page_opens_on_the_scene_its_url_names(scene):
     """Only that scene is on screen, computed, and its tab chosen (the query is read before
     the scenes exist, and the tab follows the state)."""
     explorer = rendered({"scene": scene})
-    assert [name for name, shown in explorer.scenes.items() if shown.active] == [scene]
-    assert explorer.tabs.active == list(explorer.scenes).index(scene)
+    assert list(explorer.scenes) == [scene]  # the others are not even built
+    assert explorer.scenes[scene].active
+    assert explorer.tabs.active == SCENES.index(scene)
     assert explorer.scenes[scene].computations == 1
     explorer.state.scene = "drop" if scene != "drop" else "map"
     assert not explorer.scenes[scene].active
-    assert explorer.tabs.active == list(explorer.scenes).index(explorer.state.scene)
+    assert explorer.scenes[explorer.state.scene].active
+    assert explorer.tabs.active == SCENES.index(explorer.state.scene)
 
 
 def test_the_stack_scene_computes_only_for_its_own_parameters():
@@ -60,13 +65,15 @@ def _models_by_scene(explorer: Explorer):
     """The explorer in a document, and the scene whose tab holds each Bokeh model."""
     from bokeh.models import Tabs
 
+    for name in SCENES:  # every scene built and rendered, as after a tour of the tabs
+        explorer.scene(name)
     document = Document()
     root = explorer.__panel__().get_root(document)
     document.add_root(root)
     tabs = next(model for model in root.references() if isinstance(model, Tabs))
     owners = {
         model.id: name
-        for name, panel in zip(explorer.scenes, tabs.tabs, strict=True)
+        for name, panel in zip(SCENE_REGISTRY, tabs.tabs, strict=True)
         for model in panel.child.references()
     }
     return document, owners
@@ -78,7 +85,7 @@ def _changed(explorer: Explorer, document: Document, owners: dict, change) -> di
     document.on_change(events.append)
     change()
     document.remove_on_change(events.append)
-    counts = dict.fromkeys(explorer.scenes, 0)
+    counts = dict.fromkeys(SCENE_REGISTRY, 0)
     for model in {getattr(event, "model", None) for event in events}:
         if model is not None and model.id in owners:
             counts[owners[model.id]] += 1
@@ -218,10 +225,10 @@ def test_a_click_on_the_map_sets_mu_and_tau_ratio_and_moves_the_sliders():
 
 def test_accuracy_computes_only_when_opened():
     explorer = rendered({"eps": "0.816", "mu": "0.05", "tau_ratio": "0.3"})
-    scene = explorer.scenes["accuracy"]
     explorer.state.mu = 0.06
-    assert scene.computations == 0 and scene.rows is None
+    assert "accuracy" not in explorer.scenes  # not even built until opened
     explorer.state.scene = "accuracy"
+    scene = explorer.scenes["accuracy"]
     assert scene.computations == 1
     exact = [r for r in scene.rows if r["method"] == "exact"]
     assert exact and exact[0]["rel_err_h1"] == 0.0
