@@ -26,14 +26,14 @@ from twoball.errors import ParameterError
 from twoball.stack import StackResult, icm_chain, simulate_stack
 from twoball.units import number_text
 
-from .controls import plain
+from .controls import ReleasedIntSlider, ReleasedSlider, plain
 from .drop import frame_times, height_axis, stage
 from .scene import Scene, readable
 
 # Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first
 PALETTE = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9")
 BALL_RADIUS = 0.05  # the bottom ball, as a fraction of the plot's height
-SAMPLES = 1500  # plotted times over the drop, plus 9 through every contact
+SAMPLES = 600  # plotted times over the drop (~2 px apart at 1366 px), plus 9 through every contact
 CAPTION_HELP = (
     "Each ball is *ratio* times as heavy as the one below it. The dotted green line is the "
     "textbook chain of independent collisions (floor first, then each pair in turn): for three "
@@ -56,16 +56,20 @@ class StackScene(Scene):
         self.times = np.zeros(1)
         state = self.state.param
         self.widgets = pn.FlexBox(  # wraps: side by side on a wide screen, stacked on a phone
-            pn.widgets.IntSlider.from_param(state.balls, name="balls N", width=260),
-            pn.widgets.FloatSlider.from_param(
+            # each recomputes the stack on release only (not at every step of a drag)
+            ReleasedIntSlider.from_param(state.balls, name="balls N", width=260, throttled=True),
+            ReleasedSlider.from_param(
                 state.stack_ratio,
                 name="mass ratio (each ball / the one below)",
                 step=0.01,
                 width=260,
+                throttled=True,
             ),
-            pn.widgets.FloatSlider.from_param(state.stack_eps, name="eps", step=0.01, width=260),
-            pn.widgets.FloatSlider.from_param(
-                state.stack_gap, name="gap td/tau_f", step=0.05, width=260
+            ReleasedSlider.from_param(
+                state.stack_eps, name="eps", step=0.01, width=260, throttled=True
+            ),
+            ReleasedSlider.from_param(
+                state.stack_gap, name="gap td/tau_f", step=0.05, width=260, throttled=True
             ),
             pn.widgets.RadioButtonGroup.from_param(state.force, name="force", width=200),
             flex_wrap="wrap",
