@@ -37,6 +37,9 @@ EXTRAS = {
     "matplotlib": "studies",
     "mpmath": "studies",
     "sksundae": "cvode",
+    "panel": "app",
+    "holoviews": "app",
+    "bokeh": "app",
 }
 
 
@@ -497,6 +500,22 @@ def _many_contacts(args: argparse.Namespace) -> int:
 
 
 # The commands, in the order --help lists them.
+def _add_serve(subparsers: argparse._SubParsersAction) -> None:
+    subparsers.add_parser(
+        "serve",
+        help="serve the classroom explorer at /app ('twoball serve --help' lists its options)",
+        add_help=False,
+    )
+
+
+def _serve(options: list[str]) -> int:
+    """``twoball serve``: Panel's serve command on the explorer (the app extra), which parses
+    its own options (twoball_app/serve.py, in the repository's app/)."""
+    from twoball_app import serve
+
+    return serve.main(options)
+
+
 COMMANDS = (
     _add_simulate,
     _add_stack,
@@ -506,6 +525,7 @@ COMMANDS = (
     _add_precision,
     _add_stability,
     _add_many_contacts,
+    _add_serve,
 )
 
 
@@ -528,7 +548,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``twoball`` console script; returns the exit status."""
+    argv = sys.argv[1:] if argv is None else argv
     try:
+        if argv[:1] == ["serve"]:
+            return _serve(argv[1:])
         args = build_parser().parse_args(argv)
         status = args.func(args)
         sys.stdout.flush()  # a closed reader is found here, not at the interpreter's exit

@@ -1,0 +1,87 @@
+"""``twoball serve``: the explorer served from wherever it is installed, at ``/app``.
+
+Panel's own ``panel serve`` command, with this directory as the app and three defaults changed
+for a class:
+
+- ``--num-procs``: every core this process may use (``os.sched_getaffinity``; a container's CPU
+  set, not the host's count). One Python process runs one session's callback at a time, so on
+  two cores one process left the second idle while a class queued.
+- ``--reuse-sessions``: the page's HTTP request is answered from a session kept per page kind
+  (:func:`page_kind`) instead of building one, and the session is built once, when the page's
+  websocket connects. With several processes the two requests may reach different processes
+  (the kernel hands each connection to any of them); without this the app was built twice for
+  one page, and the first copy lived on until it expired.
+- ``--liveness``: ``/liveness`` answers a health check (the Docker image's).
+
+Any other ``panel serve`` option is passed on (``twoball serve --help`` lists them). ``panel serve
+app`` from a clone serves the same directory at the same address.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+from panel.command.serve import Serve
+
+from twoball.errors import ParameterError
+
+APP_DIR = Path(__file__).resolve().parent
+ROUTE = "/app"  # shared links (/app?scene=map&eps=0.9) work however the explorer is served
+
+
+def page_kind(request) -> tuple[str, bool]:
+    """What the first HTML of a page depends on: its path and presentation mode (the template's
+    style sheet). Every other query value is read when the session is built."""
+    present = request.arguments.get("present", [b""])[-1].decode(errors="replace")
+    return request.path, present in ("1", "true", "yes")
+
+
+class AppServe(Serve):
+    """Panel's ``serve`` command serving :data:`APP_DIR` at :data:`ROUTE`."""
+
+    def customize_applications(self, args, applications):
+        applications = super().customize_applications(args, applications)
+        own = f"/{APP_DIR.name}"  # "/app" from a clone, "/twoball_app" when installed
+        return {ROUTE if route == own else route: app for route, app in applications.items()}
+
+
+def default_processes() -> int:
+    """The cores this process may run on."""
+    return len(os.sched_getaffinity(0))
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line and status 2 (twoball.cli.main)
+        raise ParameterError(f"serve: {message}")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="twoball serve",
+        description="Serve the classroom explorer at /app (Panel's serve command; see "
+        "'Serving a class' in the README).",
+    )
+    AppServe(parser=parser)
+    parser.set_defaults(
+        num_procs=default_processes(), reuse_sessions=True, liveness=True, port=5006
+    )
+    return parser
+
+
+def main(argv: list[str]) -> int:
+    """Run the server until it is stopped; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args([str(APP_DIR), *argv])
+    if args.num_procs < 1:
+        parser.error(f"--num-procs must be at least 1; got {args.num_procs}")
+    if args.files != [str(APP_DIR)]:
+        parser.error(f"takes no app to serve (it serves the explorer); got {args.files[1:]}")
+    AppServe(parser=argparse.ArgumentParser()).invoke(args)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
