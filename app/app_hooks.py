@@ -15,6 +15,7 @@ import logging
 import sys
 import time
 
+import panel
 import panel.io.document
 from tornado.ioloop import IOLoop
 from tornado.websocket import WebSocketClosedError
@@ -30,6 +31,14 @@ log = logging.getLogger("bokeh.twoball")
 # request whose headers exceed 64 kB, so no value has more digits than this, and int() of it
 # costs milliseconds.
 QUERY_DIGITS = 70_000
+
+
+def page_kind(request) -> tuple[str, bool]:
+    """What the HTML of a page depends on, for ``--reuse-sessions`` (``twoball serve``): its
+    path and presentation mode (the template's style sheet). Every other query value is read
+    when the page's session is built."""
+    present = request.arguments.get("present", [b""])[-1].decode(errors="replace")
+    return request.path, present in ("1", "true", "yes")
 
 
 def drop_messages_to_closed_sockets() -> None:
@@ -80,6 +89,7 @@ def on_server_loaded(server_context) -> None:
     """Serve at once on the Python kernels, compile in the background; open the map cube; drop
     messages to pages that have closed."""
     sys.set_int_max_str_digits(QUERY_DIGITS)
+    panel.config.session_key_func = page_kind
     drop_messages_to_closed_sockets()
     loop = IOLoop.current().asyncio_loop
     loop.set_exception_handler(closed_socket_handler(loop.get_exception_handler()))

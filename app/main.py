@@ -1,6 +1,7 @@
 """``panel serve app``: one Explorer per browser session, its state read from the URL."""
 
 import panel as pn
+from panel.io.resources import get_dist_path
 
 from .explorer import Explorer
 from .scene import send_without_delay
@@ -8,6 +9,13 @@ from .scene import send_without_delay
 # app/static/history.js (Bokeh serves app/static/): Back and Forward rebuild the page from
 # the URL they go to (the URL follows the state; nothing told the server when it went back)
 pn.extension(notifications=False, js_files={"history": "app/static/history.js"})
+
+# Panel's models name their style sheets on its CDN unless the document says where the server
+# serves them, which Panel writes only while it renders a session's page. A session built when
+# its websocket connects (twoball serve reuses the first page's HTML: app/serve.py) has no such
+# render, and its pages asked cdn.holoviz.org for their CSS (this app must not reach the network).
+if pn.state.curdoc is not None:
+    pn.state.curdoc.template_variables.setdefault("dist_url", get_dist_path(cdn=False))
 
 query = {key: values[-1].decode(errors="replace") for key, values in pn.state.session_args.items()}
 explorer = Explorer(query)

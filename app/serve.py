@@ -7,7 +7,7 @@ for a class:
   set, not the host's count). One Python process runs one session's callback at a time, so on
   two cores one process left the second idle while a class queued.
 - ``--reuse-sessions``: the page's HTTP request is answered from a session kept per page kind
-  (:func:`page_kind`) instead of building one, and the session is built once, when the page's
+  (``app_hooks.page_kind``) instead of building one, and the session is built once, when the page's
   websocket connects. With several processes the two requests may reach different processes
   (the kernel hands each connection to any of them); without this the app was built twice for
   one page, and the first copy lived on until it expired.
@@ -30,13 +30,6 @@ from twoball.errors import ParameterError
 
 APP_DIR = Path(__file__).resolve().parent
 ROUTE = "/app"  # shared links (/app?scene=map&eps=0.9) work however the explorer is served
-
-
-def page_kind(request) -> tuple[str, bool]:
-    """What the first HTML of a page depends on: its path and presentation mode (the template's
-    style sheet). Every other query value is read when the session is built."""
-    present = request.arguments.get("present", [b""])[-1].decode(errors="replace")
-    return request.path, present in ("1", "true", "yes")
 
 
 class AppServe(Serve):
