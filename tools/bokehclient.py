@@ -5,7 +5,8 @@ A :class:`PageClient` opens a session as a browser does (GET the page, read its 
 connect the websocket, pull the document, say it is drawn), finds a slider by its title and
 moves it as a browser does on release (a PATCH-DOC setting ``value``, then one setting
 ``value_throttled``), and records when each message from the server arrives. No rendering:
-many sessions fit in one process. Used by benchmarks/app_load.py and the app's tests (tests/app/test_app_serve.py).
+many sessions fit in one process. Used by benchmarks/app_load.py and the app's tests
+(tests/app/test_app_serve.py).
 """
 
 from __future__ import annotations
