@@ -21,7 +21,7 @@ from twoball.units import units_named
 
 from .collisions import first_collision
 from .drop import LOWER, UPPER
-from .scene import Scene, readable
+from .scene import Scene, on_screen, readable
 
 SAMPLES = 600  # over the collision, with every contact's start and end: ~2 px apart at 1366 px
 MARGIN = 0.08  # of the collision's duration, shown before and after it
@@ -83,11 +83,11 @@ class CloseUpScene(Scene):
         units = units_named(self.state.units)
         tr = self.result.trajectory
         self.samples.data = {
-            "t": tr.t * units.time,
-            "x1": tr.x1 * units.length,
-            "x2": tr.x2 * units.length,
-            "f01": tr.f01 * units.force,
-            "f12": tr.f12 * units.force,
+            "t": on_screen(tr.t * units.time),
+            "x1": on_screen(tr.x1 * units.length),
+            "x2": on_screen(tr.x2 * units.length),
+            "f01": on_screen(tr.f01 * units.force),
+            "f12": on_screen(tr.f12 * units.force),
         }
         for fig in (self.positions, self.floor_force, self.ball_force):
             fig.xaxis.axis_label = units.time_label

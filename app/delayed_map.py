@@ -31,7 +31,7 @@ import twoball
 from twoball import jit
 from twoball.sweep import compute_block
 
-from .scene import Scene, font_sizes, later
+from .scene import Scene, font_sizes, later, on_screen
 from .state import validate
 
 CUBE = "map"
@@ -288,7 +288,9 @@ class MapScene(Scene):
         log_mu = np.log10(self.slice["mu"].values)
         log_tau = np.log10(self.slice["tau_ratio"].values)
         mesh = hv.Image(
-            (log_mu, log_tau, values.values), [mu_dim, tau_dim], hv.Dimension(variable, label=label)
+            (log_mu, log_tau, on_screen(values.values)),
+            [mu_dim, tau_dim],
+            hv.Dimension(variable, label=label),
         )
         if variable in RATIO_CENTRES:
             finite = values.values[np.isfinite(values.values) & (values.values > 0)]

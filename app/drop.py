@@ -26,7 +26,7 @@ import twoball
 from twoball.units import units_named
 
 from .collisions import collisions
-from .scene import Scene, readable
+from .scene import Scene, on_screen, readable
 
 FLIGHT_FRAMES = 240  # evenly spread over the drop
 # Plotted samples, evenly spread over the drop: a parabola drawn through them is off by under
@@ -207,9 +207,9 @@ class DropScene(Scene):
         r, units = self.result, units_named(self.state.units)
         tr = self.plotted
         self.curves.data = {
-            "t": tr.t * units.time,
-            "x1": tr.x1 * units.length,
-            "x2": tr.x2 * units.length,
+            "t": on_screen(tr.t * units.time),
+            "x1": on_screen(tr.x1 * units.length),
+            "x2": on_screen(tr.x2 * units.length),
         }
         self.apexes.data = {
             "t": np.array(r.apex_t) * units.time,
@@ -251,9 +251,9 @@ class DropScene(Scene):
         if self.trails.value:
             past = tr.t <= at
             self.trail.data = {
-                "t": tr.t[past],
-                "x1": tr.x1[past] * units.length + 2 * r1,
-                "x2": tr.x2[past] * units.length + 2 * (r1 + r2),
+                "t": on_screen(tr.t[past]),
+                "x1": on_screen(tr.x1[past] * units.length + 2 * r1),
+                "x2": on_screen(tr.x2[past] * units.length + 2 * (r1 + r2)),
             }
         elif len(self.trail.data["t"]):
             self.trail.data = {"t": [], "x1": [], "x2": []}

@@ -66,6 +66,10 @@ SCENE_REGISTRY = {
 }
 assert tuple(SCENE_REGISTRY) == SCENES
 
+COVER_TEXT = (
+    "**Predict first.** Answer the lesson's question (in the Lesson card, beside the scene or "
+    "below it on a phone), then press *Reveal the answer*: the drop appears here."
+)
 URL_DELAY_MS = 300
 # a phone or a narrow window: the controls above the scenes, each the full width
 PAGE_CSS = """
@@ -107,10 +111,7 @@ class Explorer(Built):
         # once"); once built it stays rendered (a re-rendered tab, dynamic=True, left Bokeh
         # ranges that no longer followed the units or a preset)
         self.scenes: dict[str, Scene] = {}
-        self._holders = {
-            name: pn.Column(self._caption(name), sizing_mode="stretch_width")
-            for name in SCENE_REGISTRY
-        }
+        self._holders = {name: pn.Column(sizing_mode="stretch_width") for name in SCENE_REGISTRY}
         self.tabs = pn.Tabs(
             *((entry.title, self._holders[name]) for name, entry in SCENE_REGISTRY.items()),
             dynamic=False,
@@ -121,13 +122,7 @@ class Explorer(Built):
             stylesheets=[":host(.bk-above) .bk-headers-wrapper { flex-wrap: wrap; }"],
         )
         self.tabs.param.watch(self._tab_chosen, "active")
-        self.cover = pn.pane.Alert(
-            "**Predict first.** Answer the lesson's question (in the Lesson card, beside the "
-            "scene or below it on a phone), then press *Reveal the answer*: the drop appears "
-            "here.",
-            alert_type="info",
-            sizing_mode="stretch_width",
-        )
+        self.cover = pn.pane.Alert(alert_type="info", sizing_mode="stretch_width")
         self._cover()
         self.scene(self.state.scene).active = True
 
@@ -135,7 +130,7 @@ class Explorer(Built):
         """The scene ``name``, built (and put into its tab) the first time it is asked for."""
         if name not in self.scenes:
             self.scenes[name] = SCENE_REGISTRY[name].viewer(state=self.state)
-            self._holders[name].append(self.scenes[name])
+            self._holders[name].extend([self._caption(name), self.scenes[name]])
         return self.scenes[name]
 
     @staticmethod
@@ -154,6 +149,8 @@ class Explorer(Built):
         """A lesson step's scene stays covered until its answer is revealed (it would give the
         answer away); it keeps computing underneath, so it shows at once."""
         covered = self.state.step > 0 and not self.state.revealed
+        if covered:  # (its text is sent only to a page that follows the lesson)
+            self.cover.object = COVER_TEXT
         self.cover.visible = covered
         self.tabs.visible = not covered
 

@@ -12,6 +12,9 @@ for a class:
   (the kernel hands each connection to any of them); without this the app was built twice for
   one page, and the first copy lived on until it expired.
 - ``--liveness``: ``/liveness`` answers a health check (the Docker image's).
+- ``--websocket-compression-level 1``: messages are deflated (browsers offer permessage-deflate);
+  a page's first document crosses the network in about a fifth of its size, for a fraction of a
+  millisecond of zlib's fastest level (benchmarks/app_load.py).
 
 Any other ``panel serve`` option is passed on (``twoball serve --help`` lists them). ``panel serve
 app`` from a clone serves the same directory at the same address.
@@ -59,7 +62,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     AppServe(parser=parser)
     parser.set_defaults(
-        num_procs=default_processes(), reuse_sessions=True, liveness=True, port=5006
+        num_procs=default_processes(),
+        reuse_sessions=True,
+        liveness=True,
+        port=5006,
+        websocket_compression_level=1,
     )
     return parser
 

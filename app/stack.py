@@ -28,12 +28,14 @@ from twoball.units import number_text
 
 from .controls import ReleasedIntSlider, ReleasedSlider, plain
 from .drop import frame_times, height_axis, stage
-from .scene import Scene, readable
+from .scene import Scene, on_screen, readable
 
 # Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first
 PALETTE = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9")
 BALL_RADIUS = 0.05  # the bottom ball, as a fraction of the plot's height
-SAMPLES = 600  # plotted times over the drop (~2 px apart at 1366 px), plus 9 through every contact
+SAMPLES = (
+    400  # plotted times over the drop (as app/drop.py's PLOTTED), plus 9 through every contact
+)
 CAPTION_HELP = (
     "Each ball is *ratio* times as heavy as the one below it. The dotted green line is the "
     "textbook chain of independent collisions (floor first, then each pair in turn): for three "
@@ -179,9 +181,9 @@ class StackScene(Scene):
             return
         tr = r.trajectory
         n = r.stack.balls
-        data = {"t": tr.t}
-        for ball in range(len(PALETTE)):
-            data[f"x{ball}"] = tr.x[:, ball] if ball < n else np.full(tr.t.size, np.nan)
+        data = {"t": on_screen(tr.t)}
+        for ball in range(len(PALETTE)):  # (every line's column, NaN for a ball not there)
+            data[f"x{ball}"] = on_screen(tr.x[:, ball] if ball < n else np.full(tr.t.size, np.nan))
         self.curves.data = data
         for ball, item in enumerate(self.legend.items):
             item.visible = ball < n

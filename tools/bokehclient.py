@@ -15,6 +15,8 @@ import asyncio
 import itertools
 import json
 import re
+import socket
+import struct
 import time
 from dataclasses import dataclass, field
 
@@ -23,6 +25,7 @@ from tornado.websocket import websocket_connect
 
 TOKEN = re.compile(r'"token":\s*"([^"]+)"')
 _ids = itertools.count(1)
+TCP_INFO_BYTES_RECEIVED = 128  # offset of tcpi_bytes_received in struct tcp_info (linux/tcp.h)
 
 
 @dataclass
@@ -60,7 +63,8 @@ class PageClient:
 
     url: str
     opened: float = float("nan")  # seconds from the GET to the document pulled
-    document_bytes: int = 0  # the pulled document's JSON
+    document_bytes: int = 0  # the pulled document: its JSON and its binary buffers
+    document_wire_bytes: int = 0  # what the page received for it on the socket (compressed)
     models: dict[str, dict] = field(default_factory=dict)
     patches: list[Patch] = field(default_factory=list)
     errors: list[str] = field(default_factory=list)
@@ -80,15 +84,21 @@ class PageClient:
             headers={"Origin": f"http://{host}"},
             request_timeout=timeout,
         )
-        self._socket = await websocket_connect(request, subprotocols=["bokeh", token])
+        self._socket = await websocket_connect(
+            request,
+            subprotocols=["bokeh", token],
+            compression_options={},  # as browsers offer
+        )
         # a message is several frames: without TCP_NODELAY each frame after the first waits for
         # the server's delayed ACK (~40 ms); browsers send theirs at once
         self._socket.stream.set_nodelay(True)
         self._replies = asyncio.Queue()
         self._reader = asyncio.ensure_future(self._read())
         await self._expect("ACK", timeout)
+        before = self.received()
         await self._send("PULL-DOC-REQ", {})
         reply = await self._expect("PULL-DOC-REPLY", timeout)
+        self.document_wire_bytes = self.received() - before
         self.models = models_of(reply["doc"])
         self.opened = time.monotonic() - start
         # what BokehJS sends once the page is drawn (Panel's pn.state.onload callbacks run then)
@@ -113,9 +123,10 @@ class PageClient:
             await self._socket.read_message()  # metadata
             text = await self._socket.read_message()
             content = json.loads(text)
+            buffers = 0
             for _ in range(header.get("num_buffers", 0)):
                 await self._socket.read_message()
-                await self._socket.read_message()
+                buffers += len(await self._socket.read_message())
             arrived = time.monotonic()
             if header["msgtype"] == "PATCH-DOC":
                 events = content.get("events", [])
@@ -125,7 +136,7 @@ class PageClient:
                 self.errors.append(content.get("text", str(content)))
             else:
                 if header["msgtype"] == "PULL-DOC-REPLY":
-                    self.document_bytes = len(text)
+                    self.document_bytes = len(text) + buffers
                 await self._replies.put((header["msgtype"], content))
 
     async def _expect(self, msgtype: str, timeout: float) -> dict:
@@ -133,6 +144,12 @@ class PageClient:
             kind, content = await asyncio.wait_for(self._replies.get(), timeout)
             if kind == msgtype:
                 return content
+
+    def received(self) -> int:
+        """Bytes received on the websocket's TCP connection so far (Linux TCP_INFO's
+        tcpi_bytes_received): what crossed the network, after compression."""
+        raw = self._socket.stream.socket.getsockopt(socket.IPPROTO_TCP, socket.TCP_INFO, 256)
+        return struct.unpack_from("<Q", raw, TCP_INFO_BYTES_RECEIVED)[0]
 
     def find(self, name: str, **attributes: object) -> str:
         """The id of the one model of type ``name`` whose attributes include ``attributes``."""
