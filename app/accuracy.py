@@ -18,7 +18,7 @@ from bokeh.palettes import Category10
 
 from twoball.studies.precision import work_precision
 
-from .scene import Scene, font_sizes
+from .scene import AnsweringMarkdown, Scene, font_sizes
 
 ERROR_FLOOR = 1e-17  # a relative error of 0 (the exact solver against itself) is drawn here
 FAILED_ERROR = 10.0  # where failed runs and missed bounces are drawn
@@ -50,7 +50,8 @@ class AccuracyScene(Scene):
         )
         # what is being computed, said in words (Panel's loading overlay, set back from the
         # computation's callback, sometimes stayed on in the browser though the plots arrived)
-        self.status = pn.pane.Markdown("", sizing_mode="stretch_width")
+        # ("Computing..." answers a move)
+        self.status = AnsweringMarkdown("", sizing_mode="stretch_width")
         self.view = pn.Column(
             self.status,
             pn.pane.Markdown(

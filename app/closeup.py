@@ -21,7 +21,7 @@ from twoball.units import units_named
 
 from .collisions import first_collision
 from .drop import LOWER, UPPER
-from .scene import Scene, on_screen, readable
+from .scene import Scene, answers_pending, on_screen, readable
 
 SAMPLES = 600  # over the collision, with every contact's start and end: ~2 px apart at 1366 px
 MARGIN = 0.08  # of the collision's duration, shown before and after it
@@ -47,6 +47,7 @@ class CloseUpScene(Scene):
             sizing_mode="stretch_width",
         )
         self.samples = ColumnDataSource({"t": [], "x1": [], "x2": [], "f01": [], "f12": []})
+        answers_pending(self.samples)
         self.positions = self._figure("Positions (negative: compressed)", 300)
         self.positions.line(
             "t", "x1", source=self.samples, color=LOWER, line_width=2, legend_label="X1 lower ball"

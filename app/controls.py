@@ -12,11 +12,11 @@ import re
 
 import panel as pn
 import param
-from bokeh.models import CustomJSTickFormatter
+from bokeh.models import CustomJS, CustomJSTickFormatter
 
 from twoball import presets
 
-from .scene import Built, later
+from .scene import PENDING_JS, Built, later
 from .state import APP_RANGES, ExplorerState, validate
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
@@ -49,22 +49,32 @@ ball): up to 9 times the drop height for elastic balls and a very light upper ba
 """
 
 
-class ReleasedSlider(pn.widgets.FloatSlider):
-    """A slider whose release is handled at once.
+class Released:
+    """A slider whose release is handled at once, and marks the page as waiting for it.
 
     Panel waits 50 ms (``Syncable._debounce``) after every change from the browser, to take a
     drag's stream of ``value`` changes as one. The explorer reads only ``value_throttled``, sent
     once on release, so the wait only delayed every redraw by 50 ms (tools/bokehclient.py
-    measures it: a move's patch 57 ms after the release with the wait, 7 ms without).
+    measures it: a move's patch 57 ms after the release with the wait, 7 ms without). The
+    release also marks the page as waiting (:data:`scene.PENDING_JS`), in the browser: Panel's
+    ``jscallback`` cannot bind ``value_throttled`` (it syncs no such property), so the callback
+    goes on the Bokeh model, which has it.
     """
 
     _debounce = 0
 
+    def _get_model(self, doc, root=None, parent=None, comm=None):
+        model = super()._get_model(doc, root, parent, comm)
+        model.js_on_change("value_throttled", CustomJS(code=PENDING_JS))
+        return model
 
-class ReleasedIntSlider(pn.widgets.IntSlider):
-    """:class:`ReleasedSlider` for whole numbers."""
 
-    _debounce = 0
+class ReleasedSlider(Released, pn.widgets.FloatSlider):
+    """:class:`Released` for real numbers."""
+
+
+class ReleasedIntSlider(Released, pn.widgets.IntSlider):
+    """:class:`Released` for whole numbers."""
 
 
 class Controls(Built):

@@ -31,7 +31,7 @@ import twoball
 from twoball import jit
 from twoball.sweep import compute_block
 
-from .scene import Scene, font_sizes, later, on_screen
+from .scene import AnsweringMarkdown, Scene, answers_pending, font_sizes, later, on_screen
 from .state import validate
 
 CUBE = "map"
@@ -144,17 +144,17 @@ class MapScene(Scene):
             label="Colour by", options={variable_label(v): v for v in SHOWN}, value=self.variable
         )
         self.choice.link(self, value="variable")
-        self.note = pn.pane.Markdown(
+        self.note = AnsweringMarkdown(  # (rewritten with every slice and star move)
             pn.bind(self._note, self.param.revision, self.param.moved, self.param.active),
             sizing_mode="stretch_width",
         )
         self.tap: hv.streams.Tap | None = None
         # the star (current mu, tau_ratio): a glyph of its own on the figure, moved by its data
         # alone; as a HoloViews layer each move re-rendered the whole overlay (~120 ms of
-        # server CPU), and bound to mu directly it did so on every scene
-        self.star = ColumnDataSource(
-            {"x": [math.log10(self.state.mu)], "y": [math.log10(self.state.tau_ratio)]}
-        )
+        # server CPU), and bound to mu directly it did so on every scene. Each figure gets a
+        # source of its own (:meth:`_draw_star`): one shared by an old and a new figure was, in
+        # the browser, dropped with the old one ("reference ... isn't known" on the next move).
+        self.star: ColumnDataSource | None = None
         # a new figure per variable (its colour scale and label change); within one, the
         # figure's DynamicMaps follow the state
         self.figure = pn.pane.HoloViews(
@@ -193,20 +193,31 @@ class MapScene(Scene):
             self._move_star()
         super()._redraw()
 
+    def _star_position(self) -> dict[str, list[float]]:
+        """The current mu and tau_ratio where the map draws them (log10)."""
+        return {"x": [math.log10(self.state.mu)], "y": [math.log10(self.state.tau_ratio)]}
+
     def _move_star(self) -> None:
-        """The star to the current mu and tau_ratio (the map is drawn in log10), and the note."""
-        self.star.data = {
-            "x": [math.log10(self.state.mu)],
-            "y": [math.log10(self.state.tau_ratio)],
-        }
+        """The star to the current mu and tau_ratio, and the note.
+
+        Only a real move is sent. Bokeh sends a new ``data`` even when equal, and on the map's
+        first visit that change reached the browser before the figure holding the star did
+        (built with the star already in place by :meth:`_draw_star`): "reference ... isn't
+        known" in the browser's console."""
+        position = self._star_position()
+        if self.star is not None and dict(self.star.data) != position:
+            self.star.data = position
         self.param.trigger("moved")
 
     def _draw_star(self, plot, element) -> None:
-        """HoloViews hook: the star's glyph on the map's Bokeh figure, once per figure."""
+        """HoloViews hook: the star's glyph on the map's Bokeh figure, once per figure, with a
+        source of its own."""
         figure = plot.state
-        if not any(getattr(r, "data_source", None) is self.star for r in figure.renderers):
+        if not any(getattr(r, "name", None) == "star" for r in figure.renderers):
+            self.star = ColumnDataSource(self._star_position())
+            answers_pending(self.star)
             figure.scatter(
-                "x", "y", source=self.star, marker="star", size=18,
+                "x", "y", source=self.star, marker="star", size=18, name="star",
                 fill_color="yellow", line_color="black",
             )  # fmt: skip
 

@@ -26,7 +26,7 @@ import twoball
 from twoball.units import units_named
 
 from .collisions import collisions
-from .scene import Scene, on_screen, readable
+from .scene import Scene, answers_pending, on_screen, readable
 
 FLIGHT_FRAMES = 240  # evenly spread over the drop
 # Plotted samples, evenly spread over the drop: a parabola drawn through them is off by under
@@ -115,6 +115,7 @@ class DropScene(Scene):
         self.player.link(self, value="frame")
         self.summary = pn.pane.Markdown(sizing_mode="stretch_width")
         self.curves = ColumnDataSource({"t": [], "x1": [], "x2": []})
+        answers_pending(self.curves)
         self.apexes = ColumnDataSource({"t": [], "h": [], "text": []})
         self.balls = ColumnDataSource(
             {"x": [0.0, 0.0], "y": [0.0, 0.0], "r": [0.05, 0.02], "color": [LOWER, UPPER]}

@@ -6,6 +6,7 @@ import holoviews as hv
 import numpy as np
 import panel as pn
 import param
+from bokeh.models import CustomJS
 
 from .state import ExplorerState
 
@@ -114,6 +115,37 @@ class Scene(Built):
 
     def update(self) -> None:
         raise NotImplementedError
+
+
+# A change the server has not answered yet: a slider's release marks the page (a class on its
+# body: the plots dim and a banner says so, PAGE_CSS in explorer.py) until the scene's data
+# arrive, all in the browser (nothing sent back). With a class moving sliders at once the server
+# may be seconds behind; stale plots must not look current. A change that brings no new data
+# (e.g. a value the slider already had) clears it after 30 s.
+PENDING_JS = """
+document.body.classList.add("twoball-pending");
+clearTimeout(window.twoballPending);
+window.twoballPending = setTimeout(() => document.body.classList.remove("twoball-pending"), 30000);
+"""
+ANSWERED_JS = 'document.body.classList.remove("twoball-pending");'
+
+
+def answers_pending(source) -> None:
+    """A Bokeh ColumnDataSource whose new data answer the last change (the page is current)."""
+    source.js_on_change("data", CustomJS(code=ANSWERED_JS))
+
+
+class AnsweringMarkdown(pn.pane.Markdown):
+    """A Markdown pane whose new text answers the last change (as :func:`answers_pending`).
+
+    The callback goes on the pane's Bokeh model: Panel's ``jscallback`` on a pane added to a page
+    already shown (a scene built when first visited) sent a CustomJS the browser could not
+    resolve ("reference ... isn't known", then "Cannot read properties of undefined")."""
+
+    def _get_model(self, doc, root=None, parent=None, comm=None):
+        model = super()._get_model(doc, root, parent, comm)
+        model.js_on_change("text", CustomJS(code=ANSWERED_JS))
+        return model
 
 
 def on_screen(values) -> np.ndarray:

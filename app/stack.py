@@ -28,7 +28,7 @@ from twoball.units import number_text
 
 from .controls import ReleasedIntSlider, ReleasedSlider, plain
 from .drop import frame_times, height_axis, stage
-from .scene import Scene, on_screen, readable
+from .scene import Scene, answers_pending, on_screen, readable
 
 # Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first
 PALETTE = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9")
@@ -91,6 +91,7 @@ class StackScene(Scene):
         self.player.link(self, value="frame")
         self.summary = pn.pane.Markdown(sizing_mode="stretch_width")
         self.curves = ColumnDataSource({"t": []})
+        answers_pending(self.curves)
         self.apexes = ColumnDataSource({"t": [], "h": [], "text": []})
         self.balls_drawn = ColumnDataSource({"x": [], "y": [], "r": [], "color": []})
         self.icm_line = Span(
