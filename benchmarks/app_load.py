@@ -266,6 +266,8 @@ async def run(label: str, command: list[str], url: str, port: int, args, log: Pa
             )
         errors = server_errors(log)
         print(f"{label}: server log errors: {len(errors)}", flush=True)
+        for error in errors[:2]:
+            print("   ", error[:1500], flush=True)
     finally:
         process.terminate()
         process.wait(timeout=30)
