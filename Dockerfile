@@ -18,18 +18,19 @@ ENV PYTHONDONTWRITEBYTECODE=1 \
 COPY requirements/app.txt /opt/twoball/requirements/app.txt
 RUN python3 -m venv /opt/venv && pip install --quiet -r /opt/twoball/requirements/app.txt
 
-# The package (a plain install: the cubes travel inside it), then its compiled solver, cached
-# for the user the image runs as (uid 1000); another uid, or a read-only root, gets a copy of
-# the cache in /tmp (twoball/jit.py), and a new CPU compiles while the page is served.
+# The package with its app (a plain install: the cubes and the explorer travel inside it), then
+# its compiled solver, cached for the user the image runs as (uid 1000); another uid, or a
+# read-only root, gets a copy of the cache in /tmp (twoball/jit.py), and a new CPU compiles
+# while the page is served. The image serves as a teacher does: `twoball serve` (app/start.sh).
 WORKDIR /opt/twoball
 COPY pyproject.toml README.md ./
 COPY twoball ./twoball
-RUN pip install --quiet --no-deps . && rm -rf build twoball \
-    && python -c "from twoball import jit; jit.warm_up()" && chown -R 1000:1000 "$NUMBA_CACHE_DIR"
 COPY app ./app
+RUN pip install --quiet --no-deps . && cp app/start.sh /opt/start.sh && rm -rf build twoball app \
+    && python -c "from twoball import jit; jit.warm_up()" && chown -R 1000:1000 "$NUMBA_CACHE_DIR"
 
 USER 1000:1000
 EXPOSE 5006
 HEALTHCHECK --interval=5s --timeout=3s --start-period=60s --retries=3 \
     CMD python -c "import os, urllib.request; urllib.request.urlopen('http://127.0.0.1:%s/liveness' % os.environ['PORT'], timeout=2)"
-CMD ["sh", "app/start.sh"]
+CMD ["sh", "/opt/start.sh"]

@@ -1,10 +1,12 @@
 #!/bin/sh
-# Serve the explorer on 0.0.0.0:$PORT (default 5006) to browsers that open it as
-# $ALLOWED_ORIGIN (host[:port], default localhost:5006); /liveness answers the health check.
-# Run from the directory that holds app/ (the Dockerfile's CMD, the README and the tests).
+# The image's entry (Dockerfile CMD): `twoball serve`, the command a teacher runs, on
+# 0.0.0.0:$PORT (default 5006) for browsers that open it as $ALLOWED_ORIGIN (host[:port], default
+# localhost:5006), on $NUM_PROCS processes (default: every core the container may run on, as
+# twoball serve decides; set it when a CPU quota, --cpus, gives fewer cores than the host has).
+# /liveness answers the health check.
 set -eu
-exec panel serve app \
+exec twoball serve \
     --address 0.0.0.0 \
     --port "${PORT:-5006}" \
     --allow-websocket-origin "${ALLOWED_ORIGIN:-localhost:5006}" \
-    --liveness
+    ${NUM_PROCS:+--num-procs "$NUM_PROCS"}
