@@ -4,6 +4,7 @@ numba's cache goes when the usual places cannot be written."""
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import subprocess
@@ -148,3 +149,32 @@ def test_a_child_process_uses_the_parents_kernel_cache(tmp_path):
     )
     assert child.returncode == 0, child.stderr
     assert child.stdout.strip() == keyed
+
+
+def test_one_compiler_at_a_time_per_cache():
+    """The processes of ``twoball serve --num-procs N`` start together on a new machine: their
+    compilers take turns on the cache (a lock file in it), so a second one waits without using
+    a core and then finds the machine code there. Holding the lock here, a server's compiler
+    must wait; released, it finishes."""
+    from twoball import jit
+
+    if not isinstance(jit.CACHE_DIR, Path):
+        pytest.skip("no disk cache can be written here, so no compiler process to serialise")
+    jit.CACHE_DIR.mkdir(parents=True, exist_ok=True)
+    script = (
+        "from twoball import jit\n"
+        "thread = jit.compile_in_background()\n"
+        "thread.join(timeout=6)\n"
+        "print(jit.state, flush=True)\n"
+        "thread.join(timeout=300)\n"
+        "print(jit.state, flush=True)\n"
+    )
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(jit.CACHE_DIR)}
+    with open(jit.CACHE_DIR / "compiling.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        server = subprocess.Popen(
+            [sys.executable, "-c", script], env=env, stdout=subprocess.PIPE, text=True
+        )
+        assert server.stdout.readline().strip() == "compiling"  # waiting for the lock
+    assert server.stdout.readline().strip() == "compiled"
+    assert server.wait(timeout=60) == 0

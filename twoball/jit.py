@@ -176,11 +176,15 @@ def compile_in_background(done: Callable[[], None] | None = None) -> threading.T
         global state
         state = "compiling"
         if CACHING:
-            outcome = subprocess.run(  # niced: the pages being served come first
-                [sys.executable, "-c", f"import os; os.nice(10); {WARM_UP}"],
-                capture_output=True,
-                text=True,
+            # niced: the pages being served come first; one compiler at a time per cache (the
+            # processes of `twoball serve --num-procs N` start together: the others wait on
+            # the lock without using a core, then find the cache filled)
+            lock = CACHE_DIR / "compiling.lock"
+            script = (
+                f"import fcntl, os; os.nice(10); lock = open({str(lock)!r}, 'w'); "
+                f"fcntl.flock(lock, fcntl.LOCK_EX); {WARM_UP}"
             )
+            outcome = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
             if outcome.returncode != 0:
                 log.warning("compiling the kernels failed: %s", outcome.stderr.strip()[-2000:])
         use_compiled_kernels()
