@@ -1,4 +1,4 @@
-"""Benchmark: the server's CPU for one slider move, per scene, without a browser (issue 9: a class
+"""Benchmark: the server's CPU for one slider move, per scene, without a browser (a class
 of 40 moving sliders at once costs the server 40 times this).
 
 Builds the explorer's page in a Bokeh document, as ``panel serve`` does for a session, and

@@ -1,4 +1,4 @@
-"""Benchmark: from a slider move to updated plots in the browser (issue 5; target: median
+"""Benchmark: from a slider move to updated plots in the browser (target: median
 under 250 ms on the 2-core development machine).
 
 Serves the app (``panel serve app``) and, as a baseline in the same run, a minimal Panel app

@@ -1,4 +1,4 @@
-"""Benchmark: the server with 20 sessions open at once, each moving sliders (issue 5).
+"""Benchmark: the server with 20 sessions open at once, each moving sliders.
 
 Serves the app (``panel serve app``, one process), opens 20 Chromium pages on the drop scene,
 then for a bounded number of rounds moves one slider in every page at once and waits until all
