@@ -16,6 +16,7 @@ mesh).
 from __future__ import annotations
 
 import functools
+import io
 import math
 import weakref
 
@@ -33,6 +34,7 @@ from twoball.sweep import compute_block
 
 from .scene import AnsweringMarkdown, Scene, answers_pending, font_sizes, later, on_screen
 from .state import validate
+from .worksheet import slice_csv
 
 CUBE = "map"
 SHOWN = ("h2_over_h1", "h1_over_icm", "h1_over_drop", "h2_over_drop", "contacts_first")
@@ -144,6 +146,9 @@ class MapScene(Scene):
             label="Colour by", options={variable_label(v): v for v in SHOWN}, value=self.variable
         )
         self.choice.link(self, value="variable")
+        self.download = pn.widgets.FileDownload(  # written when clicked
+            callback=self._csv, filename="map.csv", label="Download this map (CSV)", embed=False
+        )
         self.note = AnsweringMarkdown(  # (rewritten with every slice and star move)
             pn.bind(self._note, self.param.revision, self.param.moved, self.param.active),
             sizing_mode="stretch_width",
@@ -342,6 +347,21 @@ class MapScene(Scene):
         )
         return contours(flags, levels=[0.5]).opts(color="black", line_width=1.5)
 
+    def _csv(self) -> io.StringIO:
+        """The slice on screen for a worksheet (app/worksheet.py)."""
+        self.current()
+        if self.slice is None:  # (the note says why)
+            return io.StringIO(f"# {self.error}\n")
+        s = self.state
+        about = {
+            "eps": self.slice_eps,
+            "H": s.height if self.computed else map_cube().attrs.get("height"),
+            "eps12": (s.eps12 if self.computed else None) or "equal to eps",
+            "source": "computed for this drop" if self.computed else "the shipped map cube",
+            "variable": variable_label(self.variable),
+        }
+        return io.StringIO(slice_csv(self.slice, self.variable, about))
+
     def _tapped(self, *events: param.parameterized.Event) -> None:
         tap = events[0].obj
         if tap.x is None or tap.y is None:
@@ -352,7 +372,7 @@ class MapScene(Scene):
 
     def layout(self) -> pn.viewable.Viewable:
         return pn.Column(
-            pn.Row(self.choice),
+            pn.Row(self.choice, self.download),
             self.note,
             self.figure,
             sizing_mode="stretch_width",

@@ -7,6 +7,8 @@ see benchmarks/app_latency.py). The run is asked for until the second apex only.
 
 from __future__ import annotations
 
+import io
+
 import numpy as np
 import panel as pn
 import param
@@ -27,6 +29,7 @@ from twoball.units import units_named
 
 from .collisions import collisions
 from .scene import Scene, answers_pending, on_screen, readable
+from .worksheet import drop_csv
 
 FLIGHT_FRAMES = 240  # evenly spread over the drop
 # Plotted samples, evenly spread over the drop: a parabola drawn through them is off by under
@@ -113,6 +116,9 @@ class DropScene(Scene):
         self.trails = pn.widgets.Checkbox(label="trails (the path of each ball's top)")
         self.trails.param.watch(self._show_frame, "value")
         self.player.link(self, value="frame")
+        self.download = pn.widgets.FileDownload(  # written when clicked, not at every move
+            callback=self._csv, filename="drop.csv", label="Download this drop (CSV)", embed=False
+        )
         self.summary = pn.pane.Markdown(sizing_mode="stretch_width")
         self.curves = ColumnDataSource({"t": [], "x1": [], "x2": []})
         answers_pending(self.curves)
@@ -265,6 +271,12 @@ class DropScene(Scene):
             "  slow motion" if slow else ""
         )
 
+    def _csv(self) -> io.StringIO:
+        """The drop on screen for a worksheet (app/worksheet.py)."""
+        self.current()
+        units = units_named(self.state.units)
+        return io.StringIO(drop_csv(self.result, self.plotted, units))
+
     def _summary_text(self) -> str:
         r, units = self.result, units_named(self.state.units)
         if not r.success:
@@ -304,7 +316,13 @@ class DropScene(Scene):
             self.summary,
             plots,
             # wraps: on a phone a row squeezed the player until its first buttons left the screen
-            pn.FlexBox(self.player, self.trails, flex_wrap="wrap", sizing_mode="stretch_width"),
+            pn.FlexBox(
+                self.player,
+                self.trails,
+                self.download,
+                flex_wrap="wrap",
+                sizing_mode="stretch_width",
+            ),
             pn.pane.Markdown(PLAYER_HELP, sizing_mode="stretch_width"),
             sizing_mode="stretch_width",
         )

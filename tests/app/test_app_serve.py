@@ -303,10 +303,15 @@ def test_the_installed_package_serves_the_explorer(browser, artifacts, tmp_path)
     context, page, errors = open_page(
         browser, f"{served.base}/app?scene=map&eps=0.9", viewport=(1366, 768)
     )
-    outside: list[str] = []
+    outside: list[str] = []  # requests over the network to anywhere but the server
     page.on(
         "request",
-        lambda r: outside.append(r.url) if not r.url.startswith(served.base) else None,
+        lambda r: (
+            outside.append(r.url)
+            if urlparse(r.url).scheme in ("http", "https", "ws", "wss")
+            and not r.url.startswith((served.base, served.base.replace("http", "ws")))
+            else None
+        ),
     )
     try:
         assert "scene=map" in page.url and "eps=0.9" in page.url
