@@ -198,9 +198,17 @@ async def cycles(url: str, count: int, rounds: int, pid: int, settle: float) -> 
     return sizes
 
 
-def start_server(command: list[str], port: int, log: Path):
+def start_server(command: list[str], port: int, log: Path, processes: int, compiles: bool):
+    """Start the server and wait until it serves, and (``compiles``) until each of its
+    processes has its compiled kernels in use: their loading from the disk cache, in a thread
+    and a child process, is a start's cost, not a move's."""
     process = serve(command, log)
     wait_until_served(f"http://127.0.0.1:{port}/liveness", process, timeout=300)
+    deadline = time.monotonic() + 600
+    while compiles and log.read_text().count("compiled kernels in use") < processes:
+        if time.monotonic() > deadline:
+            raise RuntimeError("the server's kernels were not in use within 600 s")
+        time.sleep(0.5)
     return process
 
 
@@ -223,7 +231,7 @@ def minimal_serve(port: int, num_procs: int, script: Path) -> list[str]:
 
 
 async def run(label: str, command: list[str], url: str, port: int, args, log: Path) -> None:
-    process = start_server(command, port, log)
+    process = start_server(command, port, log, args.num_procs, label == "twoball")
     try:
         await _close(await open_burst(url, 2))  # each process's first page (imports, caches)
         await asyncio.sleep(1.0)
