@@ -6,9 +6,13 @@ from panel.io.resources import get_dist_path
 from .explorer import Explorer
 from .scene import send_without_delay
 
-# app/static/history.js (Bokeh serves app/static/): Back and Forward rebuild the page from
-# the URL they go to (the URL follows the state; nothing told the server when it went back)
-pn.extension(notifications=False, js_files={"history": "app/static/history.js"})
+# app/static/ (Bokeh serves it): history.js, Back and Forward rebuild the page from the URL they
+# go to (the URL follows the state; nothing told the server when it went back); keys.js, a
+# presentation clicker's keys drive the lesson
+pn.extension(
+    notifications=False,
+    js_files={"history": "app/static/history.js", "keys": "app/static/keys.js"},
+)
 
 # Panel's models name their style sheets on its CDN unless the document says where the server
 # serves them, which Panel writes only while it renders a session's page. A session built when

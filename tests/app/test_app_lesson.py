@@ -126,3 +126,39 @@ def test_every_step_opens_from_its_url(browser, app_server, artifacts, size):
             assert errors == []
         finally:
             context.close()
+
+
+@pytest.mark.browser
+def test_a_presentation_clicker_drives_the_lesson(browser, app_server, artifacts):
+    """PageDown reveals the answer once a prediction is chosen, then goes on; PageUp goes back;
+    the right and left arrows do the same; a key that belongs to the focused field (typing in
+    the drop height, an arrow on a slider) is left to it."""
+    base, _ = app_server
+    context, page, errors = open_page(
+        browser, f"{base}/app?step=1&present=1", viewport=SIZES["projector"]
+    )
+    title = "Step {} of " + str(len(STEPS))
+    try:
+        page.get_by_text(STEPS[0].choices[STEPS[0].answer], exact=True).click()
+        expect(page.get_by_role("button", name="Reveal the answer")).to_be_enabled()
+        page.keyboard.press("PageDown")
+        page.get_by_text("Right.").wait_for()  # revealed
+        page.keyboard.press("PageDown")
+        page.get_by_text(title.format(2)).wait_for()
+        page.keyboard.press("PageUp")
+        page.get_by_text(title.format(1)).wait_for()
+        page.keyboard.press("ArrowRight")  # (step 1 was revealed: the answer is kept)
+        page.get_by_text(title.format(2)).wait_for()
+        page.keyboard.press("ArrowLeft")
+        page.get_by_text(title.format(1)).wait_for()
+        # the drop height's text field keeps its keys
+        page.get_by_text("advanced", exact=True).click()
+        field = page.get_by_label("H (dimensionless drop height)")
+        field.click()
+        page.keyboard.press("PageDown")
+        page.keyboard.press("ArrowRight")
+        page.wait_for_timeout(1000)
+        expect(page.get_by_text(title.format(1))).to_be_visible()
+        assert errors == []
+    finally:
+        context.close()
