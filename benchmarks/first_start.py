@@ -1,8 +1,9 @@
-"""The explorer's first start with an empty numba cache: seconds from ``panel serve app`` to the
-first page with plots, then the time each new page takes while the solver compiles in the
+"""The explorer's first start with an empty numba cache: seconds from ``twoball serve`` (every
+core, as a teacher runs it) or ``panel serve app`` (``--panel``: one process, from a clone) to
+the first page with plots, then the time each new page takes while the solver compiles in the
 background and after (medians), and when the compiled kernels take over.
 
-    .venv/bin/python benchmarks/first_start.py
+    .venv/bin/python benchmarks/first_start.py [--panel]
 """
 
 from __future__ import annotations
@@ -31,15 +32,26 @@ NOTICE = "solver is still being compiled"
 
 
 def main() -> None:
+    import argparse
+
     from playwright.sync_api import sync_playwright
 
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--panel", action="store_true", help="serve with panel serve app")
+    args = parser.parse_args()
     port = free_port()
+    if args.panel:
+        command = panel_serve("app", port)
+    else:
+        twoball = str(Path(sys.executable).parent / "twoball")
+        command = [
+            twoball, "serve", "--address", "127.0.0.1", "--port", str(port),
+            "--allow-websocket-origin", f"127.0.0.1:{port}",
+        ]  # fmt: skip
     cache = Path(tempfile.mkdtemp()) / "numba-cache"
     log = Path(tempfile.mkdtemp()) / "server.log"
     started = time.monotonic()
-    process = serve(
-        panel_serve("app", port), log, env={**os.environ, "NUMBA_CACHE_DIR": str(cache)}
-    )
+    process = serve(command, log, env={**os.environ, "NUMBA_CACHE_DIR": str(cache)})
     url = f"http://127.0.0.1:{port}/app"
     pages: dict[str, list[float]] = {"compiling": [], "compiled": []}
     try:
@@ -63,7 +75,7 @@ def main() -> None:
     finally:
         process.terminate()
         process.wait(timeout=30)
-    print(f"first page with plots: {first:.1f} s after panel serve started (empty cache)")
+    print(f"first page with plots: {first:.1f} s after {command[1]} serve started (empty cache)")
     for state, times in pages.items():
         if times:
             print(f"a new page while {state}: median {statistics.median(times):.1f} s, "
