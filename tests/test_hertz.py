@@ -205,8 +205,8 @@ def test_an_integrator_failure_is_a_solver_error(monkeypatch):
 
     monkeypatch.setattr(hertz, "DOP853", Failing)
     with pytest.raises(SolverError, match="integrator failed"):
-        simulate_stack([0.2], 0.9, 0.2, force="hertz")
-    result = simulate_stack([0.2], 0.9, 0.2, force="hertz", throw=False)
+        simulate_stack([0.2], 0.9, 0.2, force="hertz", method="DOP853")
+    result = simulate_stack([0.2], 0.9, 0.2, force="hertz", throw=False, method="DOP853")
     assert not result.success and result.status is Status.FAILED and result.h1 is None
 
 
@@ -226,6 +226,16 @@ def test_the_step_budget_bounds_a_run_that_cannot_end(monkeypatch):
     monkeypatch.setattr(hertz, "MAX_STEPS", 500)
     monkeypatch.setattr(hertz.DOP853, "step", counted)
     with pytest.raises(SolverError, match="phase or step limit") as caught:
-        simulate_stack([0.2], 0.9, 0.2, force="hertz", until=1e300)
+        simulate_stack([0.2], 0.9, 0.2, force="hertz", until=1e300, method="DOP853")
     assert "eps = 1" not in str(caught.value)
     assert len(calls) <= 500
+
+
+def test_the_compiled_path_stops_at_its_step_budget_too():
+    """The same run on the compiled path: its budget (hertz_kernel.MAX_STEPS) ends it, loudly,
+    after it has taken that many steps (the clock has gone well past the second apex)."""
+    from twoball.errors import SolverError
+
+    with pytest.raises(SolverError, match="phase or step limit") as caught:
+        simulate_stack([0.2], 0.9, 0.2, force="hertz", until=1e300)
+    assert caught.value.result.end_time > 10 * simulate_stack([0.2], 0.9, 0.2).end_time
