@@ -64,13 +64,19 @@ def _grow(rows: np.ndarray, used: int) -> np.ndarray:
 
 
 @njit
+def _power(delta: float) -> float:
+    """delta^(3/2), delta >= 0 (a square root: pow costs several times more)."""
+    return delta * math.sqrt(delta)
+
+
+@njit
 def energy(masses, x, v) -> float:
     """Kinetic + gravity + the Hertz potential (2/5) delta^(5/2) of every overlap."""
     total = 0.0
     for j in range(masses.size):
         eta = x[j] - (x[j - 1] if j >= 1 else 0.0)
         delta = max(-eta, 0.0)
-        total += 0.5 * masses[j] * v[j] * v[j] + masses[j] * x[j] + 0.4 * delta**2.5
+        total += 0.5 * masses[j] * v[j] * v[j] + masses[j] * x[j] + 0.4 * delta * _power(delta)
     return total
 
 
@@ -160,45 +166,55 @@ def _step_for(x, eta, deta, t, bound, active) -> float:
 
 
 @njit
-def _local_forces(masses, lam, eta, deta, active, span, force_bound, both, towards):
-    """Bounds F_c on each force over the next ``span``, by bootstrap
+def _local_forces(masses, lam, eta, deta, active, span, force_bound, both, towards, bound):
+    """Bounds F_c (into ``bound``) on each force over the next ``span``, by bootstrap
     (twoball.hertz._local_forces); the run's bound when the bootstrap does not close."""
     n = masses.size
-    delta = np.maximum(-eta, 0.0)
-    speed = np.abs(deta)
-    bound = np.minimum(2.0 * delta**1.5 * (1.0 + lam * speed) + 1e-300, force_bound)
+    for c in range(n):
+        delta = max(-eta[c], 0.0)
+        bound[c] = min(2.0 * _power(delta) * (1.0 + lam[c] * abs(deta[c])) + 1e-300, force_bound[c])
     for _ in range(6):
         _phase_bounds(masses, bound, active, both, towards)
         holds = True
-        implied = np.empty(n)
         for c in range(n):
-            reach = delta[c] + speed[c] * span + 0.5 * both[c] * span * span
-            implied[c] = reach**1.5 * (1.0 + lam[c] * (speed[c] + both[c] * span))
-            holds = holds and implied[c] < bound[c]
+            delta, speed = max(-eta[c], 0.0), abs(deta[c])
+            reach = delta + speed * span + 0.5 * both[c] * span * span
+            implied = _power(reach) * (1.0 + lam[c] * (speed + both[c] * span))
+            if implied >= bound[c]:
+                holds = False
+                both[c] = implied  # kept until the bounds are raised below
+            else:
+                both[c] = -1.0
         if holds:
-            return bound
+            return
         capped = True
         for c in range(n):
-            bound[c] = min(max(bound[c], 1.5 * implied[c]), force_bound[c])
+            if both[c] >= 0.0:
+                bound[c] = min(max(bound[c], 1.5 * both[c]), force_bound[c])
             capped = capped and bound[c] == force_bound[c]
         if capped:
             break
-    return force_bound.copy()
+    bound[:] = force_bound
 
 
 @njit
-def certified_step(masses, lam, x, v, t, force_bound, active) -> float:
+def certified_step(masses, lam, x, v, t, force_bound, active, wanted, work) -> float:
     """A step over which no overlap changes sign unseen (twoball.hertz._certified_step): from
-    the run's force bounds, then doubled while the forces bounded over the step certify it."""
-    n = masses.size
-    eta, deta = np.empty(n), np.empty(n)
+    the run's force bounds, then doubled while the forces bounded over the step certify it.
+    ``wanted`` (the integrator's next step) is tried first: if certified, it is the answer.
+    ``work``: (5, N) scratch."""
+    eta, deta, both, towards, local = work[0], work[1], work[2], work[3], work[4]
     _overlaps(x, v, eta, deta)
-    both, towards = np.empty(n), np.empty(n)
+    if wanted < math.inf:
+        _local_forces(masses, lam, eta, deta, active, wanted, force_bound, both, towards, local)
+        _phase_bounds(masses, local, active, both, towards)
+        if _step_for(x, eta, deta, t, towards, active) >= wanted:
+            return wanted
     _phase_bounds(masses, force_bound, active, both, towards)
     step = _step_for(x, eta, deta, t, towards, active)
     for _ in range(60):
         trial = 2.0 * step
-        local = _local_forces(masses, lam, eta, deta, active, trial, force_bound, both, towards)
+        _local_forces(masses, lam, eta, deta, active, trial, force_bound, both, towards, local)
         _phase_bounds(masses, local, active, both, towards)
         if _step_for(x, eta, deta, t, towards, active) < trial:
             break
@@ -207,11 +223,33 @@ def certified_step(masses, lam, x, v, t, force_bound, active) -> float:
 
 
 @njit
-def settled(masses, x, v) -> bool:
-    """True when no contact can open again, proven by the energy (twoball.hertz._settled)."""
+def _clamp_possible(masses, lam, eta, deta, active, span, force_bound, work) -> bool:
+    """Whether a clamp (lam eta' = 1) can be reached within ``span``: |eta''| is bounded over it
+    by the forces' local bounds (:func:`_local_forces`), so |eta'| by |eta'_0| + |eta''| span.
+    Without one, every switch is a root of an overlap, which the certified step shows at the
+    step's end."""
+    both, towards, local = work[2], work[3], work[4]
+    _local_forces(masses, lam, eta, deta, active, span, force_bound, both, towards, local)
+    _phase_bounds(masses, local, active, both, towards)
+    possible = False
+    for c in range(masses.size):
+        possible = possible or lam[c] * (abs(deta[c]) + both[c] * span) >= 1.0
+    return possible
+
+
+@njit
+def settled(masses, x, v, level) -> bool:
+    """True when no contact can open again, proven by the energy (twoball.hertz._settled):
+    below ``level`` (:func:`rest_level`)."""
+    return energy(masses, x, v) < level
+
+
+@njit
+def rest_level(masses) -> float:
+    """The energy below which the stack is at rest: the least potential, -(3/5) sum W_c^(5/3),
+    plus half the margin the top ball's contact needs to open, (3/5) W_top^(5/3)."""
     weights = _weights(masses)
-    lowest = -0.6 * (weights ** (5.0 / 3.0)).sum()
-    return energy(masses, x, v) - lowest < 0.3 * weights[-1] ** (5.0 / 3.0)
+    return -0.6 * (weights ** (5.0 / 3.0)).sum() + 0.3 * weights[-1] ** (5.0 / 3.0)
 
 
 @njit
@@ -269,7 +307,7 @@ def _rhs(s, z, out, eta0, deta0, masses, lam, active, forces) -> None:
             eta -= 0.5 * s * s
             deta -= s
         if eta < 0.0:
-            forces[c] = (-eta) ** 1.5 * max(1.0 - lam[c] * deta, 0.0)
+            forces[c] = _power(-eta) * max(1.0 - lam[c] * deta, 0.0)
     for j in range(n):
         out[j] = z[n + j]
         out[n + j] = (forces[j] - (forces[j + 1] if j + 1 < n else 0.0)) / masses[j]
@@ -325,7 +363,7 @@ def _due(masses, lam, x, v, t, active, fresh, at_start, accel, forces) -> int:
         eta = x[c] - (x[c - 1] if c >= 1 else 0.0)
         deta = v[c] - (v[c - 1] if c >= 1 else 0.0)
         if active[c] and eta < 0.0:
-            forces[c] = (-eta) ** 1.5 * max(1.0 - lam[c] * deta, 0.0)
+            forces[c] = _power(-eta) * max(1.0 - lam[c] * deta, 0.0)
     for j in range(n):
         accel[j] = -1.0 + (forces[j] - (forces[j + 1] if j + 1 < n else 0.0)) / masses[j]
     for c in range(n):
@@ -373,7 +411,7 @@ def _sample_forces(row, lam, active) -> None:
             eta = row[c] - (row[c - 1] if c >= 1 else 0.0)
             deta = row[n + c] - (row[n + c - 1] if c >= 1 else 0.0)
             if eta < 0.0:
-                row[2 * n + c] = (-eta) ** 1.5 * max(1.0 - lam[c] * deta, 0.0)
+                row[2 * n + c] = _power(-eta) * max(1.0 - lam[c] * deta, 0.0)
 
 
 @njit
@@ -395,7 +433,7 @@ def _bisect(lam, active, F, h, eta0, deta0, c, low, high, t, z, values) -> float
 @njit
 def contact_phase(
     masses, lam, x, v, t, active, force_bound, t_end, steps, fresh, watch_rest, times,
-    samples, next_sample, atol, h_abs,
+    samples, next_sample, atol, h_abs, level,
 ):  # fmt: skip
     """Integrate a phase with a contact active to its first event (see the module).
 
@@ -410,10 +448,11 @@ def contact_phase(
     eta0, deta0 = np.empty(n), np.empty(n)
     before, after, previous, now = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     scratch = np.empty(n)
+    work = np.empty((5, n))
+    x_old, v_old = np.empty(n), np.empty(n)
     watched = np.zeros(n, dtype=np.bool_)
     for j in range(n):
         watched[j] = not active[j] and not (j + 1 < n and active[j + 1]) and v[j] > 0.0
-    damped = (lam > 0.0).any()
     x, v = x.copy(), v.copy()
     at_start = True
     while steps < MAX_STEPS:
@@ -421,7 +460,7 @@ def contact_phase(
         if c >= 0:
             return K_SWITCH, c, t, x, v, steps, next_sample, h_abs
         at_start = False
-        max_step = certified_step(masses, lam, x, v, t, force_bound, active)
+        max_step = certified_step(masses, lam, x, v, t, force_bound, active, h_abs, work)
         _overlaps(x, v, eta0, deta0)
         z[:] = 0.0
         _rhs(0.0, z, stages[0], eta0, deta0, masses, lam, active, forces)
@@ -469,6 +508,7 @@ def contact_phase(
         # probes of the dense output); each watched ball's apex, exact (w = 0 for it)
         _switch_values(lam, active, 0.0, z, eta0, deta0, before)
         _switch_values(lam, active, h, z_new, eta0, deta0, after)
+        damped = _clamp_possible(masses, lam, eta0, deta0, active, h, force_bound, work)
         crossed = False
         for c in range(n):
             crossed = crossed or (before[c] >= 0.0 and after[c] < 0.0)
@@ -529,7 +569,7 @@ def contact_phase(
             t = t + root
             if kind == K_APEX:
                 z[index], z[n + index] = 0.0, 0.0
-        x_old, v_old = x.copy(), v.copy()
+        x_old[:], v_old[:] = x, v
         _state_at(t - t_old if kind == K_TIME else root, x_old, v_old, z, x, v)
         if dense:
             stop = t
@@ -545,7 +585,7 @@ def contact_phase(
             return kind, index, t, x, v, steps, next_sample, h_abs
         if t >= t_end:
             return K_TIME, -1, t, x, v, steps, next_sample, h_abs
-        if watch_rest and settled(masses, x, v):
+        if watch_rest and settled(masses, x, v, level):
             return K_REST, -1, t, x, v, steps, next_sample, h_abs
     return K_STEPS, -1, t, x, v, steps, next_sample, h_abs
 
@@ -559,6 +599,7 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
     n = masses.size
     x, v = x_start.copy(), np.zeros(n)
     force_bound = force_bounds(masses, lam, energy(masses, x, v))
+    level = rest_level(masses)
     weights = _weights(masses)
     room = energy(masses, x, v) + 0.6 * (weights ** (5.0 / 3.0)).sum()  # above the minimum
     atol = np.empty(2 * n)
@@ -592,7 +633,7 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
         else:
             kind, index, t, x, v, steps, next_sample, h_abs = contact_phase(
                 masses, lam, x, v, t, active, force_bound, t_end, steps, fresh, not resting,
-                times, samples, next_sample, atol, h_abs,
+                times, samples, next_sample, atol, h_abs, level,
             )  # fmt: skip
             steps += 1  # a phase counts, so that a run always ends
         if kind == K_TIME or (resting and next_sample == times.size):
