@@ -202,7 +202,8 @@ def certified_step(masses, lam, x, v, t, force_bound, active, wanted, work) -> f
     """A step over which no overlap changes sign unseen (twoball.hertz._certified_step): from
     the run's force bounds, then doubled while the forces bounded over the step certify it.
     ``wanted`` (the integrator's next step) is tried first: if certified, it is the answer.
-    ``work``: (5, N) scratch."""
+    ``work``: (5, N) scratch; its row 2 is left holding bounds on |eta''| valid over the step
+    returned (those of the last bounds tried, over that step or a longer span)."""
     eta, deta, both, towards, local = work[0], work[1], work[2], work[3], work[4]
     _overlaps(x, v, eta, deta)
     if wanted < math.inf:
@@ -223,16 +224,12 @@ def certified_step(masses, lam, x, v, t, force_bound, active, wanted, work) -> f
 
 
 @njit
-def _clamp_possible(masses, lam, eta, deta, active, span, force_bound, work) -> bool:
-    """Whether a clamp (lam eta' = 1) can be reached within ``span``: |eta''| is bounded over it
-    by the forces' local bounds (:func:`_local_forces`), so |eta'| by |eta'_0| + |eta''| span.
-    Without one, every switch is a root of an overlap, which the certified step shows at the
-    step's end."""
-    both, towards, local = work[2], work[3], work[4]
-    _local_forces(masses, lam, eta, deta, active, span, force_bound, both, towards, local)
-    _phase_bounds(masses, local, active, both, towards)
+def _clamp_possible(lam, deta, span, both) -> bool:
+    """Whether a clamp (lam eta' = 1) can be reached within ``span``, with |eta''| <= ``both``
+    over it (as :func:`certified_step` leaves it), so |eta'| <= |eta'_0| + both span. Without
+    one, every switch is a root of an overlap, which the certified step shows at the step's end."""
     possible = False
-    for c in range(masses.size):
+    for c in range(lam.size):
         possible = possible or lam[c] * (abs(deta[c]) + both[c] * span) >= 1.0
     return possible
 
@@ -455,6 +452,7 @@ def contact_phase(
         watched[j] = not active[j] and not (j + 1 < n and active[j + 1]) and v[j] > 0.0
     x, v = x.copy(), v.copy()
     at_start = True
+    h_last = 0.0  # the last accepted step
     while steps < MAX_STEPS:
         c = _due(masses, lam, x, v, t, active, fresh, at_start, accel, forces)
         if c >= 0:
@@ -465,6 +463,7 @@ def contact_phase(
         z[:] = 0.0
         _rhs(0.0, z, stages[0], eta0, deta0, masses, lam, active, forces)
         # one DOP853 step (scipy's rk_step and error estimate), w and w' from zero
+        rejected = False
         while True:
             h = min(h_abs, max_step)
             if t + h > t_end:
@@ -500,15 +499,21 @@ def contact_phase(
                 norm = h * err5 / math.sqrt((err5 + 0.01 * err3) * m)
             if norm < 1.0:
                 factor = MAX_FACTOR if norm == 0.0 else min(MAX_FACTOR, SAFETY * norm**-0.125)
+                if rejected and h < h_last:
+                    # shrinking towards a release, where the error grows faster than the
+                    # controller's h^8 predicts: keep shrinking (a third fewer rejected steps)
+                    factor = min(factor, h / h_last)
+                h_last = h
                 h_abs = h * factor
                 break
             h_abs = h * max(MIN_FACTOR, SAFETY * norm**-0.125)
+            rejected = True
         steps += 1
         # the events in the step: each switching function at the end (and, for the clamp, at
         # probes of the dense output); each watched ball's apex, exact (w = 0 for it)
         _switch_values(lam, active, 0.0, z, eta0, deta0, before)
         _switch_values(lam, active, h, z_new, eta0, deta0, after)
-        damped = _clamp_possible(masses, lam, eta0, deta0, active, h, force_bound, work)
+        damped = _clamp_possible(lam, deta0, h, work[2])
         crossed = False
         for c in range(n):
             crossed = crossed or (before[c] >= 0.0 and after[c] < 0.0)
