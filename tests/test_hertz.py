@@ -313,9 +313,9 @@ def _case(row: dict) -> dict:
 def test_the_compiled_path_against_the_30_digit_reference():
     """Every drop of docs/hertz_vs_truth.csv (docs/accuracy.md, "The Hertz stack"), the solver as
     it is now against the stored reference values: equal contact counts and h1 within the rule
-    (1e-10 or ten times its conditioning) on all; h2 within it on all but the six drops the table
-    lists as outside, and on those within 1e4 times its conditioning (2e3 measured), so that a
-    regression shows."""
+    (1e-10 or ten times its conditioning) on all; h2 within it on all but the eight drops the
+    table lists as outside, and on those within 1e-9 or 1e4 times its conditioning (2.2e3
+    measured), so that a regression shows."""
     from twoball.studies import hertz_truth
 
     rows = _stored_references()
@@ -330,7 +330,7 @@ def test_the_compiled_path_against_the_30_digit_reference():
         if not hertz_truth.within(row):
             outside += 1
             assert row["rel_err_h2"] <= max(1e-9, 1e4 * row["cond_h2"]), (stored, row)
-    assert outside <= 6
+    assert outside <= 8
 
 
 def test_the_hertz_rule_refuses_what_it_should():
