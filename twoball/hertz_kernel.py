@@ -3,7 +3,8 @@ Hertz force"): the method of :mod:`twoball.hertz` in numba, with a different int
 
 Free flight is exact (parabolas; touches, clamps and apexes are roots of quadratics). A phase
 with a contact active is integrated by DOP853 (the coefficients of Hairer's and scipy's, seventh
-order dense output), compiled here, with two changes that make it accurate to rounding:
+order dense output), compiled here, with two changes that make it accurate to ~1e-13 where
+scipy's was off by up to 1e-6 (docs/accuracy.md, "The Hertz stack"):
 
 - **Each step integrates the contact forces' effect only.** From a step's start (x0, v0), every
   height is x0 + v0 s - s^2/2 + w(s), and the integrator carries w, w' from zero, with
@@ -15,9 +16,11 @@ order dense output), compiled here, with two changes that make it accurate to ro
 
 No touch or release is stepped over: the certified steps of :mod:`twoball.hertz` (the energy,
 which never rises, bounds every force; with the contacts active in a phase that bounds eta''
-towards each switch; each step keeps eta + eta' h - M h^2 / 2 on its side), ported as they are.
-The clamp (1 + lam delta' = 0) is looked for at :data:`PROBES` points of each step's dense
-output and refined by bisection on it: estimated, not proven (as in :mod:`twoball.hertz`).
+towards each switch; each step keeps eta + eta' h - M h^2 / 2 on its side), ported as they are;
+a span certified so holds for every step inside it, so :data:`AHEAD` steps are certified at once.
+The clamp (1 + lam delta' = 0) is looked for at :data:`PROBES` points of the dense output of
+each step in which a proven bound on eta'' lets it be reached, and refined by bisection on it:
+estimated, not proven (as in :mod:`twoball.hertz`).
 """
 
 from __future__ import annotations
