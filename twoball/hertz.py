@@ -535,21 +535,45 @@ def _settled(stack: _Stack, y: np.ndarray) -> bool:
     return stack.energy(y) - lowest < 0.3 * weights[-1] ** (5.0 / 3.0)
 
 
-def simulate(stack, apexes_wanted: int, t_end: float, times: np.ndarray | None):
+METHODS = ("compiled", "DOP853")
+
+
+def simulate(
+    stack, apexes_wanted: int, t_end: float, times: np.ndarray | None, method: str = "compiled"
+):
     """A :class:`twoball.stack.StackResult` for a validated stack with the Hertz force: its
-    gaps in units of the Hertz floor contact time (:func:`floor_contact_time`)."""
+    gaps in units of the Hertz floor contact time (:func:`floor_contact_time`).
+
+    ``method`` "compiled" runs :func:`twoball.hertz_kernel.run` (the default, accurate to
+    rounding); "DOP853" runs :func:`solve`, scipy's integrator, kept as the reference."""
     from dataclasses import replace
 
+    from twoball.errors import ParameterError
     from twoball.stack import StackContact, StackResult, StackTrajectory, release_heights
 
+    if method not in METHODS:
+        raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     tau_f = floor_contact_time(stack.eps[0], stack.height)
     hertz_stack = replace(
         stack, tau_f=tau_f, x_start=release_heights(stack.height, stack.tau_ratios, tau_f)
     )
     eps = np.asarray(stack.eps, dtype=float)
-    status, end, apexes, contacts, first, samples = solve(
-        hertz_stack.masses, eps, hertz_stack.x_start, stack.height, apexes_wanted, t_end, times
-    )
+    if method == "DOP853":
+        status, end, apexes, contacts, first, samples = solve(
+            hertz_stack.masses, eps, hertz_stack.x_start, stack.height, apexes_wanted, t_end, times
+        )
+    else:
+        from twoball import hertz_kernel
+
+        lam = np.array([damping_factor(float(e)) for e in eps])
+        lam /= calibration_speeds(hertz_stack.masses, eps, stack.height)
+        sorted_times = np.empty(0) if times is None else np.sort(np.asarray(times, dtype=float))
+        code, end, apex_rows, contact_rows, first, samples = hertz_kernel.run(
+            hertz_stack.masses, lam, hertz_stack.x_start, apexes_wanted, t_end, sorted_times
+        )
+        status, end = Status(code), float(end)
+        apexes = [(int(b), float(w), float(h)) for b, w, h in apex_rows]
+        contacts = [(int(c), float(a), float(b)) for c, a, b in contact_rows]
     per_ball: list[list[tuple[float, float]]] = [[] for _ in range(stack.balls)]
     for ball, when, where in apexes:
         per_ball[ball].append((when, where))

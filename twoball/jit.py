@@ -1,10 +1,11 @@
 """How the kernels are compiled: numba's disk cache where it can be written, and the kernels'
 own Python functions standing in for them while the compiler runs.
 
-The kernels are the ``@njit`` functions of :mod:`twoball.model`, :mod:`twoball.exact` and
-:mod:`twoball.stack`. numba compiles them on first call (15-40 s for the two-ball solver, about
-as long again for the N-ball one) and keeps the machine code on disk, beside the sources or in
-``NUMBA_CACHE_DIR``. Two rules follow from how programs are deployed:
+The kernels are the ``@njit`` functions of :mod:`twoball.model`, :mod:`twoball.exact`,
+:mod:`twoball.stack` and :mod:`twoball.hertz_kernel`. numba compiles them on first call (15-40 s
+for the two-ball solver, about as long again for the N-ball one, 15 s for the Hertz one) and
+keeps the machine code on disk, beside the sources or in ``NUMBA_CACHE_DIR``. Two rules follow
+from how programs are deployed:
 
 - A cache that cannot be written never stops a program. The location is chosen once, before
   any kernel is declared: ``NUMBA_CACHE_DIR`` if it can be written; if it cannot (a prebuilt
@@ -40,7 +41,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent
-KERNEL_MODULES = ("twoball.model", "twoball.exact", "twoball.stack")
+KERNEL_MODULES = ("twoball.model", "twoball.exact", "twoball.stack", "twoball.hertz_kernel")
 # what compiles every kernel in a new process (the Dockerfile runs it too)
 WARM_UP = "from twoball import jit; jit.warm_up()"
 
@@ -160,6 +161,8 @@ def warm_up() -> None:
     from twoball.stack import simulate_stack  # the N-ball solver (twoball.stack)
 
     simulate_stack([0.2, 0.2], 0.9, 0.2, t_eval=[0.0, 1.0])
+    # the Hertz stack (twoball.hertz_kernel)
+    simulate_stack([0.2, 0.2], 0.9, 0.2, force="hertz", t_eval=[0.0, 1.0])
 
 
 def compile_in_background(done: Callable[[], None] | None = None) -> threading.Thread:

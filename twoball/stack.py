@@ -933,6 +933,7 @@ def simulate_stack(
     until: str | float = "second",
     t_eval: object = None,
     throw: bool = True,
+    method: str = "compiled",
 ) -> StackResult:
     """Drop a stack of N balls and measure the top ball's bounces (docs/model.md, "Stacks of N
     balls").
@@ -958,6 +959,9 @@ def simulate_stack(
     throw : bool
         A run that fails raises :class:`~twoball.errors.SolverError`; with False the result says
         so (``success``, ``status``).
+    method : "compiled" or "DOP853"
+        With the Hertz force: the compiled integrator, or scipy's DOP853, kept as a reference
+        (:func:`twoball.hertz.simulate`).
 
     Returns
     -------
@@ -983,7 +987,7 @@ def simulate_stack(
     if force == "hertz":
         from twoball import hertz
 
-        result = hertz.simulate(stack, apexes_wanted, t_end, times)
+        result = hertz.simulate(stack, apexes_wanted, t_end, times, method)
         stack = result.stack  # its gaps are in units of the Hertz floor contact
     else:
         out = run(stack.masses, stack.zeta, stack.x_start, apexes_wanted, t_end, times is not None)

@@ -1,0 +1,704 @@
+"""The compiled Hertz stack (docs/stacks.md, "How each force is solved"; docs/model.md, "The
+Hertz force"): the method of :mod:`twoball.hertz` in numba, with a different integrator.
+
+Free flight is exact (parabolas; touches, clamps and apexes are roots of quadratics). A phase
+with a contact active is integrated by DOP853 (the coefficients of Hairer's and scipy's, seventh
+order dense output), compiled here, with two changes that make it accurate to ~1e-13 where
+scipy's was off by up to 1e-6 (docs/accuracy.md, "The Hertz stack"):
+
+- **Each step integrates the contact forces' effect only.** From a step's start (x0, v0), every
+  height is x0 + v0 s - s^2/2 + w(s), and the integrator carries w, w' from zero, with
+  w_j'' = (f_j - f_(j+1)) / m_j. The overlaps are eta = D x0 + D v0 s - [floor] s^2/2 + D w,
+  never the difference of two large heights rebuilt at every stage; a ball in free flight has
+  w = 0 exactly, so its apex is exact (s = v0).
+- **The error is measured on that w against the contact's own scale** (rtol :data:`RTOL`, atol
+  rtol times the largest compression and speed the energy allows), not on heights of order H.
+
+No touch or release is stepped over: the certified steps of :mod:`twoball.hertz` (the energy,
+which never rises, bounds every force; with the contacts active in a phase that bounds eta''
+towards each switch; each step keeps eta + eta' h - M h^2 / 2 on its side), ported as they are;
+a span certified so holds for every step inside it, so :data:`AHEAD` steps are certified at once.
+The clamp (1 + lam delta' = 0) is looked for at :data:`PROBES` points of the dense output of
+each step in which a proven bound on eta'' lets it be reached, and refined by bisection on it:
+estimated, not proven (as in :mod:`twoball.hertz`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.integrate._ivp import dop853_coefficients as _dop853
+
+from twoball.errors import Status
+from twoball.jit import njit
+
+MAX_STEPS = 300_000  # a run that cannot end fails within seconds (a step takes ~3 us)
+RTOL = 1e-14  # local error of w (and w') per step, relative to the contact's scale
+PROBES = 8  # dense-output points per step where the clamp is looked for
+AHEAD = 4.0  # steps certified at once
+
+_STAGES = _dop853.N_STAGES
+_A = np.ascontiguousarray(_dop853.A[:_STAGES, :_STAGES])
+_B = np.ascontiguousarray(_dop853.B)
+_C = np.ascontiguousarray(_dop853.C[:_STAGES])
+_E3 = np.ascontiguousarray(_dop853.E3)
+_E5 = np.ascontiguousarray(_dop853.E5)
+_D = np.ascontiguousarray(_dop853.D)
+_A_EXTRA = np.ascontiguousarray(_dop853.A[_STAGES + 1 :])
+_C_EXTRA = np.ascontiguousarray(_dop853.C[_STAGES + 1 :])
+_EXTENDED = _dop853.N_STAGES_EXTENDED
+_POWER = _dop853.INTERPOLATOR_POWER
+SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
+
+# what ends a phase
+K_SWITCH, K_APEX, K_TIME, K_REST, K_STEPS, K_FAILED = 0, 1, 2, 3, 4, 5
+STATUS_DONE, STATUS_REST = int(Status.DONE), int(Status.REST)
+STATUS_PHASES, STATUS_FAILED = int(Status.PHASE_LIMIT), int(Status.FAILED)
+
+
+@njit
+def _grow(rows: np.ndarray, used: int) -> np.ndarray:
+    """``rows`` with room for one more row after the first ``used``."""
+    if used < rows.shape[0]:
+        return rows
+    bigger = np.empty((2 * rows.shape[0], rows.shape[1]))
+    bigger[:used] = rows[:used]
+    return bigger
+
+
+@njit
+def _power(delta: float) -> float:
+    """delta^(3/2), delta >= 0 (a square root: pow costs several times more)."""
+    return delta * math.sqrt(delta)
+
+
+@njit
+def energy(masses, x, v) -> float:
+    """Kinetic + gravity + the Hertz potential (2/5) delta^(5/2) of every overlap."""
+    total = 0.0
+    for j in range(masses.size):
+        eta = x[j] - (x[j - 1] if j >= 1 else 0.0)
+        delta = max(-eta, 0.0)
+        total += 0.5 * masses[j] * v[j] * v[j] + masses[j] * x[j] + 0.4 * delta * _power(delta)
+    return total
+
+
+@njit
+def _weights(masses):
+    """W_c, the weight above contact c (its ball's and every ball's above)."""
+    n = masses.size
+    weights = np.empty(n)
+    above = 0.0
+    for c in range(n - 1, -1, -1):
+        above += masses[c]
+        weights[c] = above
+    return weights
+
+
+@njit
+def force_bounds(masses, lam, total) -> np.ndarray:
+    """F_c >= f_c for the rest of the run, from the energy ``total``, which never rises (the
+    argument of twoball.hertz._force_bounds)."""
+    n = masses.size
+    weights = _weights(masses)
+    wells = 0.6 * weights ** (5.0 / 3.0)
+    kinetic = total + wells.sum()
+    force = np.empty(n)
+    for c in range(n):
+        room = total + wells.sum() - wells[c]
+        delta = max(weights[c] ** (2.0 / 3.0), 1.0)
+        while 0.4 * delta**2.5 - weights[c] * delta <= room:
+            delta *= 1.5
+        closing = math.sqrt(2.0 * kinetic / masses[c])
+        if c >= 1:
+            closing += math.sqrt(2.0 * kinetic / masses[c - 1])
+        force[c] = delta**1.5 * (1.0 + lam[c] * closing)
+    return force
+
+
+@njit
+def _phase_bounds(masses, force, active, both, towards) -> None:
+    """Bounds on eta_c'' while the phase lasts (twoball.hertz._phase_bounds): |eta''| <= both,
+    and towards, the bound towards each contact's switch."""
+    n = masses.size
+    for c in range(n):
+        own_force = force[c] if active[c] else 0.0
+        own = own_force / masses[c]
+        if c >= 1:
+            own += own_force / masses[c - 1]
+        above = force[c + 1] if c + 1 < n and active[c + 1] else 0.0
+        neighbours = above / masses[c]
+        if c >= 1:
+            below = force[c - 1] if active[c - 1] else 0.0
+            neighbours += below / masses[c - 1]
+        else:
+            neighbours += 1.0  # gravity pulls ball 0 towards the floor
+        both[c] = max(own + neighbours, 1e-300)
+        toward = (max(own - 1.0, 0.0) if c == 0 else own) if active[c] else neighbours
+        towards[c] = max(toward, 1e-300)
+
+
+@njit
+def _overlaps(x, v, eta, deta) -> None:
+    for c in range(x.size):
+        eta[c] = x[c] - (x[c - 1] if c >= 1 else 0.0)
+        deta[c] = v[c] - (v[c - 1] if c >= 1 else 0.0)
+
+
+@njit
+def _rounding(x, deta, t, c) -> float:
+    """The rounding of eta_c: 16 ulp of the heights plus eta' times 16 ulp of the clock."""
+    heights = 1.0
+    for j in range(x.size):
+        heights += abs(x[j])
+    return 16e-16 * (heights + abs(deta[c]) * (1.0 + abs(t)))
+
+
+@njit
+def _step_for(x, eta, deta, t, bound, active) -> float:
+    """The largest h keeping each eta (or -eta, for a contact that pushes) above -tol by
+    eta + eta' h - M h^2 / 2 (twoball.hertz._step_for)."""
+    step = math.inf
+    for c in range(eta.size):
+        value, rate = (-eta[c], -deta[c]) if active[c] else (eta[c], deta[c])
+        value = max(value, 0.0) + _rounding(x, deta, t, c)
+        root = math.sqrt(rate * rate + 2.0 * bound[c] * value)
+        h = (rate + root) / bound[c] if rate >= 0.0 else 2.0 * value / (root - rate)
+        step = min(step, h)
+    return step
+
+
+@njit
+def _local_forces(masses, lam, eta, deta, active, span, force_bound, both, towards, bound):
+    """Bounds F_c (into ``bound``) on each force over the next ``span``, by bootstrap
+    (twoball.hertz._local_forces); the run's bound when the bootstrap does not close."""
+    n = masses.size
+    for c in range(n):
+        delta = max(-eta[c], 0.0)
+        bound[c] = min(2.0 * _power(delta) * (1.0 + lam[c] * abs(deta[c])) + 1e-300, force_bound[c])
+    for _ in range(6):
+        _phase_bounds(masses, bound, active, both, towards)
+        holds = True
+        for c in range(n):
+            delta, speed = max(-eta[c], 0.0), abs(deta[c])
+            reach = delta + speed * span + 0.5 * both[c] * span * span
+            implied = _power(reach) * (1.0 + lam[c] * (speed + both[c] * span))
+            if implied >= bound[c]:
+                holds = False
+                both[c] = implied  # kept until the bounds are raised below
+            else:
+                both[c] = -1.0
+        if holds:
+            return
+        capped = True
+        for c in range(n):
+            if both[c] >= 0.0:
+                bound[c] = min(max(bound[c], 1.5 * both[c]), force_bound[c])
+            capped = capped and bound[c] == force_bound[c]
+        if capped:
+            break
+    bound[:] = force_bound
+
+
+@njit
+def certified_step(masses, lam, x, v, t, force_bound, active, wanted, work) -> float:
+    """A step over which no overlap changes sign unseen (twoball.hertz._certified_step): from
+    the run's force bounds, then doubled while the forces bounded over the step certify it.
+    ``wanted`` (the integrator's next step) is tried first: if certified, it is the answer.
+    ``work``: (5, N) scratch; its row 2 is left holding bounds on |eta''| valid over the step
+    returned (those of the last bounds tried, over that step or a longer span)."""
+    eta, deta, both, towards, local = work[0], work[1], work[2], work[3], work[4]
+    _overlaps(x, v, eta, deta)
+    if wanted < math.inf:
+        _local_forces(masses, lam, eta, deta, active, wanted, force_bound, both, towards, local)
+        _phase_bounds(masses, local, active, both, towards)
+        if _step_for(x, eta, deta, t, towards, active) >= wanted:
+            return wanted
+    _phase_bounds(masses, force_bound, active, both, towards)
+    step = _step_for(x, eta, deta, t, towards, active)
+    for _ in range(60):
+        trial = 2.0 * step
+        _local_forces(masses, lam, eta, deta, active, trial, force_bound, both, towards, local)
+        _phase_bounds(masses, local, active, both, towards)
+        if _step_for(x, eta, deta, t, towards, active) < trial:
+            break
+        step = trial
+    return step
+
+
+@njit
+def _clamp_possible(lam, deta, span, both) -> bool:
+    """Whether a clamp (lam eta' = 1) can be reached within ``span``, with |eta''| <= ``both``
+    over it (as :func:`certified_step` leaves it), so |eta'| <= |eta'_0| + both span. Without
+    one, every switch is a root of an overlap, which the certified step shows at the step's end."""
+    possible = False
+    for c in range(lam.size):
+        possible = possible or lam[c] * (abs(deta[c]) + both[c] * span) >= 1.0
+    return possible
+
+
+@njit
+def settled(masses, x, v, level) -> bool:
+    """True when no contact can open again, proven by the energy (twoball.hertz._settled):
+    below ``level`` (:func:`rest_level`)."""
+    return energy(masses, x, v) < level
+
+
+@njit
+def rest_level(masses) -> float:
+    """The energy below which the stack is at rest: the least potential, -(3/5) sum W_c^(5/3),
+    plus half the margin the top ball's contact needs to open, (3/5) W_top^(5/3)."""
+    weights = _weights(masses)
+    return -0.6 * (weights ** (5.0 / 3.0)).sum() + 0.3 * weights[-1] ** (5.0 / 3.0)
+
+
+@njit
+def _first_fall(a, b, c) -> float:
+    """The first s >= 0 at which a s^2 + b s + c (a <= 0) falls through zero, 0 if it is not
+    positive and falling now, inf if never: where an inactive overlap closes."""
+    if c <= 0.0 and (b < 0.0 or (b == 0.0 and a < 0.0)):
+        return 0.0
+    if a == 0.0:
+        return -c / b if b < 0.0 else math.inf
+    disc = b * b - 4.0 * a * c
+    if disc < 0.0:
+        return math.inf
+    q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+    larger = q / a
+    if q != 0.0:
+        larger = max(larger, c / q)
+    return larger if larger > 0.0 else math.inf
+
+
+@njit
+def _next_in_flight(lam, x, v, horizon):
+    """(time, kind, index) of the next touch, re-push or apex with every ball in free flight:
+    roots of quadratics (exact)."""
+    n = x.size
+    best, kind, index = horizon, K_TIME, -1
+    for c in range(n):
+        eta = x[c] - (x[c - 1] if c >= 1 else 0.0)
+        deta = v[c] - (v[c - 1] if c >= 1 else 0.0)
+        root = _first_fall(-0.5 if c == 0 else 0.0, deta, eta)
+        if root < best:
+            best, kind, index = root, K_SWITCH, c
+    # a floor contact clamped while still compressed pushes again once ball 0 slows below 1/lam
+    if x[0] < 0.0 and lam[0] > 0.0:
+        again = v[0] - 1.0 / lam[0]
+        if 0.0 < again < best:
+            best, kind, index = again, K_SWITCH, 0
+    for ball in range(n):
+        if 0.0 < v[ball] < best:
+            best, kind, index = v[ball], K_APEX, ball
+    return best, kind, index
+
+
+@njit
+def _rhs(s, z, out, eta0, deta0, masses, lam, active, forces) -> None:
+    """z = (w, w'): the displacement by the contact forces since the step's start, s after it."""
+    n = masses.size
+    for c in range(n):
+        forces[c] = 0.0
+        if not active[c]:
+            continue
+        eta = eta0[c] + deta0[c] * s + z[c] - (z[c - 1] if c >= 1 else 0.0)
+        deta = deta0[c] + z[n + c] - (z[n + c - 1] if c >= 1 else 0.0)
+        if c == 0:
+            eta -= 0.5 * s * s
+            deta -= s
+        if eta < 0.0:
+            forces[c] = _power(-eta) * max(1.0 - lam[c] * deta, 0.0)
+    for j in range(n):
+        out[j] = z[n + j]
+        out[n + j] = (forces[j] - (forces[j + 1] if j + 1 < n else 0.0)) / masses[j]
+
+
+@njit
+def _state_at(s, x0, v0, z, x, v) -> None:
+    """Heights and velocities s after the step's start, from its w, w' = z."""
+    n = x0.size
+    for j in range(n):
+        x[j] = x0[j] + v0[j] * s - 0.5 * s * s + z[j]
+        v[j] = v0[j] - s + z[n + j]
+
+
+@njit
+def _dense(F, s, h, z) -> None:
+    """z = (w, w') at s in [0, h] from the step's dense output F (DOP853's interpolant)."""
+    u = s / h
+    z[:] = 0.0
+    for i in range(_POWER):
+        z += F[_POWER - 1 - i]
+        if i % 2 == 0:
+            z *= u
+        else:
+            z *= 1.0 - u
+    return
+
+
+@njit
+def _switch_values(lam, active, s, z, eta0, deta0, out) -> None:
+    """Each contact's switching function s after the step's start, signed so that it falls
+    through zero at a switch: S = max(eta, g) for an inactive contact, -S for an active one,
+    g = lam eta' - 1 (the one rule of docs/model.md, "Bodies, coordinates, forces")."""
+    n = lam.size
+    for c in range(n):
+        eta = eta0[c] + deta0[c] * s + z[c] - (z[c - 1] if c >= 1 else 0.0)
+        deta = deta0[c] + z[n + c] - (z[n + c - 1] if c >= 1 else 0.0)
+        if c == 0:
+            eta -= 0.5 * s * s
+            deta -= s
+        value = max(eta, lam[c] * deta - 1.0)
+        out[c] = -value if active[c] else value
+
+
+@njit
+def _due(masses, lam, x, v, t, active, fresh, at_start, accel, forces) -> int:
+    """The first contact whose switch is here (at its root to rounding and moving through it,
+    or past it), -1 if none (twoball.hertz._switching)."""
+    n = masses.size
+    heights = 1.0 + np.abs(x).sum()
+    for c in range(n):
+        forces[c] = 0.0
+        eta = x[c] - (x[c - 1] if c >= 1 else 0.0)
+        deta = v[c] - (v[c - 1] if c >= 1 else 0.0)
+        if active[c] and eta < 0.0:
+            forces[c] = _power(-eta) * max(1.0 - lam[c] * deta, 0.0)
+    for j in range(n):
+        accel[j] = -1.0 + (forces[j] - (forces[j + 1] if j + 1 < n else 0.0)) / masses[j]
+    for c in range(n):
+        if at_start and fresh[c]:
+            continue  # it has just switched
+        eta = x[c] - (x[c - 1] if c >= 1 else 0.0)
+        deta = v[c] - (v[c - 1] if c >= 1 else 0.0)
+        g = lam[c] * deta - 1.0
+        if eta >= g:
+            value, rate = eta, deta
+            rounding = 16e-16 * (heights + abs(deta) * (1.0 + abs(t)))
+        else:
+            value, rate = g, lam[c] * (accel[c] - (accel[c - 1] if c >= 1 else 0.0))
+            rounding = 1e-12
+        if active[c]:
+            value, rate = -value, -rate
+        if value < -rounding or (value <= rounding and rate < 0.0):
+            return c
+    return -1
+
+
+@njit
+def _record(times, samples, next_sample, start, stop, x, v, lam, active) -> int:
+    """Fill the samples at times in [start, stop] from the state at ``start`` in free flight
+    (``x``, ``v``); returns the next sample's index."""
+    n = x.size
+    while next_sample < times.size and times[next_sample] <= stop:
+        if times[next_sample] >= start:
+            s = times[next_sample] - start
+            for j in range(n):
+                samples[next_sample, j] = x[j] + v[j] * s - 0.5 * s * s
+                samples[next_sample, n + j] = v[j] - s
+            _sample_forces(samples[next_sample], lam, active)
+        next_sample += 1
+    return next_sample
+
+
+@njit
+def _sample_forces(row, lam, active) -> None:
+    """The contact forces of a sampled state (heights, velocities first in ``row``)."""
+    n = lam.size
+    for c in range(n):
+        row[2 * n + c] = 0.0
+        if active[c]:
+            eta = row[c] - (row[c - 1] if c >= 1 else 0.0)
+            deta = row[n + c] - (row[n + c - 1] if c >= 1 else 0.0)
+            if eta < 0.0:
+                row[2 * n + c] = _power(-eta) * max(1.0 - lam[c] * deta, 0.0)
+
+
+@njit
+def _bisect(lam, active, F, h, eta0, deta0, c, low, high, t, z, values) -> float:
+    """The time s in (low, high] where contact c's switching function falls through zero,
+    refined on the dense output to rounding of the clock (the side past the root)."""
+    while True:
+        middle = 0.5 * (low + high)
+        if not low < middle < high or high - low <= 4e-16 * (abs(t) + high):
+            return high
+        _dense(F, middle, h, z)
+        _switch_values(lam, active, middle, z, eta0, deta0, values)
+        if values[c] < 0.0:
+            high = middle
+        else:
+            low = middle
+
+
+@njit
+def contact_phase(
+    masses, lam, x, v, t, active, force_bound, t_end, steps, fresh, watch_rest, times,
+    samples, next_sample, atol, h_abs, level,
+):  # fmt: skip
+    """Integrate a phase with a contact active to its first event (see the module).
+
+    Returns (kind, index, t, x, v, steps, next_sample, h_abs): kind K_FAILED when a step falls
+    below the spacing of the clock (beyond the domain double precision carries)."""
+    n = masses.size
+    m = 2 * n
+    stages = np.empty((_EXTENDED, m))
+    F = np.empty((_POWER, m))
+    z, z_new, dz = np.zeros(m), np.empty(m), np.empty(m)
+    forces, accel = np.empty(n), np.empty(n)
+    eta0, deta0 = np.empty(n), np.empty(n)
+    before, after, previous, now = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    scratch = np.empty(n)
+    work = np.empty((5, n))
+    x_old, v_old = np.empty(n), np.empty(n)
+    watched = np.zeros(n, dtype=np.bool_)
+    for j in range(n):
+        watched[j] = not active[j] and not (j + 1 < n and active[j + 1]) and v[j] > 0.0
+    x, v = x.copy(), v.copy()
+    at_start = True
+    h_last = 0.0  # the last accepted step
+    certified = -math.inf  # no overlap reaches its root unseen before this time
+    bounds = np.empty(n)  # |eta''| <= bounds until then
+    while steps < MAX_STEPS:
+        c = _due(masses, lam, x, v, t, active, fresh, at_start, accel, forces)
+        if c >= 0:
+            return K_SWITCH, c, t, x, v, steps, next_sample, h_abs
+        at_start = False
+        if t + h_abs > certified:
+            # a certified span holds for every step inside it (no overlap can reach its root
+            # unseen there), so certify a few steps ahead at once
+            span = certified_step(masses, lam, x, v, t, force_bound, active, AHEAD * h_abs, work)
+            certified = t + span
+            bounds[:] = work[2]
+        max_step = certified - t
+        _overlaps(x, v, eta0, deta0)
+        z[:] = 0.0
+        _rhs(0.0, z, stages[0], eta0, deta0, masses, lam, active, forces)
+        # one DOP853 step (scipy's rk_step and error estimate), w and w' from zero
+        rejected = False
+        while True:
+            h = min(h_abs, max_step)
+            if t + h > t_end:
+                h = t_end - t
+            if h < 10.0 * (np.nextafter(t, np.inf) - t):
+                if h == t_end - t:  # the end, closer than a step can go
+                    return K_TIME, -1, t_end, x, v, steps, next_sample, h_abs
+                return K_FAILED, -1, t, x, v, steps, next_sample, h_abs
+            for stage in range(1, _STAGES):
+                for i in range(m):
+                    total = 0.0
+                    for k in range(stage):
+                        total += stages[k, i] * _A[stage, k]
+                    dz[i] = total * h
+                _rhs(_C[stage] * h, dz, stages[stage], eta0, deta0, masses, lam, active, forces)
+            for i in range(m):
+                total = 0.0
+                for k in range(_STAGES):
+                    total += stages[k, i] * _B[k]
+                z_new[i] = h * total
+            _rhs(h, z_new, stages[_STAGES], eta0, deta0, masses, lam, active, forces)
+            err5, err3 = 0.0, 0.0
+            for i in range(m):
+                scale = atol[i] + RTOL * abs(z_new[i])
+                e5, e3 = 0.0, 0.0
+                for k in range(_STAGES + 1):
+                    e5 += stages[k, i] * _E5[k]
+                    e3 += stages[k, i] * _E3[k]
+                err5 += (e5 / scale) ** 2
+                err3 += (e3 / scale) ** 2
+            norm = 0.0
+            if err5 > 0.0 or err3 > 0.0:
+                norm = h * err5 / math.sqrt((err5 + 0.01 * err3) * m)
+            if norm < 1.0:
+                factor = MAX_FACTOR if norm == 0.0 else min(MAX_FACTOR, SAFETY * norm**-0.125)
+                if rejected and h < h_last:
+                    # shrinking towards a release, where the error grows faster than the
+                    # controller's h^8 predicts: keep shrinking (a third fewer rejected steps)
+                    factor = min(factor, h / h_last)
+                h_last = h
+                h_abs = h * factor
+                break
+            h_abs = h * max(MIN_FACTOR, SAFETY * norm**-0.125)
+            rejected = True
+        steps += 1
+        # the events in the step: each switching function at the end (and, for the clamp, at
+        # probes of the dense output); each watched ball's apex, exact (w = 0 for it)
+        _switch_values(lam, active, 0.0, z, eta0, deta0, before)
+        _switch_values(lam, active, h, z_new, eta0, deta0, after)
+        damped = _clamp_possible(lam, deta0, h, bounds)
+        crossed = False
+        for c in range(n):
+            crossed = crossed or (before[c] >= 0.0 and after[c] < 0.0)
+        for j in range(n):
+            crossed = crossed or (watched[j] and 0.0 < v[j] <= h)
+        sampled = next_sample < times.size and times[next_sample] <= t + h
+        dense = crossed or damped or sampled
+        if dense:
+            for stage in range(_STAGES + 1, _EXTENDED):
+                row = stage - _STAGES - 1
+                for i in range(m):
+                    total = 0.0
+                    for k in range(stage):
+                        total += stages[k, i] * _A_EXTRA[row, k]
+                    dz[i] = total * h
+                _rhs(_C_EXTRA[row] * h, dz, stages[stage], eta0, deta0, masses, lam, active, forces)
+            for i in range(m):
+                F[0, i] = z_new[i]
+                F[1, i] = h * stages[0, i] - z_new[i]
+                F[2, i] = 2.0 * z_new[i] - h * (stages[_STAGES, i] + stages[0, i])
+                for row in range(_POWER - 3):
+                    total = 0.0
+                    for k in range(_EXTENDED):
+                        total += _D[row, k] * stages[k, i]
+                    F[3 + row, i] = h * total
+        root, kind, index = h, K_TIME, -1
+        if crossed or damped:
+            previous[:] = before
+            low = 0.0
+            probes = PROBES + 1 if damped else 1
+            for probe in range(1, probes + 1):
+                s = h * probe / probes
+                if probe == probes:
+                    now[:] = after
+                else:
+                    _dense(F, s, h, z)
+                    _switch_values(lam, active, s, z, eta0, deta0, now)
+                found = False
+                for c in range(n):
+                    if previous[c] >= 0.0 and now[c] < 0.0:
+                        found = True
+                        when = _bisect(lam, active, F, h, eta0, deta0, c, low, s, t, z, scratch)
+                        if when < root or kind == K_TIME:
+                            root, kind, index = when, K_SWITCH, c
+                if found:
+                    break
+                previous[:] = now
+                low = s
+        for j in range(n):
+            if watched[j] and 0.0 < v[j] <= h and (v[j] < root or kind == K_TIME):
+                root, kind, index = v[j], K_APEX, j
+        t_old = t
+        if kind == K_TIME:
+            z[:] = z_new
+            t = t + h
+        else:
+            _dense(F, root, h, z)
+            t = t + root
+            if kind == K_APEX:
+                z[index], z[n + index] = 0.0, 0.0
+        x_old[:], v_old[:] = x, v
+        _state_at(t - t_old if kind == K_TIME else root, x_old, v_old, z, x, v)
+        if dense:
+            stop = t
+            while next_sample < times.size and times[next_sample] <= stop:
+                if times[next_sample] >= t_old:
+                    s = times[next_sample] - t_old
+                    _dense(F, s, h, dz)
+                    row = samples[next_sample]
+                    _state_at(s, x_old, v_old, dz, row[:n], row[n : 2 * n])
+                    _sample_forces(row, lam, active)
+                next_sample += 1
+        if kind != K_TIME:
+            return kind, index, t, x, v, steps, next_sample, h_abs
+        if t >= t_end:
+            return K_TIME, -1, t, x, v, steps, next_sample, h_abs
+        if watch_rest and settled(masses, x, v, level):
+            return K_REST, -1, t, x, v, steps, next_sample, h_abs
+    return K_STEPS, -1, t, x, v, steps, next_sample, h_abs
+
+
+@njit
+def run(masses, lam, x_start, apexes_wanted, t_end, times):
+    """Run a Hertz stack from rest at heights ``x_start`` until the top ball's
+    ``apexes_wanted``-th apex, ``t_end`` or a proven rest, sampling at the sorted ``times``
+    (empty: none). Returns (status, end time, apexes (ball, t, h) rows, contact (contact, start,
+    end) rows, contacts before the top ball's first apex, samples (times, 3N))."""
+    n = masses.size
+    x, v = x_start.copy(), np.zeros(n)
+    force_bound = force_bounds(masses, lam, energy(masses, x, v))
+    level = rest_level(masses)
+    weights = _weights(masses)
+    room = energy(masses, x, v) + 0.6 * (weights ** (5.0 / 3.0)).sum()  # above the minimum
+    atol = np.empty(2 * n)
+    for j in range(n):
+        atol[j] = RTOL * (2.5 * room) ** 0.4  # the largest compression the energy allows
+        atol[n + j] = RTOL * math.sqrt(2.0 * room / masses[j])  # the largest speed
+    active = np.zeros(n, dtype=np.bool_)
+    fresh = np.zeros(n, dtype=np.bool_)
+    opened = np.zeros(n)
+    first = np.zeros(n, dtype=np.int64)
+    apexes = np.empty((8, 3))
+    contacts = np.empty((8, 3))
+    n_apex, n_contacts, top_apexes = 0, 0, 0
+    samples = np.full((times.size, 3 * n), np.nan)
+    next_sample = 0
+    status = STATUS_PHASES
+    steps = 0
+    t = 0.0
+    switched_at = 0.0
+    resting = False
+    h_abs = math.inf
+    while steps < MAX_STEPS:
+        if not active.any():
+            tau, kind, index = _next_in_flight(lam, x, v, t_end - t)
+            next_sample = _record(times, samples, next_sample, t, t + tau, x, v, lam, active)
+            for j in range(n):
+                x[j] += v[j] * tau - 0.5 * tau * tau
+                v[j] -= tau
+            t += tau
+            steps += 1
+        else:
+            kind, index, t, x, v, steps, next_sample, h_abs = contact_phase(
+                masses, lam, x, v, t, active, force_bound, t_end, steps, fresh, not resting,
+                times, samples, next_sample, atol, h_abs, level,
+            )  # fmt: skip
+            steps += 1  # a phase counts, so that a run always ends
+        if kind == K_TIME or (resting and next_sample == times.size):
+            status = STATUS_REST if resting else STATUS_DONE
+            break
+        if kind == K_STEPS:
+            break
+        if kind == K_FAILED:
+            status = STATUS_FAILED
+            break
+        if kind == K_SWITCH:
+            if not fresh.any() or t != switched_at:
+                fresh[:] = False
+            fresh[index], switched_at = True, t
+        else:
+            fresh[:] = False
+        if kind == K_APEX:
+            v[index] = 0.0
+            apexes = _grow(apexes, n_apex)
+            apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, x[index]
+            n_apex += 1
+            if index == n - 1:
+                top_apexes += 1
+                if top_apexes == apexes_wanted:
+                    status = STATUS_DONE
+                    break
+            continue
+        if kind == K_REST:
+            status = STATUS_REST
+            if next_sample == times.size:
+                break
+            resting = True  # proven: carry on only to fill the samples asked for
+            continue
+        # a switch: the contact's function fell through zero, so it toggles
+        if active[index]:
+            contacts = _grow(contacts, n_contacts)
+            contacts[n_contacts, 0], contacts[n_contacts, 1] = index, opened[index]
+            contacts[n_contacts, 2] = t
+            n_contacts += 1
+        else:
+            opened[index] = t
+            if top_apexes == 0:
+                first[index] += 1
+        active[index] = not active[index]
+    for c in range(n):
+        if active[c]:
+            contacts = _grow(contacts, n_contacts)
+            contacts[n_contacts, 0], contacts[n_contacts, 1] = c, opened[c]
+            contacts[n_contacts, 2] = t
+            n_contacts += 1
+    return status, t, apexes[:n_apex].copy(), contacts[:n_contacts].copy(), first, samples
