@@ -212,7 +212,7 @@ def _block_kind(block):
 @njit
 def _block_weights(kind, block, companion, rates, r0, r1):
     """(p, q) with |r . y(s)| <= p a + q b for every later time s of the phase, where
-    (a, b) = :func:`_block_sizes` of the block's state y now (docs/stacks.md, "Why every damped
+    (a, b) = :func:`_sizes` of the block's state y now (docs/stacks.md, "Why every damped
     stack ends"). A rotation keeps |y| or shrinks it, a diagonal each |y_i|; a strongly
     overdamped block is two decaying exponentials (:func:`twoball.exact._overdamped_bound`);
     otherwise Cauchy-Schwarz on the oscillator energy of (u, u') = R y, which never rises."""
@@ -235,25 +235,6 @@ def _block_weights(kind, block, companion, rates, r0, r1):
 
 
 @njit
-def _block_sizes(kind, block, companion, rates, y0, y1):
-    """The two sizes of a block's state y that :func:`_block_weights` weighs: |y| (rotation),
-    |y_0| and |y_1| (diagonal), the amplitudes of the slow and the fast exponential (strongly
-    overdamped), sqrt(2 E) = sqrt(u'^2 + det(B) u^2) (otherwise). None of them can grow."""
-    if kind == BLOCK_ROTATION:
-        return math.hypot(y0, y1), 0.0
-    if kind == BLOCK_DIAGONAL:
-        return abs(y0), abs(y1)
-    u = companion[0, 0] * y0 + companion[0, 1] * y1
-    du = companion[1, 0] * y0 + companion[1, 1] * y1
-    if kind == BLOCK_EXPONENTIALS:
-        slow, fast = rates[0], rates[1]
-        gap = fast - slow
-        return abs((du + fast * u) / gap), abs((du + slow * u) / gap)
-    det = block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0]
-    return math.sqrt(du * du + det * u * u), 0.0
-
-
-@njit
 def _store_weights(target, store, cid, index, row, k):
     """target[cid, index] = the weights of the functional ``row`` (on z or w, length 2k) on
     each block of the cluster: row X restricted to the block, through :func:`_block_weights`."""
@@ -273,15 +254,6 @@ def _store_weights(target, store, cid, index, row, k):
         )
         target[cid, index, blk, 0] = p
         target[cid, index, blk, 1] = q
-
-
-@njit
-def _mode_bound(weights, sizes, k):
-    """sum over the k blocks of p a + q b: a bound on a functional for the rest of the phase."""
-    total = 0.0
-    for blk in range(k):
-        total += weights[blk, 0] * sizes[blk, 0] + weights[blk, 1] * sizes[blk, 1]
-    return total
 
 
 @njit
@@ -388,6 +360,8 @@ def _phase(active, x, v, store, masses, zeta):
     size = np.zeros(n)
     speed = np.zeros(n)
     of_ball = np.zeros(n, dtype=np.int64)
+    z = np.empty(2 * n)
+    eta_rest, x_inv = store.eta_rest, store.x_inv
     count = 0
     j = 0
     while j < n:
@@ -399,28 +373,32 @@ def _phase(active, x, v, store, masses, zeta):
         cid[count] = _cluster_id(start, j, grounded[count], n)
         if not store.ready[cid[count]]:
             _build_cluster(store, cid[count], start, j, grounded[count], masses, zeta)
-        k = store.contacts[cid[count]]
+        here = cid[count]
+        k = store.contacts[here]
         first = 0 if grounded[count] else start + 1
-        total = masses[start : j + 1].sum()
-        centre[count, 0] = (masses[start : j + 1] * x[start : j + 1]).sum() / total
-        centre[count, 1] = (masses[start : j + 1] * v[start : j + 1]).sum() / total
+        total = mass_x = mass_v = 0.0
         size[count] = 1.0
-        for ball in range(start, j + 1):
+        for ball in range(start, j + 1):  # loops, not slices or temporaries (see _evaluate)
+            total += masses[ball]
+            mass_x += masses[ball] * x[ball]
+            mass_v += masses[ball] * v[ball]
             of_ball[ball] = count
             size[count] += abs(x[ball])
             speed[count] += abs(v[ball])
-        z = np.zeros(2 * k)
+        centre[count, 0] = mass_x / total
+        centre[count, 1] = mass_v / total
         for i in range(k):
             c = first + i
             below_x = x[c - 1] if c >= 1 else 0.0
             below_v = v[c - 1] if c >= 1 else 0.0
-            z[i] = x[c] - below_x - store.eta_rest[cid[count], i]
+            z[i] = x[c] - below_x - eta_rest[here, i]
             z[k + i] = v[c] - below_v
-            size[count] += abs(store.eta_rest[cid[count], i])
-        if k > 0:
-            modes[count, : 2 * k] = (
-                np.ascontiguousarray(store.x_inv[cid[count], : 2 * k, : 2 * k]) @ z
-            )
+            size[count] += abs(eta_rest[here, i])
+        for row in range(2 * k):  # modes = X^-1 z
+            total = 0.0
+            for col in range(2 * k):
+                total += x_inv[here, row, col] * z[col]
+            modes[count, row] = total
         count += 1
         j += 1
     return Phase(count, lo, hi, cid, grounded, modes, centre, size, speed, of_ball)
@@ -431,55 +409,177 @@ def _evaluate(tau, phase, store, n, x, v, a, shape_z, shape_w, mode_z, mode_w):
     """Heights, velocities, accelerations of every ball at tau into the phase (into x, v, a),
     each phase cluster's z and w = z' (into shape_z, shape_w) and their block (mode)
     coordinates X^-1 z and X^-1 w (into mode_z, mode_w)."""
-    for p in range(phase.count):
-        cid = phase.cid[p]
-        k = store.contacts[cid]
+    _evaluate_arrays(
+        tau,
+        phase.count,
+        phase.cid,
+        phase.lo,
+        phase.hi,
+        phase.grounded,
+        phase.centre,
+        phase.modes,
+        store.contacts,
+        store.blocks,
+        store.x,
+        store.shape,
+        store.offset,
+        x,
+        v,
+        a,
+        shape_z,
+        shape_w,
+        mode_z,
+        mode_w,
+    )
+
+
+@njit
+def _evaluate_arrays(
+    tau,
+    count,
+    cids,
+    lows,
+    highs,
+    grounded,
+    centre,
+    modes,
+    contacts,
+    blocks,
+    big_x,
+    shape,
+    offset,
+    x,
+    v,
+    a,
+    shape_z,
+    shape_w,
+    mode_z,
+    mode_w,
+):
+    """:func:`_evaluate` on the phase's and the store's arrays, passed one by one: the step
+    loop reads them once per phase. Written without array slices or tuples of arrays: each
+    would count references, which took most of the time of a step."""
+    for p in range(count):
+        cid = cids[p]
+        k = contacts[cid]
         d = 2 * k
-        shape_z[p, :d] = 0.0
-        shape_w[p, :d] = 0.0
+        for row in range(d):
+            shape_z[p, row] = 0.0
+            shape_w[p, row] = 0.0
         for blk in range(k):
-            n0, n1, r0, r1 = exact._block_flow(
-                store.blocks[cid, blk], phase.modes[p, 2 * blk], phase.modes[p, 2 * blk + 1], tau
+            n0, n1, r0, r1 = exact._flow(
+                blocks[cid, blk, 0, 0],
+                blocks[cid, blk, 0, 1],
+                blocks[cid, blk, 1, 0],
+                blocks[cid, blk, 1, 1],
+                modes[p, 2 * blk],
+                modes[p, 2 * blk + 1],
+                tau,
             )
             mode_z[p, 2 * blk], mode_z[p, 2 * blk + 1] = n0, n1
             mode_w[p, 2 * blk], mode_w[p, 2 * blk + 1] = r0, r1
             for row in range(d):  # z = X flow, w = X rate, without allocating
-                left, right = store.x[cid, row, 2 * blk], store.x[cid, row, 2 * blk + 1]
+                left, right = big_x[cid, row, 2 * blk], big_x[cid, row, 2 * blk + 1]
                 shape_z[p, row] += left * n0 + right * n1
                 shape_w[p, row] += left * r0 + right * r1
-        z = shape_z[p]
-        w = shape_w[p]
-        if phase.grounded[p]:
+        if grounded[p]:
             base_x = base_v = base_a = 0.0
         else:
-            base_x = phase.centre[p, 0] + tau * (phase.centre[p, 1] - 0.5 * tau)
-            base_v = phase.centre[p, 1] - tau
+            base_x = centre[p, 0] + tau * (centre[p, 1] - 0.5 * tau)
+            base_v = centre[p, 1] - tau
             base_a = -1.0
-        for ball in range(phase.lo[p], phase.hi[p] + 1):
-            jl = ball - phase.lo[p]
+        for ball in range(lows[p], highs[p] + 1):
+            jl = ball - lows[p]
             xs = vs = acc = 0.0
             for i in range(k):
-                coefficient = store.shape[cid, jl, i]
-                xs += coefficient * z[i]
-                vs += coefficient * z[k + i]
-                acc += coefficient * w[k + i]
-            x[ball] = base_x + store.offset[cid, jl] + xs
+                coefficient = shape[cid, jl, i]
+                xs += coefficient * shape_z[p, i]
+                vs += coefficient * shape_z[p, k + i]
+                acc += coefficient * shape_w[p, k + i]
+            x[ball] = base_x + offset[cid, jl] + xs
             v[ball] = base_v + vs
             a[ball] = base_a + acc
 
 
 @njit
-def _sizes(store, cid, modes, out):
-    """Each block's sizes (:func:`_block_sizes`) of a cluster's mode coordinates, into out."""
-    for blk in range(store.contacts[cid]):
-        out[blk, 0], out[blk, 1] = _block_sizes(
-            store.kind[cid, blk],
-            store.blocks[cid, blk],
-            store.companion[cid, blk],
-            store.rates[cid, blk],
-            modes[2 * blk],
-            modes[2 * blk + 1],
-        )
+def _sizes(kinds, blocks, companions, rates, cid, k, modes, p, out):
+    """The two sizes of each block's state y = modes[p] (cluster cid, k blocks) that
+    :func:`_block_weights` weighs, into out[p]: |y| (rotation), |y_0| and |y_1| (diagonal), the
+    amplitudes of the slow and the fast exponential (strongly overdamped), sqrt(2 E) =
+    sqrt(u'^2 + det(B) u^2) (otherwise). None of them can grow. Whole arrays and indices, not
+    slices (see :func:`_evaluate`)."""
+    for blk in range(k):
+        kind = kinds[cid, blk]
+        y0, y1 = modes[p, 2 * blk], modes[p, 2 * blk + 1]
+        if kind == BLOCK_ROTATION:
+            out[p, blk, 0], out[p, blk, 1] = math.hypot(y0, y1), 0.0
+        elif kind == BLOCK_DIAGONAL:
+            out[p, blk, 0], out[p, blk, 1] = abs(y0), abs(y1)
+        else:
+            u = companions[cid, blk, 0, 0] * y0 + companions[cid, blk, 0, 1] * y1
+            du = companions[cid, blk, 1, 0] * y0 + companions[cid, blk, 1, 1] * y1
+            if kind == BLOCK_EXPONENTIALS:
+                slow, fast = rates[cid, blk, 0], rates[cid, blk, 1]
+                gap = fast - slow
+                out[p, blk, 0] = abs((du + fast * u) / gap)
+                out[p, blk, 1] = abs((du + slow * u) / gap)
+            else:
+                det = (
+                    blocks[cid, blk, 0, 0] * blocks[cid, blk, 1, 1]
+                    - blocks[cid, blk, 0, 1] * blocks[cid, blk, 1, 0]
+                )
+                out[p, blk, 0], out[p, blk, 1] = math.sqrt(du * du + det * u * u), 0.0
+
+
+@njit
+def _bounds(
+    count,
+    cids,
+    lows,
+    highs,
+    grounded,
+    contacts,
+    kinds,
+    blocks,
+    companions,
+    rates,
+    w_x2,
+    w_g_low,
+    w_g_up,
+    w_eta,
+    w_g,
+    mode_w,
+    sizes_w,
+    out,
+):
+    """Every bound on a switching function's curvature for the rest of the phase, from the
+    blocks' sizes of w (:func:`_sizes`, into sizes_w): out[ball] holds those of x'' and of the
+    g'' of the ball's lower and upper contact, out[contact, 3:5] those of eta'' and g'' of an
+    active contact. One call per step (see :func:`_evaluate_arrays`)."""
+    for p in range(count):
+        cid = cids[p]
+        k = contacts[cid]
+        _sizes(kinds, blocks, companions, rates, cid, k, mode_w, p, sizes_w)
+        for ball in range(lows[p], highs[p] + 1):
+            jl = ball - lows[p]
+            out[ball, 0] = _bound(w_x2, cid, jl, sizes_w, p, k)
+            out[ball, 1] = _bound(w_g_low, cid, jl, sizes_w, p, k)
+            out[ball, 2] = _bound(w_g_up, cid, jl, sizes_w, p, k)
+        first = 0 if grounded[p] else lows[p] + 1
+        for i in range(k):
+            out[first + i, 3] = _bound(w_eta, cid, i, sizes_w, p, k)
+            out[first + i, 4] = _bound(w_g, cid, i, sizes_w, p, k)
+
+
+@njit
+def _bound(weights, cid, index, sizes, p, k):
+    """sum over the k blocks of p a + q b, (p, q) = weights[cid, index, block] and (a, b) =
+    sizes[p, block]: a bound on a functional for the rest of the phase (:func:`_block_weights`)."""
+    total = 0.0
+    for blk in range(k):
+        total += weights[cid, index, blk, 0] * sizes[p, blk, 0]
+        total += weights[cid, index, blk, 1] * sizes[p, blk, 1]
+    return total
 
 
 @njit
@@ -502,12 +602,13 @@ def _rest_rounding(store, cid, x, v, carried):
         if c >= 1:
             scale[c] += abs(x[c - 1])
             scale[n + c] += abs(v[c - 1])
-    spread = np.abs(store.x_inv[cid, : 2 * n, : 2 * n]) @ scale
-    sizes = np.zeros((n, 2))
-    _sizes(store, cid, spread, sizes)
+    spread = np.zeros((1, 2 * n))
+    spread[0] = np.abs(store.x_inv[cid, : 2 * n, : 2 * n]) @ scale
+    sizes = np.zeros((1, n, 2))
+    _sizes(store.kind, store.blocks, store.companion, store.rates, cid, n, spread, 0, sizes)
     out = np.empty(n)
     for c in range(n):
-        out[c] = _mode_bound(store.w_rest[cid, c], sizes, n)
+        out[c] = _bound(store.w_rest, cid, c, sizes, 0, n)
     return out
 
 
@@ -532,7 +633,17 @@ def advance_phase(
     mode_z = np.zeros((n, 2 * n))
     mode_w = np.zeros((n, 2 * n))
     sizes_w = np.zeros((n, n, 2))
-    sizes_z = np.zeros((n, 2))
+    sizes_z = np.zeros((1, n, 2))
+    curvature = np.zeros((n, 5))  # see _bounds
+    # the store's and the phase's arrays, read once (see _evaluate)
+    kinds, blocks, companions, rates = store.kind, store.blocks, store.companion, store.rates
+    contacts, noise, eta_rest = store.contacts, store.noise, store.eta_rest
+    w_x2, w_g_low, w_g_up = store.w_x2, store.w_g_low, store.w_g_up
+    w_eta, w_g, w_rest = store.w_eta, store.w_g, store.w_rest
+    cids, lows, grounded, of_ball = phase.cid, phase.lo, phase.grounded, phase.of_ball
+    sizes, speeds = phase.size, phase.speed
+    count, highs, centre, modes = phase.count, phase.hi, phase.centre, phase.modes
+    big_x, shape, offset = store.x, store.shape, store.offset
     everything = phase.count == 1 and phase.grounded[0] and store.contacts[phase.cid[0]] == n
     rest_rounding = np.zeros(n)
     if everything and n >= 3:
@@ -540,47 +651,82 @@ def advance_phase(
     tau = 0.0
     last_step = 0.0
     for _ in range(MAX_STEPS_PER_PHASE):
-        _evaluate(tau, phase, store, n, x, v, a, shape_z, shape_w, mode_z, mode_w)
-        for p in range(phase.count):
-            _sizes(store, phase.cid[p], mode_w[p], sizes_w[p])
+        _evaluate_arrays(
+            tau,
+            count,
+            cids,
+            lows,
+            highs,
+            grounded,
+            centre,
+            modes,
+            contacts,
+            blocks,
+            big_x,
+            shape,
+            offset,
+            x,
+            v,
+            a,
+            shape_z,
+            shape_w,
+            mode_z,
+            mode_w,
+        )
+        _bounds(
+            count,
+            cids,
+            lows,
+            highs,
+            grounded,
+            contacts,
+            kinds,
+            blocks,
+            companions,
+            rates,
+            w_x2,
+            w_g_low,
+            w_g_up,
+            w_eta,
+            w_g,
+            mode_w,
+            sizes_w,
+            curvature,
+        )
         clock = 1.0 + t + tau
         step = horizon - tau
         event, best = -1, np.inf
         for c in range(n):
-            upper = phase.of_ball[c]
-            cid_u, jl_u = phase.cid[upper], c - phase.lo[upper]
-            noise_u = store.noise[cid_u]
-            tol_state = noise_u * (phase.size[upper] + phase.speed[upper] * (1.0 + tau) + tau * tau)
-            tol_rate = noise_u * (phase.speed[upper] + 1.0 + tau)
+            upper = of_ball[c]
+            cid_u = cids[upper]
+            k_u = contacts[cid_u]
+            noise_u = noise[cid_u]
+            tol_state = noise_u * (sizes[upper] + speeds[upper] * (1.0 + tau) + tau * tau)
+            tol_rate = noise_u * (speeds[upper] + 1.0 + tau)
             if active[c]:
-                i = c - (0 if phase.grounded[upper] else phase.lo[upper] + 1)
-                k = store.contacts[cid_u]
-                eta = store.eta_rest[cid_u, i] + shape_z[upper, i]
-                deta = shape_z[upper, k + i]
-                ddeta = shape_w[upper, k + i]
-                bound_eta = _mode_bound(store.w_eta[cid_u, i], sizes_w[upper], k)
-                bound_g = _mode_bound(store.w_g[cid_u, i], sizes_w[upper], k)
+                i = c - (0 if grounded[upper] else lows[upper] + 1)
+                eta = eta_rest[cid_u, i] + shape_z[upper, i]
+                deta = shape_z[upper, k_u + i]
+                ddeta = shape_w[upper, k_u + i]
+                bound_eta, bound_g = curvature[c, 3], curvature[c, 4]
             else:
-                rigid_u = 0.0 if phase.grounded[upper] else -1.0
-                k_u = store.contacts[cid_u]
-                bound_eta = _mode_bound(store.w_x2[cid_u, jl_u], sizes_w[upper], k_u)
-                bound_g = _mode_bound(store.w_g_low[cid_u, jl_u], sizes_w[upper], k_u)
+                rigid_u = 0.0 if grounded[upper] else -1.0
+                bound_eta, bound_g = curvature[c, 0], curvature[c, 1]
                 if c == 0:
                     eta, deta, ddeta = x[0], v[0], a[0]
                     rigid = -rigid_u
                 else:
-                    lower = phase.of_ball[c - 1]
-                    cid_l, jl_l = phase.cid[lower], c - 1 - phase.lo[lower]
+                    lower = of_ball[c - 1]
+                    cid_l = cids[lower]
                     eta, deta, ddeta = x[c] - x[c - 1], v[c] - v[c - 1], a[c] - a[c - 1]
-                    rigid_l = 0.0 if phase.grounded[lower] else -1.0
+                    rigid_l = 0.0 if grounded[lower] else -1.0
                     rigid = abs(rigid_u - rigid_l)
-                    k_l = store.contacts[cid_l]
-                    bound_eta += _mode_bound(store.w_x2[cid_l, jl_l], sizes_w[lower], k_l)
-                    bound_g += _mode_bound(store.w_g_up[cid_l, jl_l], sizes_w[lower], k_l)
-                    tol_state += store.noise[cid_l] * (
-                        phase.size[lower] + phase.speed[lower] * (1.0 + tau) + tau * tau
+                    bound_eta += curvature[c - 1, 0]
+                    bound_g += curvature[c - 1, 2]
+                    tol_state += noise[cid_l] * (
+                        sizes[lower] + speeds[lower] * (1.0 + tau) + tau * tau
                     )
-                    tol_rate += store.noise[cid_l] * (phase.speed[lower] + 1.0 + tau)
+                    tol_rate += noise[cid_l] * (speeds[lower] + 1.0 + tau)
                 bound_eta += rigid
                 bound_g += rigid
             tol_state = ROUNDING * tol_state + carried
@@ -602,19 +748,37 @@ def advance_phase(
             else:
                 step = min(step, h)
         if event >= 0:
-            _evaluate(best, phase, store, n, x, v, a, shape_z, shape_w, mode_z, mode_w)
+            _evaluate_arrays(
+                best,
+                count,
+                cids,
+                lows,
+                highs,
+                grounded,
+                centre,
+                modes,
+                contacts,
+                blocks,
+                big_x,
+                shape,
+                offset,
+                x,
+                v,
+                a,
+                shape_z,
+                shape_w,
+                mode_z,
+                mode_w,
+            )
             return EV_SWITCH, event, best, x, v
         if everything:
             margin_ok = True
-            _sizes(store, phase.cid[0], mode_z[0], sizes_z)
-            tol_rest = (
-                ROUNDING
-                * store.noise[phase.cid[0]]
-                * (phase.size[0] + phase.speed[0] * (1.0 + tau) + tau * tau)
-            )
+            cid = cids[0]
+            _sizes(kinds, blocks, companions, rates, cid, n, mode_z, 0, sizes_z)
+            tol_rest = ROUNDING * noise[cid] * (sizes[0] + speeds[0] * (1.0 + tau) + tau * tau)
             for c in range(n):
-                excursion = _mode_bound(store.w_rest[phase.cid[0], c], sizes_z, n)
-                margin = -store.eta_rest[phase.cid[0], c] - excursion
+                excursion = _bound(w_rest, cid, c, sizes_z, 0, n)
+                margin = -eta_rest[cid, c] - excursion
                 if n >= 3:  # each contact's own rounding (see _rest_rounding)
                     tol_rest = ROUNDING * (rest_rounding[c] + excursion)
                 if not margin > tol_rest:
@@ -624,7 +788,28 @@ def advance_phase(
             if margin_ok:
                 return EV_REST, -1, tau, x, v
         if tau + step >= horizon:
-            _evaluate(horizon, phase, store, n, x, v, a, shape_z, shape_w, mode_z, mode_w)
+            _evaluate_arrays(
+                horizon,
+                count,
+                cids,
+                lows,
+                highs,
+                grounded,
+                centre,
+                modes,
+                contacts,
+                blocks,
+                big_x,
+                shape,
+                offset,
+                x,
+                v,
+                a,
+                shape_z,
+                shape_w,
+                mode_z,
+                mode_w,
+            )
             if horizon_ball >= 0:
                 return EV_APEX, horizon_ball, horizon, x, v
             return EV_TIME, -1, horizon, x, v
