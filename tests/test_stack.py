@@ -360,3 +360,22 @@ def test_a_phase_limit_says_what_is_true(monkeypatch):
         jit.use_compiled_kernels()
     assert "eps = 1" not in str(damped.value) and "phase or step limit" in str(damped.value)
     assert "the floor is elastic, eps = 1" in str(elastic.value)
+
+
+def test_a_reused_cluster_store_gives_the_same_drop():
+    """Drops of the same balls reuse the clusters' closed forms (stack._store_for); a drop run
+    after others of the same balls (other heights, a time limit) is the same, to the bit, as
+    with a fresh store, and a store is never shared by different balls."""
+    from twoball import stack as stack_module
+
+    drop = ([0.2, 0.3, 0.5], 0.6, 0.1)
+    stack_module._STORES.clear()
+    fresh = simulate_stack(*drop, height=30.0)
+    assert len(stack_module._STORES) == 1
+    simulate_stack(*drop, height=7.0)
+    simulate_stack(*drop, height=300.0, until=20.0)
+    simulate_stack([0.2, 0.3, 0.4], 0.6, 0.1, height=30.0)  # other balls: another store
+    assert len(stack_module._STORES) == 2
+    again = simulate_stack(*drop, height=30.0)
+    assert (again.h1, again.h2, again.end_time) == (fresh.h1, fresh.h2, fresh.end_time)
+    assert again.contacts == fresh.contacts and again.apexes == fresh.apexes
