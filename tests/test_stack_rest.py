@@ -35,7 +35,7 @@ def test_every_damped_stack_ends_with_an_answer(count):
     """Seeded: in-domain damped stacks of 3 to 8 balls (H 1 to 3, which keeps it fast) reach
     the top ball's second apex or a proven rest; none ends at the phase limit. The solver
     before the per-mode bounds ended 1 985 of these 10 000 at the phase limit (20 %; 414 of them
-    reach their second apex now, 1 571 a proven rest). 10 000 take 15 to 20 s on two shared
+    reach their second apex now, 1 571 a proven rest). 10 000 take 15 to 60 s on two shared
     cores, hence slow; the first 1 000 always run."""
     rng = np.random.default_rng(SEED)
     ended: dict[Status, int] = {}
