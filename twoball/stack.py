@@ -19,16 +19,21 @@ cluster resting on the floor through an active floor contact is *grounded*.
   eigenvalues paired in order; a near-defective pair then costs accuracy in proportion to the
   condition of X, which the tolerance carries.
 
-Why no contact can be missed: the certified steps of :mod:`twoball.exact`. The mechanical energy
-of a cluster, E(z) = (|z_1|^2 + z_2^T W^-1 z_2)/2 (springs, and kinetic energy of its shape),
-never rises, also for w = z' (which obeys the same equation). Every switching function is linear
-in the heights and velocities of at most two balls; its second derivative is a constant (from
-gravity, for balls of free clusters) plus a linear form in each involved cluster's w, bounded by
-Cauchy-Schwarz in that energy: |l.w| <= sqrt(l_1.l_1 + l_2^T W l_2) sqrt(2 E(w)). So each step
+Why no contact can be missed: the certified steps of :mod:`twoball.exact`. Every switching
+function is linear in the heights and velocities of at most two balls; its second derivative is
+a constant (from gravity, for balls of free clusters) plus a linear form in each involved
+cluster's w = z' (which obeys the same equation as z). In the block coordinates X^-1 w that form
+is a sum over the blocks, and each block's share is bounded for the rest of the phase by sizes
+of its state that never grow (a rotation's norm, a diagonal's entries, a strongly overdamped
+block's two exponentials, else its oscillator energy): :func:`_block_weights`. So each step
 keeps F + F' h - bound h^2/2 above -tol, and a root can be approached but not stepped over.
+Bounding mode by mode, as the two-ball solver does, steps each contact at the pace of the modes
+that move it: the cluster's total energy weighs a light top ball's contact by 1/sqrt(its mass)
+times the whole stack's motion.
 
-A stack is at rest when every contact is active and the energy of z is too small for any contact
-force to fall from its static value (the weight above it) to zero.
+A stack is at rest when every contact is active and the same per-mode bounds, on z, leave every
+contact force above zero for ever, beyond the rounding of the phase's start
+(:func:`_rest_rounding`): docs/stacks.md, "Why every damped stack ends", has the argument.
 """
 
 from __future__ import annotations
@@ -80,6 +85,8 @@ MAX_PHASES = 1_000_000
 EV_SWITCH, EV_APEX, EV_TIME, EV_REST, EV_STUCK, EV_STEPS = 0, 1, 2, 3, 4, 5
 STATUS_DONE, STATUS_REST = int(Status.DONE), int(Status.REST)
 STATUS_STUCK, STATUS_PHASES = int(Status.STUCK), int(Status.PHASE_LIMIT)
+# How a block's future is bounded (:func:`_block_kind`).
+BLOCK_ROTATION, BLOCK_DIAGONAL, BLOCK_EXPONENTIALS, BLOCK_ENERGY = 0, 1, 2, 3
 
 
 class Clusters(NamedTuple):
@@ -90,16 +97,21 @@ class Clusters(NamedTuple):
     x: np.ndarray  # (ids, 2N, 2N) X of the block form (first 2k rows and columns)
     x_inv: np.ndarray
     blocks: np.ndarray  # (ids, N, 2, 2)
+    kind: np.ndarray  # (ids, N) how each block's future is bounded (BLOCK_ROTATION, ...)
+    companion: np.ndarray  # (ids, N, 2, 2) (u, u') = R y of a block (BLOCK_ENERGY, _EXPONENTIALS)
+    rates: np.ndarray  # (ids, N, 2) slow and fast decay rates (BLOCK_EXPONENTIALS)
     eta_rest: np.ndarray  # (ids, N) by local contact
-    kinetic: np.ndarray  # (ids, N, N) W^-1, the shape's mass matrix
     shape: np.ndarray  # (ids, N, N) ball (local) height from z_1 (contact local)
     offset: np.ndarray  # (ids, N) ball height at z = 0 (grounded), 0 for free clusters
-    c_x2: np.ndarray  # (ids, N) Cauchy-Schwarz constants of x'' of each ball, on w
-    c_g_low: np.ndarray  # of x'' + 2 zeta_below x''' (the ball's lower contact's g'')
-    c_g_up: np.ndarray  # of x'' + 2 zeta_above x'''
-    c_eta: np.ndarray  # (ids, N) of eta'' of each active contact
-    c_g: np.ndarray  # of g''
-    c_rest: np.ndarray  # of g - g_rest, on z
+    # weights (ids, N, N, 2) of each functional on each block's sizes (:func:`_block_weights`):
+    # per ball, x'' and the g'' of its lower and upper contact, on w = z'; per active contact,
+    # eta'' and g'' on w and g - g_rest on z
+    w_x2: np.ndarray
+    w_g_low: np.ndarray
+    w_g_up: np.ndarray
+    w_eta: np.ndarray
+    w_g: np.ndarray
+    w_rest: np.ndarray
     noise: np.ndarray  # (ids,) condition of X
 
 
@@ -120,16 +132,18 @@ def new_clusters(n):
         np.zeros((ids, d, d)),
         np.zeros((ids, d, d)),
         np.zeros((ids, n, 2, 2)),
+        np.zeros((ids, n), dtype=np.int64),
+        np.zeros((ids, n, 2, 2)),
+        np.zeros((ids, n, 2)),
         np.zeros((ids, n)),
         np.zeros((ids, n, n)),
-        np.zeros((ids, n, n)),
         np.zeros((ids, n)),
-        np.zeros((ids, n)),
-        np.zeros((ids, n)),
-        np.zeros((ids, n)),
-        np.zeros((ids, n)),
-        np.zeros((ids, n)),
-        np.zeros((ids, n)),
+        np.zeros((ids, n, n, 2)),
+        np.zeros((ids, n, n, 2)),
+        np.zeros((ids, n, n, 2)),
+        np.zeros((ids, n, n, 2)),
+        np.zeros((ids, n, n, 2)),
+        np.zeros((ids, n, n, 2)),
         np.zeros(ids),
     )
 
@@ -181,14 +195,65 @@ def _real_blocks(b, k):
 
 
 @njit
-def _energy_constant(row_w, kinetic_inverse, k):
-    """c with |row . w| <= c sqrt(2 E(w)), E = (|w_1|^2 + w_2^T W^-1 w_2)/2 (Cauchy-Schwarz)."""
-    total = 0.0
-    for i in range(k):
-        total += row_w[i] * row_w[i]
-        for j in range(k):
-            total += row_w[k + i] * kinetic_inverse[i, j] * row_w[k + j]
-    return math.sqrt(max(total, 0.0))
+def _block_kind(block):
+    """How a 2x2 block's future is bounded (docs/stacks.md, "Why every damped stack ends"):
+    a scaled rotation (a complex pair of the eigenvector form), a diagonal (two real
+    eigenvalues), a strongly overdamped block (two exponentials) or, otherwise, the energy of
+    its oscillator."""
+    if block[0, 1] == 0.0 and block[1, 0] == 0.0:
+        return BLOCK_DIAGONAL
+    if block[0, 0] == block[1, 1] and block[0, 1] == -block[1, 0]:
+        return BLOCK_ROTATION
+    if exact._overdamped_rates(block)[1] > 0.0:
+        return BLOCK_EXPONENTIALS
+    return BLOCK_ENERGY
+
+
+@njit
+def _block_weights(kind, block, companion, rates, r0, r1):
+    """(p, q) with |r . y(s)| <= p a + q b for every later time s of the phase, where
+    (a, b) = :func:`_sizes` of the block's state y now (docs/stacks.md, "Why every damped
+    stack ends"). A rotation keeps |y| or shrinks it, a diagonal each |y_i|; a strongly
+    overdamped block is two decaying exponentials (:func:`twoball.exact._overdamped_bound`);
+    otherwise Cauchy-Schwarz on the oscillator energy of (u, u') = R y, which never rises."""
+    if kind == BLOCK_ROTATION:
+        return math.hypot(r0, r1), 0.0
+    if kind == BLOCK_DIAGONAL:
+        return abs(r0), abs(r1)
+    row = np.empty(2)
+    row[0], row[1] = r0, r1
+    alpha_beta = exact._companion_row(row, companion)
+    alpha, beta = alpha_beta[0], alpha_beta[1]
+    if kind == BLOCK_EXPONENTIALS:
+        slow, fast = rates[0], rates[1]
+        return (
+            abs(alpha - beta * slow) * exact.OVERDAMPED_SAFETY,
+            abs(alpha - beta * fast) * exact.OVERDAMPED_SAFETY,
+        )
+    omega = math.sqrt(block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0])
+    return math.hypot(alpha / omega, beta), 0.0
+
+
+@njit
+def _store_weights(target, store, cid, index, row, k):
+    """target[cid, index] = the weights of the functional ``row`` (on z or w, length 2k) on
+    each block of the cluster: row X restricted to the block, through :func:`_block_weights`."""
+    x = store.x[cid]
+    for blk in range(k):
+        r0 = r1 = 0.0
+        for m in range(2 * k):
+            r0 += row[m] * x[m, 2 * blk]
+            r1 += row[m] * x[m, 2 * blk + 1]
+        p, q = _block_weights(
+            store.kind[cid, blk],
+            store.blocks[cid, blk],
+            store.companion[cid, blk],
+            store.rates[cid, blk],
+            r0,
+            r1,
+        )
+        target[cid, index, blk, 0] = p
+        target[cid, index, blk, 1] = q
 
 
 @njit
@@ -222,8 +287,13 @@ def _build_cluster(store, cid, lo, hi, grounded, masses, zeta):
     store.x_inv[cid, : 2 * k, : 2 * k] = x_inv
     store.blocks[cid, :k] = blocks
     store.noise[cid] = np.abs(x).sum(axis=0).max() * np.abs(x_inv).sum(axis=0).max()
-    kinetic = np.linalg.inv(w)
-    store.kinetic[cid, :k, :k] = kinetic
+    for blk in range(k):
+        kind = _block_kind(blocks[blk])
+        store.kind[cid, blk] = kind
+        if kind in (BLOCK_ENERGY, BLOCK_EXPONENTIALS):
+            store.companion[cid, blk] = exact._companion(np.ascontiguousarray(blocks[blk]))
+        if kind == BLOCK_EXPONENTIALS:
+            store.rates[cid, blk] = exact._overdamped_rates(blocks[blk])
     # heights from the shape: x_j = offset_j + shape[j] . z_1 (+ centre of mass if free)
     total = masses[lo : hi + 1].sum()
     for jl in range(balls):
@@ -247,18 +317,18 @@ def _build_cluster(store, cid, lo, hi, grounded, masses, zeta):
         row[:k] = store.shape[cid, jl, :k]
         r1 = row @ b  # x'' = r1 . w
         r2 = row @ b2  # x''' = r2 . w
-        store.c_x2[cid, jl] = _energy_constant(r1, w, k)
-        store.c_g_low[cid, jl] = _energy_constant(r1 + 2.0 * zeta[j] * r2, w, k)
+        _store_weights(store.w_x2, store, cid, jl, r1, k)
+        _store_weights(store.w_g_low, store, cid, jl, r1 + 2.0 * zeta[j] * r2, k)
         above = zeta[j + 1] if j + 1 < n else 0.0
-        store.c_g_up[cid, jl] = _energy_constant(r1 + 2.0 * above * r2, w, k)
+        _store_weights(store.w_g_up, store, cid, jl, r1 + 2.0 * above * r2, k)
     for i in range(k):
         c = first + i
         row = np.zeros(2 * k)
         row[i] = 1.0
-        store.c_eta[cid, i] = _energy_constant(row @ b, w, k)
+        _store_weights(store.w_eta, store, cid, i, row @ b, k)
         row[k + i] = 2.0 * zeta[c]
-        store.c_g[cid, i] = _energy_constant(row @ b, w, k)
-        store.c_rest[cid, i] = math.sqrt(1.0 + 4.0 * zeta[c] ** 2 * w[i, i])  # on E(z)
+        _store_weights(store.w_g, store, cid, i, row @ b, k)
+        _store_weights(store.w_rest, store, cid, i, row, k)  # g - g_rest on z
     store.ready[cid] = True
 
 
@@ -290,6 +360,8 @@ def _phase(active, x, v, store, masses, zeta):
     size = np.zeros(n)
     speed = np.zeros(n)
     of_ball = np.zeros(n, dtype=np.int64)
+    z = np.empty(2 * n)
+    eta_rest, x_inv = store.eta_rest, store.x_inv
     count = 0
     j = 0
     while j < n:
@@ -301,82 +373,243 @@ def _phase(active, x, v, store, masses, zeta):
         cid[count] = _cluster_id(start, j, grounded[count], n)
         if not store.ready[cid[count]]:
             _build_cluster(store, cid[count], start, j, grounded[count], masses, zeta)
-        k = store.contacts[cid[count]]
+        here = cid[count]
+        k = store.contacts[here]
         first = 0 if grounded[count] else start + 1
-        total = masses[start : j + 1].sum()
-        centre[count, 0] = (masses[start : j + 1] * x[start : j + 1]).sum() / total
-        centre[count, 1] = (masses[start : j + 1] * v[start : j + 1]).sum() / total
+        total = mass_x = mass_v = 0.0
         size[count] = 1.0
-        for ball in range(start, j + 1):
+        for ball in range(start, j + 1):  # loops, not slices or temporaries (see _evaluate)
+            total += masses[ball]
+            mass_x += masses[ball] * x[ball]
+            mass_v += masses[ball] * v[ball]
             of_ball[ball] = count
             size[count] += abs(x[ball])
             speed[count] += abs(v[ball])
-        z = np.zeros(2 * k)
+        centre[count, 0] = mass_x / total
+        centre[count, 1] = mass_v / total
         for i in range(k):
             c = first + i
             below_x = x[c - 1] if c >= 1 else 0.0
             below_v = v[c - 1] if c >= 1 else 0.0
-            z[i] = x[c] - below_x - store.eta_rest[cid[count], i]
+            z[i] = x[c] - below_x - eta_rest[here, i]
             z[k + i] = v[c] - below_v
-            size[count] += abs(store.eta_rest[cid[count], i])
-        if k > 0:
-            modes[count, : 2 * k] = (
-                np.ascontiguousarray(store.x_inv[cid[count], : 2 * k, : 2 * k]) @ z
-            )
+            size[count] += abs(eta_rest[here, i])
+        for row in range(2 * k):  # modes = X^-1 z
+            total = 0.0
+            for col in range(2 * k):
+                total += x_inv[here, row, col] * z[col]
+            modes[count, row] = total
         count += 1
         j += 1
     return Phase(count, lo, hi, cid, grounded, modes, centre, size, speed, of_ball)
 
 
 @njit
-def _evaluate(tau, phase, store, n, x, v, a, shape_z, shape_w):
-    """Heights, velocities, accelerations of every ball at tau into the phase (into x, v, a), and
-    each phase cluster's z and w = z' (into shape_z, shape_w)."""
-    for p in range(phase.count):
-        cid = phase.cid[p]
-        k = store.contacts[cid]
+def _evaluate(tau, phase, store, n, x, v, a, shape_z, shape_w, mode_z, mode_w):
+    """Heights, velocities, accelerations of every ball at tau into the phase (into x, v, a),
+    each phase cluster's z and w = z' (into shape_z, shape_w) and their block (mode)
+    coordinates X^-1 z and X^-1 w (into mode_z, mode_w)."""
+    _evaluate_arrays(
+        tau,
+        phase.count,
+        phase.cid,
+        phase.lo,
+        phase.hi,
+        phase.grounded,
+        phase.centre,
+        phase.modes,
+        store.contacts,
+        store.blocks,
+        store.x,
+        store.shape,
+        store.offset,
+        x,
+        v,
+        a,
+        shape_z,
+        shape_w,
+        mode_z,
+        mode_w,
+    )
+
+
+@njit
+def _evaluate_arrays(
+    tau,
+    count,
+    cids,
+    lows,
+    highs,
+    grounded,
+    centre,
+    modes,
+    contacts,
+    blocks,
+    big_x,
+    shape,
+    offset,
+    x,
+    v,
+    a,
+    shape_z,
+    shape_w,
+    mode_z,
+    mode_w,
+):
+    """:func:`_evaluate` on the phase's and the store's arrays, passed one by one: the step
+    loop reads them once per phase. Written without array slices or tuples of arrays: each
+    would count references, which took most of the time of a step."""
+    for p in range(count):
+        cid = cids[p]
+        k = contacts[cid]
         d = 2 * k
-        shape_z[p, :d] = 0.0
-        shape_w[p, :d] = 0.0
+        for row in range(d):
+            shape_z[p, row] = 0.0
+            shape_w[p, row] = 0.0
         for blk in range(k):
-            n0, n1, r0, r1 = exact._block_flow(
-                store.blocks[cid, blk], phase.modes[p, 2 * blk], phase.modes[p, 2 * blk + 1], tau
+            n0, n1, r0, r1 = exact._flow(
+                blocks[cid, blk, 0, 0],
+                blocks[cid, blk, 0, 1],
+                blocks[cid, blk, 1, 0],
+                blocks[cid, blk, 1, 1],
+                modes[p, 2 * blk],
+                modes[p, 2 * blk + 1],
+                tau,
             )
+            mode_z[p, 2 * blk], mode_z[p, 2 * blk + 1] = n0, n1
+            mode_w[p, 2 * blk], mode_w[p, 2 * blk + 1] = r0, r1
             for row in range(d):  # z = X flow, w = X rate, without allocating
-                left, right = store.x[cid, row, 2 * blk], store.x[cid, row, 2 * blk + 1]
+                left, right = big_x[cid, row, 2 * blk], big_x[cid, row, 2 * blk + 1]
                 shape_z[p, row] += left * n0 + right * n1
                 shape_w[p, row] += left * r0 + right * r1
-        z = shape_z[p]
-        w = shape_w[p]
-        if phase.grounded[p]:
+        if grounded[p]:
             base_x = base_v = base_a = 0.0
         else:
-            base_x = phase.centre[p, 0] + tau * (phase.centre[p, 1] - 0.5 * tau)
-            base_v = phase.centre[p, 1] - tau
+            base_x = centre[p, 0] + tau * (centre[p, 1] - 0.5 * tau)
+            base_v = centre[p, 1] - tau
             base_a = -1.0
-        for ball in range(phase.lo[p], phase.hi[p] + 1):
-            jl = ball - phase.lo[p]
+        for ball in range(lows[p], highs[p] + 1):
+            jl = ball - lows[p]
             xs = vs = acc = 0.0
             for i in range(k):
-                coefficient = store.shape[cid, jl, i]
-                xs += coefficient * z[i]
-                vs += coefficient * z[k + i]
-                acc += coefficient * w[k + i]
-            x[ball] = base_x + store.offset[cid, jl] + xs
+                coefficient = shape[cid, jl, i]
+                xs += coefficient * shape_z[p, i]
+                vs += coefficient * shape_z[p, k + i]
+                acc += coefficient * shape_w[p, k + i]
+            x[ball] = base_x + offset[cid, jl] + xs
             v[ball] = base_v + vs
             a[ball] = base_a + acc
 
 
 @njit
-def _energy_root(store, cid, vec):
-    """sqrt(2 E) of a cluster's shape state (z or w), E = (|v_1|^2 + v_2^T W^-1 v_2)/2."""
-    k = store.contacts[cid]
+def _sizes(kinds, blocks, companions, rates, cid, k, modes, p, out):
+    """The two sizes of each block's state y = modes[p] (cluster cid, k blocks) that
+    :func:`_block_weights` weighs, into out[p]: |y| (rotation), |y_0| and |y_1| (diagonal), the
+    amplitudes of the slow and the fast exponential (strongly overdamped), sqrt(2 E) =
+    sqrt(u'^2 + det(B) u^2) (otherwise). None of them can grow. Whole arrays and indices, not
+    slices (see :func:`_evaluate`)."""
+    for blk in range(k):
+        kind = kinds[cid, blk]
+        y0, y1 = modes[p, 2 * blk], modes[p, 2 * blk + 1]
+        if kind == BLOCK_ROTATION:
+            out[p, blk, 0], out[p, blk, 1] = math.hypot(y0, y1), 0.0
+        elif kind == BLOCK_DIAGONAL:
+            out[p, blk, 0], out[p, blk, 1] = abs(y0), abs(y1)
+        else:
+            u = companions[cid, blk, 0, 0] * y0 + companions[cid, blk, 0, 1] * y1
+            du = companions[cid, blk, 1, 0] * y0 + companions[cid, blk, 1, 1] * y1
+            if kind == BLOCK_EXPONENTIALS:
+                slow, fast = rates[cid, blk, 0], rates[cid, blk, 1]
+                gap = fast - slow
+                out[p, blk, 0] = abs((du + fast * u) / gap)
+                out[p, blk, 1] = abs((du + slow * u) / gap)
+            else:
+                det = (
+                    blocks[cid, blk, 0, 0] * blocks[cid, blk, 1, 1]
+                    - blocks[cid, blk, 0, 1] * blocks[cid, blk, 1, 0]
+                )
+                out[p, blk, 0], out[p, blk, 1] = math.sqrt(du * du + det * u * u), 0.0
+
+
+@njit
+def _bounds(
+    count,
+    cids,
+    lows,
+    highs,
+    grounded,
+    contacts,
+    kinds,
+    blocks,
+    companions,
+    rates,
+    w_x2,
+    w_g_low,
+    w_g_up,
+    w_eta,
+    w_g,
+    mode_w,
+    sizes_w,
+    out,
+):
+    """Every bound on a switching function's curvature for the rest of the phase, from the
+    blocks' sizes of w (:func:`_sizes`, into sizes_w): out[ball] holds those of x'' and of the
+    g'' of the ball's lower and upper contact, out[contact, 3:5] those of eta'' and g'' of an
+    active contact. One call per step (see :func:`_evaluate_arrays`)."""
+    for p in range(count):
+        cid = cids[p]
+        k = contacts[cid]
+        _sizes(kinds, blocks, companions, rates, cid, k, mode_w, p, sizes_w)
+        for ball in range(lows[p], highs[p] + 1):
+            jl = ball - lows[p]
+            out[ball, 0] = _bound(w_x2, cid, jl, sizes_w, p, k)
+            out[ball, 1] = _bound(w_g_low, cid, jl, sizes_w, p, k)
+            out[ball, 2] = _bound(w_g_up, cid, jl, sizes_w, p, k)
+        first = 0 if grounded[p] else lows[p] + 1
+        for i in range(k):
+            out[first + i, 3] = _bound(w_eta, cid, i, sizes_w, p, k)
+            out[first + i, 4] = _bound(w_g, cid, i, sizes_w, p, k)
+
+
+@njit
+def _bound(weights, cid, index, sizes, p, k):
+    """sum over the k blocks of p a + q b, (p, q) = weights[cid, index, block] and (a, b) =
+    sizes[p, block]: a bound on a functional for the rest of the phase (:func:`_block_weights`)."""
     total = 0.0
-    for i in range(k):
-        total += vec[i] * vec[i]
-        for j in range(k):
-            total += vec[k + i] * store.kinetic[cid, i, j] * vec[k + j]
-    return math.sqrt(max(total, 0.0))
+    for blk in range(k):
+        total += weights[cid, index, blk, 0] * sizes[p, blk, 0]
+        total += weights[cid, index, blk, 1] * sizes[p, blk, 1]
+    return total
+
+
+@njit
+def _rest_rounding(store, cid, x, v, carried):
+    """Per contact, a bound (in units of ROUNDING) on how far the rounding of this phase's
+    start moves g - g_rest at any later time (docs/stacks.md, "Why every damped stack ends").
+
+    The start z = (eta - eta_rest, eta') is formed from the heights, each overlap rounded to
+    ~|x_c| + |x_(c-1)| + |eta_rest| (and what earlier closed forms ``carried``), each rate to
+    ~|v_c| + |v_(c-1)|; its modes X^-1 z then carry at most |X^-1| times that, and a mode's
+    error is a state of the same block, bounded for all later times as the mode is
+    (:func:`_block_weights`). Only for the eigenvector form (rotations and diagonals), that
+    is clusters of three or more contacts. Far tighter than the condition of X times the
+    heights: a light top ball's weight (1e-9 of ball 0) is below that, not below this."""
+    n = store.contacts[cid]
+    scale = np.zeros(2 * n)
+    for c in range(n):
+        scale[c] = abs(x[c]) + abs(store.eta_rest[cid, c]) + 2.0 * carried / ROUNDING
+        scale[n + c] = abs(v[c])
+        if c >= 1:
+            scale[c] += abs(x[c - 1])
+            scale[n + c] += abs(v[c - 1])
+    spread = np.zeros((1, 2 * n))
+    spread[0] = np.abs(store.x_inv[cid, : 2 * n, : 2 * n]) @ scale
+    sizes = np.zeros((1, n, 2))
+    _sizes(store.kind, store.blocks, store.companion, store.rates, cid, n, spread, 0, sizes)
+    out = np.empty(n)
+    for c in range(n):
+        out[c] = _bound(store.w_rest, cid, c, sizes, 0, n)
+    return out
 
 
 @njit
@@ -397,50 +630,103 @@ def advance_phase(
     a = np.empty(n)
     shape_z = np.zeros((n, 2 * n))
     shape_w = np.zeros((n, 2 * n))
-    root_w = np.zeros(n)
+    mode_z = np.zeros((n, 2 * n))
+    mode_w = np.zeros((n, 2 * n))
+    sizes_w = np.zeros((n, n, 2))
+    sizes_z = np.zeros((1, n, 2))
+    curvature = np.zeros((n, 5))  # see _bounds
+    # the store's and the phase's arrays, read once (see _evaluate)
+    kinds, blocks, companions, rates = store.kind, store.blocks, store.companion, store.rates
+    contacts, noise, eta_rest = store.contacts, store.noise, store.eta_rest
+    w_x2, w_g_low, w_g_up = store.w_x2, store.w_g_low, store.w_g_up
+    w_eta, w_g, w_rest = store.w_eta, store.w_g, store.w_rest
+    cids, lows, grounded, of_ball = phase.cid, phase.lo, phase.grounded, phase.of_ball
+    sizes, speeds = phase.size, phase.speed
+    count, highs, centre, modes = phase.count, phase.hi, phase.centre, phase.modes
+    big_x, shape, offset = store.x, store.shape, store.offset
     everything = phase.count == 1 and phase.grounded[0] and store.contacts[phase.cid[0]] == n
+    rest_rounding = np.zeros(n)
+    if everything and n >= 3:
+        rest_rounding = _rest_rounding(store, phase.cid[0], x0, v0, carried)
     tau = 0.0
     last_step = 0.0
     for _ in range(MAX_STEPS_PER_PHASE):
-        _evaluate(tau, phase, store, n, x, v, a, shape_z, shape_w)
-        for p in range(phase.count):
-            root_w[p] = _energy_root(store, phase.cid[p], shape_w[p])
+        _evaluate_arrays(
+            tau,
+            count,
+            cids,
+            lows,
+            highs,
+            grounded,
+            centre,
+            modes,
+            contacts,
+            blocks,
+            big_x,
+            shape,
+            offset,
+            x,
+            v,
+            a,
+            shape_z,
+            shape_w,
+            mode_z,
+            mode_w,
+        )
+        _bounds(
+            count,
+            cids,
+            lows,
+            highs,
+            grounded,
+            contacts,
+            kinds,
+            blocks,
+            companions,
+            rates,
+            w_x2,
+            w_g_low,
+            w_g_up,
+            w_eta,
+            w_g,
+            mode_w,
+            sizes_w,
+            curvature,
+        )
         clock = 1.0 + t + tau
         step = horizon - tau
         event, best = -1, np.inf
         for c in range(n):
-            upper = phase.of_ball[c]
-            cid_u, jl_u = phase.cid[upper], c - phase.lo[upper]
-            noise_u = store.noise[cid_u]
-            tol_state = noise_u * (phase.size[upper] + phase.speed[upper] * (1.0 + tau) + tau * tau)
-            tol_rate = noise_u * (phase.speed[upper] + 1.0 + tau)
+            upper = of_ball[c]
+            cid_u = cids[upper]
+            k_u = contacts[cid_u]
+            noise_u = noise[cid_u]
+            tol_state = noise_u * (sizes[upper] + speeds[upper] * (1.0 + tau) + tau * tau)
+            tol_rate = noise_u * (speeds[upper] + 1.0 + tau)
             if active[c]:
-                i = c - (0 if phase.grounded[upper] else phase.lo[upper] + 1)
-                k = store.contacts[cid_u]
-                eta = store.eta_rest[cid_u, i] + shape_z[upper, i]
-                deta = shape_z[upper, k + i]
-                ddeta = shape_w[upper, k + i]
-                bound_eta = store.c_eta[cid_u, i] * root_w[upper]
-                bound_g = store.c_g[cid_u, i] * root_w[upper]
+                i = c - (0 if grounded[upper] else lows[upper] + 1)
+                eta = eta_rest[cid_u, i] + shape_z[upper, i]
+                deta = shape_z[upper, k_u + i]
+                ddeta = shape_w[upper, k_u + i]
+                bound_eta, bound_g = curvature[c, 3], curvature[c, 4]
             else:
-                rigid_u = 0.0 if phase.grounded[upper] else -1.0
-                bound_eta = store.c_x2[cid_u, jl_u] * root_w[upper]
-                bound_g = store.c_g_low[cid_u, jl_u] * root_w[upper]
+                rigid_u = 0.0 if grounded[upper] else -1.0
+                bound_eta, bound_g = curvature[c, 0], curvature[c, 1]
                 if c == 0:
                     eta, deta, ddeta = x[0], v[0], a[0]
                     rigid = -rigid_u
                 else:
-                    lower = phase.of_ball[c - 1]
-                    cid_l, jl_l = phase.cid[lower], c - 1 - phase.lo[lower]
+                    lower = of_ball[c - 1]
+                    cid_l = cids[lower]
                     eta, deta, ddeta = x[c] - x[c - 1], v[c] - v[c - 1], a[c] - a[c - 1]
-                    rigid_l = 0.0 if phase.grounded[lower] else -1.0
+                    rigid_l = 0.0 if grounded[lower] else -1.0
                     rigid = abs(rigid_u - rigid_l)
-                    bound_eta += store.c_x2[cid_l, jl_l] * root_w[lower]
-                    bound_g += store.c_g_up[cid_l, jl_l] * root_w[lower]
-                    tol_state += store.noise[cid_l] * (
-                        phase.size[lower] + phase.speed[lower] * (1.0 + tau) + tau * tau
+                    bound_eta += curvature[c - 1, 0]
+                    bound_g += curvature[c - 1, 2]
+                    tol_state += noise[cid_l] * (
+                        sizes[lower] + speeds[lower] * (1.0 + tau) + tau * tau
                     )
-                    tol_rate += store.noise[cid_l] * (phase.speed[lower] + 1.0 + tau)
+                    tol_rate += noise[cid_l] * (speeds[lower] + 1.0 + tau)
                 bound_eta += rigid
                 bound_g += rigid
             tol_state = ROUNDING * tol_state + carried
@@ -462,18 +748,39 @@ def advance_phase(
             else:
                 step = min(step, h)
         if event >= 0:
-            _evaluate(best, phase, store, n, x, v, a, shape_z, shape_w)
+            _evaluate_arrays(
+                best,
+                count,
+                cids,
+                lows,
+                highs,
+                grounded,
+                centre,
+                modes,
+                contacts,
+                blocks,
+                big_x,
+                shape,
+                offset,
+                x,
+                v,
+                a,
+                shape_z,
+                shape_w,
+                mode_z,
+                mode_w,
+            )
             return EV_SWITCH, event, best, x, v
         if everything:
             margin_ok = True
-            root_z = _energy_root(store, phase.cid[0], shape_z[0])
-            tol_rest = (
-                ROUNDING
-                * store.noise[phase.cid[0]]
-                * (phase.size[0] + phase.speed[0] * (1.0 + tau) + tau * tau)
-            )
+            cid = cids[0]
+            _sizes(kinds, blocks, companions, rates, cid, n, mode_z, 0, sizes_z)
+            tol_rest = ROUNDING * noise[cid] * (sizes[0] + speeds[0] * (1.0 + tau) + tau * tau)
             for c in range(n):
-                margin = -store.eta_rest[phase.cid[0], c] - store.c_rest[phase.cid[0], c] * root_z
+                excursion = _bound(w_rest, cid, c, sizes_z, 0, n)
+                margin = -eta_rest[cid, c] - excursion
+                if n >= 3:  # each contact's own rounding (see _rest_rounding)
+                    tol_rest = ROUNDING * (rest_rounding[c] + excursion)
                 if not margin > tol_rest:
                     margin_ok = False
             if not margin_ok and n == 2:
@@ -481,7 +788,28 @@ def advance_phase(
             if margin_ok:
                 return EV_REST, -1, tau, x, v
         if tau + step >= horizon:
-            _evaluate(horizon, phase, store, n, x, v, a, shape_z, shape_w)
+            _evaluate_arrays(
+                horizon,
+                count,
+                cids,
+                lows,
+                highs,
+                grounded,
+                centre,
+                modes,
+                contacts,
+                blocks,
+                big_x,
+                shape,
+                offset,
+                x,
+                v,
+                a,
+                shape_z,
+                shape_w,
+                mode_z,
+                mode_w,
+            )
             if horizon_ball >= 0:
                 return EV_APEX, horizon_ball, horizon, x, v
             return EV_TIME, -1, horizon, x, v
@@ -521,11 +849,12 @@ class StackRun(NamedTuple):
 
 
 @njit
-def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases):
+def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
     """Run a stack from rest at heights ``x_start`` until the top ball's ``apexes_wanted``-th
-    apex, ``t_end`` or rest (docs/model.md, "Stacks of N balls")."""
+    apex, ``t_end`` or rest (docs/model.md, "Stacks of N balls"). ``store`` holds the clusters'
+    closed forms for these masses and damping ratios (:func:`new_clusters`, or one that earlier
+    runs of the same balls filled: :func:`_store_for`)."""
     n = masses.size
-    store = new_clusters(n)
     x = x_start.copy()
     v = np.zeros(n)
     # Balls released touching (a gap of zero) start with their contact active and unloaded
@@ -643,6 +972,8 @@ def sample(phases, times, masses, zeta):
     a = np.empty(n)
     shape_z = np.zeros((n, 2 * n))
     shape_w = np.zeros((n, 2 * n))
+    mode_z = np.zeros((n, 2 * n))
+    mode_w = np.zeros((n, 2 * n))
     active = np.zeros(n, dtype=np.bool_)
     current = -1
     phase = _phase(active, phases[0, 2 : 2 + n], phases[0, 2 + n :], store, masses, zeta)
@@ -656,7 +987,8 @@ def sample(phases, times, masses, zeta):
                 active, phases[index, 2 : 2 + n], phases[index, 2 + n :], store, masses, zeta
             )
             current = index
-        _evaluate(times[s] - phases[index, 0], phase, store, n, x, v, a, shape_z, shape_w)
+        tau = times[s] - phases[index, 0]
+        _evaluate(tau, phase, store, n, x, v, a, shape_z, shape_w, mode_z, mode_w)
         heights[s] = x
         speeds[s] = v
         for c in range(n):
@@ -990,10 +1322,18 @@ def simulate_stack(
         result = hertz.simulate(stack, apexes_wanted, t_end, times, method)
         stack = result.stack  # its gaps are in units of the Hertz floor contact
     else:
-        out = run(stack.masses, stack.zeta, stack.x_start, apexes_wanted, t_end, times is not None)
+        out = run(
+            stack.masses,
+            stack.zeta,
+            stack.x_start,
+            apexes_wanted,
+            t_end,
+            times is not None,
+            _store_for(stack),
+        )
         apexes: list[list[tuple[float, float]]] = [[] for _ in range(stack.balls)]
-        for ball, when, where in out.apexes:
-            apexes[int(ball)].append((float(when), float(where)))
+        for ball, when, where in out.apexes.tolist():
+            apexes[int(ball)].append((when, where))
         trajectory = None
         if times is not None:
             heights, speeds, forces = sample(out.phases, times, stack.masses, stack.zeta)
@@ -1002,7 +1342,9 @@ def simulate_stack(
             stack=stack,
             force=force,
             apexes=apexes,
-            contacts=[StackContact(int(c), float(s), float(e)) for c, s, e in out.contacts],
+            # tolist: Python floats at once, not a numpy scalar per value (a third of the
+            # three-ball drop's time outside the kernel)
+            contacts=[StackContact(int(c), s, e) for c, s, e in out.contacts.tolist()],
             contacts_first=[int(count) for count in out.contacts_first],
             end_time=float(out.end_time),
             status=Status(out.status),
@@ -1022,6 +1364,26 @@ def simulate_stack(
             message += phase_limit_hint(stack.eps[0])
         raise SolverError(f"the stack run failed on {stack}: {message}", result)
     return result
+
+
+# The clusters' closed forms of the last few stacks, by masses and damping ratios: a cluster is
+# built on first use (an eigenvector form: about 0.1 ms for all of three balls', 1.7 ms for
+# eight balls'), so drops of the same balls from other heights or gaps (a sweep, the app) reuse
+# them. The kernel holds the GIL, so one store is never filled by two runs at once.
+_STORES: dict[bytes, Clusters] = {}
+STORES_KEPT = 8
+
+
+def _store_for(stack: Stack) -> Clusters:
+    """The cluster store for this stack's balls, the most recently used kept last."""
+    key = stack.masses.tobytes() + stack.zeta.tobytes()
+    store = _STORES.pop(key, None)
+    if store is None:
+        store = new_clusters(stack.balls)
+    _STORES[key] = store
+    while len(_STORES) > STORES_KEPT:
+        del _STORES[next(iter(_STORES))]
+    return store
 
 
 def _apex_bound(stack: Stack, force: str) -> float:
