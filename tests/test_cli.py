@@ -199,7 +199,8 @@ def test_report_on_an_array_inside_a_store_is_one_line(tmp_path):
 
 
 def test_a_hertz_integrator_failure_is_one_line_and_status_1(monkeypatch, capsys):
-    """DOP853 failing in a contact phase printed a RuntimeError traceback (exit 1)."""
+    """DOP853 (the Hertz reference method) failing in a contact phase printed a RuntimeError
+    traceback (exit 1)."""
     from twoball import cli, hertz
 
     class Failing(hertz.DOP853):
@@ -208,7 +209,8 @@ def test_a_hertz_integrator_failure_is_one_line_and_status_1(monkeypatch, capsys
             return "Required step size is less than spacing between numbers."
 
     monkeypatch.setattr(hertz, "DOP853", Failing)
-    assert cli.main(["stack", "--mass-ratios", "0.2", "--force", "hertz"]) == 1
+    command = ["stack", "--mass-ratios", "0.2", "--force", "hertz", "--method", "DOP853"]
+    assert cli.main(command) == 1
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("twoball: solver failed:")
     assert "integrator failed" in lines[0]

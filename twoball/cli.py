@@ -238,6 +238,11 @@ def _add_stack(subparsers: argparse._SubParsersAction) -> None:
     )
     _add_height(parser)
     parser.add_argument("--force", default="linear", help="linear (exact) or hertz")
+    parser.add_argument(
+        "--method",
+        default="compiled",
+        help="with --force hertz: compiled (default) or DOP853 (scipy's, the reference)",
+    )
     parser.add_argument("--until", type=_until, default="second", help="first, second or a time")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.set_defaults(func=_stack)
@@ -253,6 +258,7 @@ def _stack(args: argparse.Namespace) -> int:
         height=args.height,
         force=args.force,
         until=args.until,
+        method=args.method,
     )
     summary = result.summary()
     top_apexes = len(result.apexes[-1])
