@@ -163,3 +163,14 @@ def test_numpy_numbers_are_numbers():
     )
     assert numpy.h2 == twoball.simulate(0.9, 0.01, float(np.float32(0.01))).h2
     assert plain.h1 == pytest.approx(numpy.h1, rel=1e-4)
+
+
+def test_the_error_vocabulary_is_importable_from_twoball():
+    """A caller catches and compares with ``twoball.X``, not ``twoball.errors.X``."""
+    import twoball
+    from twoball import errors
+
+    assert twoball.Status is errors.Status and twoball.SolverError is errors.SolverError
+    with pytest.raises(twoball.ParameterError, match="eps"):
+        twoball.simulate(2.0, 0.01, 0.01)
+    assert twoball.simulate(0.9, 0.01, 0.01).status is twoball.Status.DONE

@@ -3,6 +3,7 @@
 from importlib.metadata import PackageNotFoundError, version
 
 from twoball.cubes import load_cube
+from twoball.errors import ParameterError, Status
 from twoball.model import Parameters, check_parameters
 from twoball.observables import ContactInterval, Result, Trajectory
 from twoball.solve import METHODS, SolverError, simulate
@@ -16,11 +17,13 @@ except PackageNotFoundError:  # running from a source tree that was not installe
 __all__ = [
     "METHODS",
     "ContactInterval",
+    "ParameterError",
     "Parameters",
     "Result",
     "SolverError",
     "Stack",
     "StackResult",
+    "Status",
     "Trajectory",
     "__version__",
     "check_parameters",

@@ -561,27 +561,21 @@ def sweep(
                     for future in threads_completed(futures):
                         future.result()
                         bar.update(_cases(futures[future]))
+        # complete: one metadata document, so that xarray.open_zarr reads it without a
+        # warning (written under the lock: no other sweep changes the store meanwhile)
         import warnings
 
         import zarr
 
-        with warnings.catch_warnings():  # zarr notes the done-markers and that v3 has no
-            warnings.simplefilter("ignore")  # consolidation in its specification yet
-            zarr.consolidate_metadata(str(store))  # so that xarray.open_zarr reads it quietly
+        with warnings.catch_warnings():
+            # zarr notes that consolidation is not in the v3 spec (xarray relies on it), and
+            # that the done-markers in _progress/ are not zarr objects: both known and harmless
+            warnings.simplefilter("ignore", UserWarning)
+            zarr.consolidate_metadata(str(store))
     finally:
         lock.unlink(missing_ok=True)
         if client is not None:
             client.close()
-    # complete: one metadata document, so that xarray.open_zarr reads it without a warning
-    import warnings
-
-    import zarr
-
-    with warnings.catch_warnings():
-        # zarr notes that consolidation is not in the v3 spec (xarray relies on it), and that
-        # the done-markers in _progress/ are not zarr objects: both known and harmless here
-        warnings.simplefilter("ignore", UserWarning)
-        zarr.consolidate_metadata(str(store))
     from twoball.cubes import load_cube
 
     return load_cube(store)
