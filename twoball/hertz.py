@@ -23,18 +23,20 @@ lam = Lambda / v at its *calibration speed* v: the closing speed of its collisio
 chain (sqrt(2H) for the floor). A slower contact is bouncier (1 - e ~ lam v), as real balls
 are. The floor contact time tau_f, which sets the gaps, is that of the calibrated floor contact.
 
-**Solution.** Free flight is exact: with no contact active, every ball is a parabola and the
-next touch, clamp or apex is a root of a polynomial of degree at most two. A phase with a contact
-active is integrated with scipy's DOP853 (rtol 1e-12), whose every step is bounded so that no
-touch or release (a root of some overlap eta) can be stepped over: the energy never rises, so it
-bounds every overlap, speed and force over the whole run (:func:`_force_bounds`); with the
-contacts active in a phase, that bounds eta'' towards each switch by M (:func:`_phase_bounds`:
-an active contact opens only by its own force, an inactive one closes only by its neighbours');
-a step keeps eta + eta' h - M h^2 / 2 on its side (the certified step of twoball.exact). That
-part is proven for the exact solution (the integrator's error, ~1e-12 relative, is not part of
-the proof). The clamp (1 + lam delta' = 0) and the apexes are located by sign changes at the
-step's ends and 8 points of its dense output: estimated, not proven. A root is refined by
-Brent's method on the dense output.
+**Solution.** The default is the compiled path of :mod:`twoball.hertz_kernel` (the same method
+with a compiled DOP853 on the contact forces' displacement, accurate to ~1e-13). This module's
+own, ``method="DOP853"``, is kept as a reference. Free flight is exact: with no contact active,
+every ball is a parabola and the next touch, clamp or apex is a root of a polynomial of degree
+at most two. A phase with a contact active is integrated with scipy's DOP853 (rtol 1e-12), whose
+every step is bounded so that no touch or release (a root of some overlap eta) can be stepped
+over: the energy never rises, so it bounds every overlap, speed and force over the whole run
+(:func:`_force_bounds`); with the contacts active in a phase, that bounds eta'' towards each
+switch by M (:func:`_phase_bounds`: an active contact opens only by its own force, an inactive
+one closes only by its neighbours'); a step keeps eta + eta' h - M h^2 / 2 on its side (the
+certified step of twoball.exact). That part is proven for the exact solution (the integrator's
+error, ~1e-12 relative, is not part of the proof). The clamp (1 + lam delta' = 0) and the apexes
+are located by sign changes at the step's ends and 8 points of its dense output: estimated, not
+proven. A root is refined by Brent's method on the dense output.
 """
 
 from __future__ import annotations

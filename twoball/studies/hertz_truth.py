@@ -21,6 +21,9 @@ numbers. The method is deliberately different (docs/model.md, "The Hertz force")
   :data:`PROBES` points of each step, then refined by bisection on the series to ~1e-28.
 
 Call :func:`solve_hertz_truth`. A two-ball drop takes seconds, four balls a minute or two.
+Limit: a contact that closes with no speed (balls released touching) starts with rho = 0 and
+rho' = 0, so J = 0 and the time change stalls; the reference does not handle it (the seeded drops
+all have gaps).
 """
 
 from __future__ import annotations
