@@ -19,6 +19,7 @@ The server (every process of it: ``--num-procs`` forks) is measured from /proc. 
 the same run is a minimal Panel app (one slider, one 10-point line) served the same way.
 
     .venv/bin/python benchmarks/app_load.py [--sessions 30 60] [--seconds 60] [--num-procs 2]
+        [--scene closeup] [--scene stack --slider "mass ratio (each ball / the one below)"]
 """
 
 from __future__ import annotations
@@ -131,8 +132,9 @@ async def open_burst(url: str, count: int) -> list[PageClient]:
     return clients
 
 
-async def moving(url: str, count: int, seconds: float, every: float, pid: int) -> dict:
-    """``count`` sessions, each moving eps every ``every`` s for ``seconds`` s."""
+async def moving(url: str, count: int, seconds: float, every: float, pid: int, slider: str) -> dict:
+    """``count`` sessions, each moving the slider titled ``slider`` every ``every`` s for
+    ``seconds`` s, through ten values inside its range."""
     rss_before = rss_mb(pid)
     clients = [PageClient(url) for _ in range(count)]
     for client in clients:  # one after another, as a class does over a few seconds
@@ -147,14 +149,15 @@ async def moving(url: str, count: int, seconds: float, every: float, pid: int) -
 
     async def student(index: int, client: PageClient) -> None:
         nonlocal missing
-        slider = client.slider("eps (restitution)")
+        slider_id = client.slider(slider)
+        low, high = (client.models[slider_id]["attributes"][k] for k in ("start", "end"))
         ignored = not_the_move(client)
         await asyncio.sleep(every * index / count)
         start = time.monotonic()
         moves = 0
         while time.monotonic() - start < seconds:
-            value = 0.5 + 0.45 * ((index * 7 + moves) % 10) / 10
-            sent = await client.move(slider, value)
+            value = low + (high - low) * (0.3 + 0.6 * ((index * 7 + moves) % 10) / 10)
+            sent = await client.move(slider_id, value)
             moves += 1
             await asyncio.sleep(every)
             latency = last_patch_after(client, sent, time.monotonic(), ignored)
@@ -216,8 +219,10 @@ def twoball_serve(port: int, num_procs: int) -> list[str]:
     return [
         str(Path(sys.executable).parent / "twoball"), "serve", "--address", "127.0.0.1",
         "--port", str(port), "--num-procs", str(num_procs),
-        # closed sessions are discarded within two seconds (Bokeh's defaults: 15-32 s)
-        "--check-unused-sessions", "1000", "--unused-session-lifetime", "1000",
+        # closed sessions are discarded within 6 s (Bokeh's defaults: 15-32 s); not sooner, as
+        # a session is "unused" from its websocket's opening to its first pull, which under
+        # overload took over a second
+        "--check-unused-sessions", "1000", "--unused-session-lifetime", "5000",
     ]  # fmt: skip
 
 
@@ -226,7 +231,7 @@ def minimal_serve(port: int, num_procs: int, script: Path) -> list[str]:
         str(Path(sys.executable).parent / "panel"), "serve", str(script), "--address",
         "127.0.0.1", "--port", str(port), "--num-procs", str(num_procs), "--liveness",
         "--allow-websocket-origin", f"127.0.0.1:{port}", "--reuse-sessions",
-        "--check-unused-sessions", "1000", "--unused-session-lifetime", "1000",
+        "--check-unused-sessions", "1000", "--unused-session-lifetime", "5000",
     ]  # fmt: skip
 
 
@@ -252,7 +257,8 @@ async def run(label: str, command: list[str], url: str, port: int, args, log: Pa
         await _close(burst)
         await asyncio.sleep(2.0)
         for count in args.sessions:
-            row = await moving(url, count, args.seconds, args.every, process.pid)
+            slider = args.slider if label == "twoball" else "eps (restitution)"
+            row = await moving(url, count, args.seconds, args.every, process.pid, slider)
             print(
                 f"{label}: {count} sessions moving every {args.every:g} s for {args.seconds:g} "
                 f"s: {row['moves']} moves, move to last patch p50 {row['p50_ms']:.0f} ms, p95 "
@@ -264,7 +270,7 @@ async def run(label: str, command: list[str], url: str, port: int, args, log: Pa
             )
             await asyncio.sleep(2.0)
         if args.cycles:
-            sizes = await cycles(url, args.cycle_sessions, args.cycles, process.pid, 3.0)
+            sizes = await cycles(url, args.cycle_sessions, args.cycles, process.pid, 8.0)
             growth = [f"{100 * (b / sizes[1] - 1):+.1f} %" for b in sizes[2:]]
             print(
                 f"{label}: resident memory over {args.cycles} cycles of {args.cycle_sessions} "
@@ -311,6 +317,9 @@ def main() -> None:
     parser.add_argument("--cycle-sessions", type=int, default=60)
     parser.add_argument("--num-procs", type=int, default=len(os.sched_getaffinity(0)))
     parser.add_argument("--scene", default="drop")
+    parser.add_argument(
+        "--slider", default="eps (restitution)", help="the title of the slider moved (twoball)"
+    )
     parser.add_argument("--no-baseline", action="store_true")
     args = parser.parse_args()
     from twoball import jit
