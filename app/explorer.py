@@ -224,6 +224,11 @@ class Explorer(Built):
             sidebar_width=330,
             header_background="#0072B2",
             meta_viewport="width=device-width, initial-scale=1",
+            # Panel's busy spinner reflects the whole server process: every slider move in any
+            # session turned it on and off in every open page, two patches to each of N pages a
+            # move (60 pages moving: 3600 patches a second, the server saturated). A page says
+            # itself that its own change is pending (scene.PENDING_JS).
+            busy_indicator=None,
         )
         template.config.raw_css.append(PAGE_CSS)
         if self.state.presentation:

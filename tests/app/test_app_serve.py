@@ -162,6 +162,30 @@ def test_two_sessions_moved_differently_keep_their_own_drops_and_urls(two_proces
     run(check())
 
 
+def test_a_move_sends_nothing_to_the_other_pages(two_processes):
+    """A page that does nothing receives nothing while another page moves: a move costs the
+    server its own page's patch, not one per open page (Panel's process-wide busy spinner
+    sent two to every page: 3600 patches a second with 60 pages moving)."""
+
+    async def check() -> None:
+        # four idle pages: at least one shares the mover's process (of two) 15 times in 16
+        idle = [await opened(f"{two_processes.base}/app") for _ in range(4)]
+        mover = await opened(f"{two_processes.base}/app")
+        try:
+            await asyncio.sleep(1.0)  # the idle pages' own start-up patches (their URLs)
+            before = [len(page.patches) for page in idle]
+            slider = mover.slider("eps (restitution)")
+            for eps in (0.6, 0.7, 0.8):
+                await _answer(mover, await mover.move(slider, eps))
+            await asyncio.sleep(1.0)
+            assert [page.patches[n:] for page, n in zip(idle, before, strict=True)] == [[]] * 4
+        finally:
+            for page in [*idle, mover]:
+                await page.close()
+
+    run(check())
+
+
 def test_a_release_is_answered_in_one_message_of_float32_data(two_processes):
     """What a move sends: every change of the redraw in one message (each change was a message
     of its own, 16 a move), its plotted columns as float32 (half of float64's bytes)."""
