@@ -75,7 +75,8 @@ def main() -> None:
     finally:
         process.terminate()
         process.wait(timeout=30)
-    print(f"first page with plots: {first:.1f} s after {command[1]} serve started (empty cache)")
+    program = Path(command[0]).name
+    print(f"first page with plots: {first:.1f} s after {program} serve started (empty cache)")
     for state, times in pages.items():
         if times:
             print(f"a new page while {state}: median {statistics.median(times):.1f} s, "
