@@ -107,8 +107,8 @@ class Explorer(Built):
         self.controls = Controls(state=self.state, messages=messages)
         self.lesson = Lesson(state=self.state)
         # a scene is built when first shown (its widgets, figures and Bokeh models): a page
-        # costs the scene on screen, not all five (item 1 of docs/performance.md, "A class at
-        # once"); once built it stays rendered (a re-rendered tab, dynamic=True, left Bokeh
+        # costs the scene on screen, not all five (docs/performance.md, "A class at once");
+        # once built it stays rendered (a re-rendered tab, dynamic=True, left Bokeh
         # ranges that no longer followed the units or a preset)
         self.scenes: dict[str, Scene] = {}
         self._holders = {name: pn.Column(sizing_mode="stretch_width") for name in SCENE_REGISTRY}

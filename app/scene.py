@@ -140,7 +140,7 @@ class AnsweringMarkdown(pn.pane.Markdown):
 
     The callback goes on the pane's Bokeh model: Panel's ``jscallback`` on a pane added to a page
     already shown (a scene built when first visited) sent a CustomJS the browser could not
-    resolve ("reference ... isn't known", then "Cannot read properties of undefined")."""
+    connect ("Cannot read properties of undefined (reading 'connect')" in its console)."""
 
     def _get_model(self, doc, root=None, parent=None, comm=None):
         model = super()._get_model(doc, root, parent, comm)
