@@ -372,7 +372,8 @@ class MapScene(Scene):
 
     def layout(self) -> pn.viewable.Viewable:
         return pn.Column(
-            pn.Row(self.choice, self.download),
+            # wraps: on a phone the two side by side made the page scroll sideways
+            pn.FlexBox(self.choice, self.download, flex_wrap="wrap", sizing_mode="stretch_width"),
             self.note,
             self.figure,
             sizing_mode="stretch_width",
