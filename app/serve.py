@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
 from pathlib import Path
 
@@ -71,6 +72,26 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def stop_together_on_sigterm() -> None:
+    """With several processes, a SIGTERM to the first one stops them all.
+
+    That process only waits for the ones it forked (Tornado's ``fork_processes``) and handles no
+    SIGTERM; as a container's PID 1 it ignored ``docker stop`` (the kernel delivers no signal
+    to PID 1 that it does not handle), which killed it after its grace period (exit 137), and
+    elsewhere it died alone, leaving its children serving. Forwarded once to the process
+    group, the SIGTERM stops each server (Bokeh's own handler, exit 0), and the first process
+    then exits 0."""
+    forwarded = False
+
+    def forward(signum: int, frame: object) -> None:
+        nonlocal forwarded
+        if not forwarded:
+            forwarded = True
+            os.killpg(os.getpgrp(), signal.SIGTERM)
+
+    signal.signal(signal.SIGTERM, forward)
+
+
 def main(argv: list[str]) -> int:
     """Run the server until it is stopped; returns the exit status."""
     parser = build_parser()
@@ -79,6 +100,8 @@ def main(argv: list[str]) -> int:
         parser.error(f"--num-procs must be at least 1; got {args.num_procs}")
     if args.files != [str(APP_DIR)]:
         parser.error(f"takes no app to serve (it serves the explorer); got {args.files[1:]}")
+    if args.num_procs > 1:
+        stop_together_on_sigterm()
     AppServe(parser=argparse.ArgumentParser()).invoke(args)
     return 0
 
