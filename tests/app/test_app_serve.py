@@ -15,6 +15,7 @@ import signal
 import subprocess
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from urllib.parse import parse_qs, urlparse
 
@@ -80,7 +81,10 @@ def two_processes(artifacts, tmp_path_factory):
 
 
 def run(coroutine):
-    return asyncio.run(coroutine)
+    """``asyncio.run`` in a thread of its own: once a browser test has run, Playwright's sync API
+    keeps an event loop running in the main thread, where asyncio.run refuses to start."""
+    with ThreadPoolExecutor(1) as pool:
+        return pool.submit(asyncio.run, coroutine).result()
 
 
 async def opened(url: str) -> PageClient:
