@@ -1,6 +1,6 @@
 """``twoball serve``: the explorer served from wherever it is installed, at ``/app``.
 
-Panel's own ``panel serve`` command, with this directory as the app and three defaults changed
+Panel's own ``panel serve`` command, with this directory as the app and four defaults changed
 for a class:
 
 - ``--num-procs``: every core this process may use (``os.sched_getaffinity``; a container's CPU
