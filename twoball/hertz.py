@@ -48,6 +48,7 @@ import numpy as np
 from scipy.integrate import DOP853, solve_ivp
 from scipy.optimize import brentq
 
+from twoball import hertz_kernel
 from twoball.errors import Status
 
 # The work a run may take: 30 000 steps, 15-40 s. Inside the domain check_stack accepts the
@@ -336,23 +337,6 @@ def solve(
     return status, t, apexes, contacts, first, samples
 
 
-def _first_fall(a: float, b: float, c: float) -> float:
-    """The first s >= 0 at which a s^2 + b s + c (a <= 0) falls through zero, 0 if it is not
-    positive and falling now, inf if never: where an inactive overlap closes."""
-    if c <= 0.0 and (b < 0.0 or (b == 0.0 and a < 0.0)):
-        return 0.0
-    if a == 0.0:
-        return -c / b if b < 0.0 else math.inf
-    disc = b * b - 4.0 * a * c
-    if disc < 0.0:
-        return math.inf
-    # the larger root of a concave parabola is where it falls through zero
-    q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
-    roots = [q / a, c / q if q != 0.0 else -math.inf]
-    larger = max(roots)
-    return larger if larger > 0.0 else math.inf
-
-
 def _next_in_flight(stack: _Stack, y: np.ndarray, horizon: float) -> tuple[float, str, int]:
     """Time to the next touch or apex with every ball in free flight (exact: parabolas)."""
     n = stack.n
@@ -360,7 +344,7 @@ def _next_in_flight(stack: _Stack, y: np.ndarray, horizon: float) -> tuple[float
     eta, deta = stack.overlaps(y)
     for c in range(n):
         curvature = -0.5 if c == 0 else 0.0  # eta_0 = x_0 falls at 1; the others' relative
-        root = _first_fall(curvature, deta[c], eta[c])
+        root = hertz_kernel._first_fall(curvature, deta[c], eta[c])  # (shared with it)
         if root < best:
             best, kind, index = root, "switch", c
     # a floor contact clamped while still compressed (leaving faster than 1/lam) pushes again
@@ -565,8 +549,6 @@ def simulate(
             hertz_stack.masses, eps, hertz_stack.x_start, stack.height, apexes_wanted, t_end, times
         )
     else:
-        from twoball import hertz_kernel
-
         lam = np.array([damping_factor(float(e)) for e in eps])
         lam /= calibration_speeds(hertz_stack.masses, eps, stack.height)
         sorted_times = np.empty(0) if times is None else np.sort(np.asarray(times, dtype=float))

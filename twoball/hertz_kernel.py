@@ -30,6 +30,7 @@ import math
 import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _dop853
 
+from twoball import exact
 from twoball.errors import Status
 from twoball.jit import njit
 
@@ -55,16 +56,6 @@ SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 K_SWITCH, K_APEX, K_TIME, K_REST, K_STEPS, K_FAILED = 0, 1, 2, 3, 4, 5
 STATUS_DONE, STATUS_REST = int(Status.DONE), int(Status.REST)
 STATUS_PHASES, STATUS_FAILED = int(Status.PHASE_LIMIT), int(Status.FAILED)
-
-
-@njit
-def _grow(rows: np.ndarray, used: int) -> np.ndarray:
-    """``rows`` with room for one more row after the first ``used``."""
-    if used < rows.shape[0]:
-        return rows
-    bigger = np.empty((2 * rows.shape[0], rows.shape[1]))
-    bigger[:used] = rows[:used]
-    return bigger
 
 
 @njit
@@ -669,7 +660,7 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
             fresh[:] = False
         if kind == K_APEX:
             v[index] = 0.0
-            apexes = _grow(apexes, n_apex)
+            apexes = exact._room_for_one(apexes, n_apex)
             apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, x[index]
             n_apex += 1
             if index == n - 1:
@@ -686,7 +677,7 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
             continue
         # a switch: the contact's function fell through zero, so it toggles
         if active[index]:
-            contacts = _grow(contacts, n_contacts)
+            contacts = exact._room_for_one(contacts, n_contacts)
             contacts[n_contacts, 0], contacts[n_contacts, 1] = index, opened[index]
             contacts[n_contacts, 2] = t
             n_contacts += 1
@@ -697,7 +688,7 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
         active[index] = not active[index]
     for c in range(n):
         if active[c]:
-            contacts = _grow(contacts, n_contacts)
+            contacts = exact._room_for_one(contacts, n_contacts)
             contacts[n_contacts, 0], contacts[n_contacts, 1] = c, opened[c]
             contacts[n_contacts, 2] = t
             n_contacts += 1
