@@ -36,11 +36,16 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tools"))
 
-from appdriver import free_port, serve, server_errors, wait_until_served  # noqa: E402
+from appdriver import (  # noqa: E402
+    cpu_seconds,
+    free_port,
+    rss_mb,
+    serve,
+    server_errors,
+    wait_until_served,
+)
 from bokehclient import PageClient  # noqa: E402
 
-TICKS = os.sysconf("SC_CLK_TCK")
-PAGE_SIZE = os.sysconf("SC_PAGE_SIZE")
 MINIMAL_APP = """
 import numpy as np
 import panel as pn
@@ -54,48 +59,6 @@ slider = pn.widgets.FloatSlider(name="eps (restitution)", start=0, end=1, value=
 slider.param.watch(lambda e: source.data.update(y=np.full(10, e.new)), "value_throttled")
 pn.Column(slider, pn.pane.Bokeh(fig)).servable()
 """
-
-
-def tree(pid: int) -> list[int]:
-    """``pid`` and its descendants (the processes ``--num-procs`` forks)."""
-    children: dict[int, list[int]] = {}
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                stat = (entry / "stat").read_text()
-            except OSError:
-                continue
-            parent = int(stat.rsplit(")", 1)[1].split()[1])
-            children.setdefault(parent, []).append(int(entry.name))
-    found, todo = [], [pid]
-    while todo:
-        current = todo.pop()
-        found.append(current)
-        todo.extend(children.get(current, []))
-    return found
-
-
-def cpu_seconds(pid: int) -> float:
-    """User + system CPU of the server's processes so far."""
-    total = 0.0
-    for process in tree(pid):
-        try:
-            fields = Path(f"/proc/{process}/stat").read_text().rsplit(")", 1)[1].split()
-        except OSError:
-            continue
-        total += (int(fields[11]) + int(fields[12])) / TICKS
-    return total
-
-
-def rss_mb(pid: int) -> float:
-    """Resident memory of the server's processes, in MB."""
-    total = 0
-    for process in tree(pid):
-        try:
-            total += int(Path(f"/proc/{process}/statm").read_text().split()[1])
-        except OSError:
-            continue
-    return total * PAGE_SIZE / 2**20
 
 
 def percentile(values: list[float], q: float) -> float:

@@ -12,7 +12,6 @@ Chromium runs on the same 2-core machine as the server, so this is a pessimistic
 from __future__ import annotations
 
 import argparse
-import os
 import statistics
 import sys
 import tempfile
@@ -25,31 +24,17 @@ sys.path.insert(0, str(REPO / "tools"))
 from appdriver import (  # noqa: E402
     CHROMIUM,
     CHROMIUM_ARGS,
+    cpu_seconds,
     finish_slider_move,
     free_port,
     open_page,
     panel_serve,
+    rss_mb,
     serve,
     server_errors,
     start_slider_move,
     wait_until_served,
 )
-
-TICKS = os.sysconf("SC_CLK_TCK")
-
-
-def rss_mb(pid: int) -> float:
-    """Resident memory of a process in MB (/proc)."""
-    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith("VmRSS:"):
-            return int(line.split()[1]) / 1024
-    raise RuntimeError("no VmRSS")
-
-
-def cpu_seconds(pid: int) -> float:
-    """User + system CPU time of a process so far (/proc)."""
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / TICKS
 
 
 def server_errors_in(log: str) -> list[str]:

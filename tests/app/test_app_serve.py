@@ -26,6 +26,7 @@ from appdriver import (
     free_port,
     open_page,
     press_slider,
+    rss_mb,
     serve,
     server_errors,
     wait_for_change,
@@ -222,31 +223,6 @@ def test_a_bad_serve_option_is_one_line_and_status_2(tmp_path):
         assert done.returncode == 2, (options, done.stderr)
         lines = done.stderr.strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith("twoball: error: serve:"), lines
-
-
-def rss_mb(pid: int) -> float:
-    """Resident memory of a process and its children, in MB."""
-    total = 0
-    for process in [pid, *_children(pid)]:
-        try:
-            pages = int(Path(f"/proc/{process}/statm").read_text().split()[1])
-        except OSError:
-            continue
-        total += pages * os.sysconf("SC_PAGE_SIZE")
-    return total / 2**20
-
-
-def _children(pid: int) -> list[int]:
-    found = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                parent = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
-            except OSError:
-                continue
-            if parent == pid:
-                found += [int(entry.name), *_children(int(entry.name))]
-    return found
 
 
 @pytest.mark.slow
