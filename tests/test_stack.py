@@ -261,8 +261,8 @@ def _largest_height_by_hand(masses):
 
 @pytest.mark.parametrize("ratios", [[0.2], [0.2, 0.2], [1e-4, 1e-4], [3.0, 0.5, 2.0]])
 def test_heights_beyond_the_domain_are_refused_as_simulate_refuses_them(ratios):
-    """H = 1e30 returned h1 = 2.3e30 (simulate refuses it); the largest height accepted is the
-    one the formula of docs/model.md gives, evaluated here independently."""
+    """The largest height accepted is the one the formula of docs/model.md gives, evaluated here
+    independently; H = 1e30 is refused, as simulate refuses it."""
     largest = _largest_height_by_hand(np.cumprod([1.0, *ratios]))
     check_stack(ratios, 0.9, 0.0 if len(ratios) < 3 else 1e-6, height=largest * 0.99)
     with pytest.raises(ParameterError, match="height must be at most") as caught:
