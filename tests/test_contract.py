@@ -59,7 +59,7 @@ def test_a_stuck_or_limited_run_raises_or_returns_failed(monkeypatch, status):
     def failing(*args, **kwargs):
         return real(*args, **kwargs)._replace(status=status, message=status.message)
 
-    monkeypatch.setattr(exact, "solve", failing)
+    monkeypatch.setitem(twoball.METHODS, "exact", failing)
     with pytest.raises(SolverError, match=re.escape(status.message)) as raised:
         twoball.simulate(0.9, 0.01, 0.01)
     assert raised.value.result.status is status and not raised.value.result.success
@@ -76,7 +76,7 @@ def test_the_command_line_reports_a_failed_run_in_one_line_with_status_1(monkeyp
         limit = Status.PHASE_LIMIT
         return real(*args, **kwargs)._replace(status=limit, message=limit.message)
 
-    monkeypatch.setattr(exact, "solve", limited)
+    monkeypatch.setitem(twoball.METHODS, "exact", limited)
     assert main(["simulate", "--eps", "0.9", "--mu", "0.01", "--tau-ratio", "0.01"]) == 1
     captured = capsys.readouterr()
     lines = captured.err.strip().splitlines()
@@ -94,7 +94,7 @@ def test_an_apex_above_the_energy_at_release_is_an_error_not_a_value(monkeypatch
         outcome = real(*args, **kwargs)
         return outcome._replace(apex_h=[outcome.apex_h[0], 1e100])
 
-    monkeypatch.setattr(exact, "solve", inflated)
+    monkeypatch.setitem(twoball.METHODS, "exact", inflated)
     with pytest.raises(SolverError, match="impossible") as raised:
         twoball.simulate(0.9, 0.01, 0.01)
     assert raised.value.result.status is Status.IMPOSSIBLE

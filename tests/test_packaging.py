@@ -119,8 +119,9 @@ def test_the_kernel_cache_is_keyed_on_every_kernel_module(tmp_path, monkeypatch)
     from twoball import jit
 
     for name in jit.KERNEL_MODULES:
-        module = name.rpartition(".")[2]
-        (tmp_path / f"{module}.py").write_bytes((jit.PACKAGE / f"{module}.py").read_bytes())
+        copy = tmp_path / jit.source_of(name).relative_to(jit.PACKAGE)
+        copy.parent.mkdir(parents=True, exist_ok=True)
+        copy.write_bytes(jit.source_of(name).read_bytes())
     monkeypatch.setattr(jit, "PACKAGE", tmp_path)
     before = jit.sources_key()
     assert jit.CACHE_DIR is False or Path(jit.CACHE_DIR).name == before

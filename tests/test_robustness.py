@@ -84,7 +84,7 @@ def test_an_impossible_apex_is_an_error_not_a_value(monkeypatch):
         outcome = real(drop, apexes, t_end, **options)
         return outcome._replace(apex_h=[outcome.apex_h[0], 4.0e106])
 
-    monkeypatch.setattr(exact, "solve", doctored)
+    monkeypatch.setitem(twoball.METHODS, "exact", doctored)
     with pytest.raises(twoball.SolverError, match="apex 2 .* is impossible"):
         twoball.simulate(0.9, 0.01, 0.01)
     result = twoball.simulate(0.9, 0.01, 0.01, throw=False)
@@ -103,7 +103,7 @@ def test_a_stuck_root_finder_is_loud_everywhere(monkeypatch):
             message=Status.STUCK.message,
         )
 
-    monkeypatch.setattr(exact, "solve", stuck)
+    monkeypatch.setitem(twoball.METHODS, "exact", stuck)
     with pytest.raises(twoball.SolverError, match="root finder"):
         twoball.simulate(0.9, 0.01, 0.01)
     status, _, err = run_cli("simulate", "--eps", "0.9", "--mu", "0.01", "--tau-ratio", "0.01")

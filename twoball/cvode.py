@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from twoball.errors import ParameterError
 from twoball.model import Drop
 from twoball.observables import Outcome
 from twoball.reference import _right_hand_side, forces, outcome_from_events, time_limit
@@ -25,9 +26,13 @@ MAX_STEPS = 1_000_000
 MAX_RESTARTS = 100_000
 
 
-def solve(drop: Drop, apexes: int, t_end: float, rtol: float, atol: float) -> Outcome:
+def solve(
+    drop: Drop, apexes: int, t_end: float, *, rtol: float, atol: float, dense_output: bool = False
+) -> Outcome:
     """Integrate with CVODE (BDF) to the wanted apexes; an Outcome like
     :func:`twoball.reference.solve`'s, without dense output."""
+    if dense_output:
+        raise ParameterError("CVODE gives no dense output here (t_eval, dense_output)")
     from sksundae.cvode import CVODE
 
     rhs_list, jacobian = _right_hand_side(drop)

@@ -66,26 +66,31 @@ from typing import NamedTuple
 
 import numpy as np
 
-from twoball.errors import Status
+from twoball.errors import ParameterError, Status
 from twoball.jit import njit
-from twoball.model import MACHINE_EPSILON, Drop
+from twoball.kernels.codes import (
+    EVENT_APEX,
+    EVENT_BALL,
+    EVENT_FLOOR,
+    EVENT_REST,
+    EVENT_STEPS,
+    EVENT_STUCK,
+    EVENT_TIME,
+    MAX_PHASES,
+    MAX_STEPS_PER_PHASE,
+    ROUNDING,
+    STATUS_DONE,
+    STATUS_PHASES,
+    STATUS_REST,
+    STATUS_STUCK,
+)
+from twoball.model import Drop
 from twoball.observables import Outcome
 
 # Phase kinds: bit 0 floor contact active, bit 1 ball contact active.
 FREE, FLOOR, BALL, BOTH = 0, 1, 2, 3
 
-# Events returned by one phase.
-EVENT_FLOOR, EVENT_BALL, EVENT_APEX, EVENT_TIME, EVENT_REST, EVENT_STUCK = 0, 1, 2, 3, 4, 5
-EVENT_STEPS = 6  # MAX_STEPS_PER_PHASE used up: a phase too long to finish, not a stall
-
-# Status of a run (plain integers inside the kernel; twoball.errors.Status names them).
-STATUS_DONE, STATUS_REST = int(Status.DONE), int(Status.REST)
-STATUS_STUCK, STATUS_PHASES = int(Status.STUCK), int(Status.PHASE_LIMIT)
-
-MAX_STEPS_PER_PHASE = 100_000
 MAX_ROOT_ITERATIONS = 100  # of a bracketed Halley search (it converges in about three)
-MAX_PHASES = 1_000_000
-ROUNDING = 16.0 * MACHINE_EPSILON  # tolerance in units of relative rounding
 SUBSPACE_SWEEPS = 4  # refinement sweeps of the both-contact mode split (see _split_modes)
 OVERDAMPED_GAP = 0.1  # rates this far apart (relative) split a block into two exponentials
 OVERDAMPED_SAFETY = 1.0 + 1e-9  # covers the rounding of that split (relative ~ulp / gap)
@@ -454,17 +459,35 @@ def _overdamped_bound(rates, alpha_beta, u, du, power):
     return bound * OVERDAMPED_SAFETY
 
 
-@njit
-def prepare(mu, z01, z12):
-    """What the kernel needs for one drop, passed on whole to :func:`run` as ``prepared``.
+class Prepared(NamedTuple):
+    """What the kernel needs for one drop (:func:`prepare`, arrays; :func:`constants`, the same
+    fields as nested tuples of floats).
 
-    Returns (params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, mode_rows):
     c0[kind, contact, part] + c1[...] sqrt(2 E_1) + c2[...] sqrt(2 E_2) bounds |F''| (part 0 is
     eta, part 1 is g); rest[contact, block] bounds |g - g_rest| in the both-contact phase; x,
     blocks and companions describe its two modes; rates[block] are the decay rates of a strongly
     overdamped block (zeros otherwise) and mode_rows[contact, part, block] each functional's
     coefficients on the block's (u, u'), for :func:`_overdamped_bound`.
     """
+
+    params: np.ndarray  # (7,) laid out as P_MU, P_Z01, ...
+    c0: np.ndarray  # (4, 2, 2)
+    c1: np.ndarray
+    c2: np.ndarray
+    rest: np.ndarray  # (2, 2)
+    x: np.ndarray  # (4, 4) the both-contact phase's mode split
+    x_inv: np.ndarray
+    blocks: np.ndarray  # (2, 2, 2)
+    companions: np.ndarray  # (2, 2, 2)
+    y_rest: np.ndarray  # (4,) the both-contact phase's static rest
+    rates: np.ndarray  # (2, 2)
+    mode_rows: np.ndarray  # (2, 2, 2, 2)
+
+
+@njit
+def prepare(mu, z01, z12):
+    """What the kernel needs for one drop (a :class:`Prepared`), passed on whole to :func:`run`
+    as ``prepared``."""
     w2 = (1.0 + mu) / mu
     nu2 = mu / (1.0 + mu)
     b12, om12 = z12 * w2, math.sqrt(w2)
@@ -520,7 +543,20 @@ def prepare(mu, z01, z12):
     # rounding growth of the both-contact state through x and x^-1 (1-norm condition)
     params[P_NOISE] = np.abs(x).sum(axis=0).max() * np.abs(x_inv).sum(axis=0).max()
     y_rest = np.array([-(1.0 + mu), -mu, 0.0, 0.0])  # X1 = -(1 + mu), X2 = -(1 + 2 mu)
-    return params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, mode_rows
+    return Prepared(
+        params=params,
+        c0=c0,
+        c1=c1,
+        c2=c2,
+        rest=rest,
+        x=x,
+        x_inv=x_inv,
+        blocks=blocks,
+        companions=companions,
+        y_rest=y_rest,
+        rates=rates,
+        mode_rows=mode_rows,
+    )
 
 
 @njit
@@ -543,26 +579,29 @@ def _quad(a):
 
 @njit
 def constants(prepared):
-    """What :func:`prepare` returned, as nested tuples of floats (indexed alike).
+    """What :func:`prepare` returned, as a :class:`Prepared` of nested tuples of floats (indexed
+    alike).
 
     :func:`run` steps with these: an array handed to a compiled function costs an atomic
     reference-count increment and decrement per call, which in the stepping loop took about
     half the kernel's time; tuples of floats cost nothing to pass.
     """
-    params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, mode_rows = prepared
-    return (
-        (params[0], params[1], params[2], params[3], params[4], params[5], params[6]),
-        (_square(c0[0]), _square(c0[1]), _square(c0[2]), _square(c0[3])),
-        (_square(c1[0]), _square(c1[1]), _square(c1[2]), _square(c1[3])),
-        (_square(c2[0]), _square(c2[1]), _square(c2[2]), _square(c2[3])),
-        _square(rest),
-        (_quad(x[0]), _quad(x[1]), _quad(x[2]), _quad(x[3])),
-        (_quad(x_inv[0]), _quad(x_inv[1]), _quad(x_inv[2]), _quad(x_inv[3])),
-        (_square(blocks[0]), _square(blocks[1])),
-        (_square(companions[0]), _square(companions[1])),
-        _quad(y_rest),
-        _square(rates),
-        (
+    params, c0, c1, c2 = prepared.params, prepared.c0, prepared.c1, prepared.c2
+    x, x_inv, mode_rows = prepared.x, prepared.x_inv, prepared.mode_rows
+    blocks, companions = prepared.blocks, prepared.companions
+    return Prepared(
+        params=(params[0], params[1], params[2], params[3], params[4], params[5], params[6]),
+        c0=(_square(c0[0]), _square(c0[1]), _square(c0[2]), _square(c0[3])),
+        c1=(_square(c1[0]), _square(c1[1]), _square(c1[2]), _square(c1[3])),
+        c2=(_square(c2[0]), _square(c2[1]), _square(c2[2]), _square(c2[3])),
+        rest=_square(prepared.rest),
+        x=(_quad(x[0]), _quad(x[1]), _quad(x[2]), _quad(x[3])),
+        x_inv=(_quad(x_inv[0]), _quad(x_inv[1]), _quad(x_inv[2]), _quad(x_inv[3])),
+        blocks=(_square(blocks[0]), _square(blocks[1])),
+        companions=(_square(companions[0]), _square(companions[1])),
+        y_rest=_quad(prepared.y_rest),
+        rates=_square(prepared.rates),
+        mode_rows=(
             (_square(mode_rows[0, 0]), _square(mode_rows[0, 1])),
             (_square(mode_rows[1, 0]), _square(mode_rows[1, 1])),
         ),
@@ -913,7 +952,10 @@ def advance_phase(
     its force ends is found in closed form (:func:`_release_time`) and becomes the horizon; only
     the other contact is stepped.
     """
-    params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, mode_rows = prepared
+    params, c0, c1, c2 = prepared.params, prepared.c0, prepared.c1, prepared.c2
+    rest, x, x_inv, blocks = prepared.rest, prepared.x, prepared.x_inv, prepared.blocks
+    companions, y_rest = prepared.companions, prepared.y_rest
+    rates, mode_rows = prepared.rates, prepared.mode_rows
     z01, z12, w2_ball = params[P_Z01], params[P_Z12], params[P_W2]
     noise = params[P_NOISE] if kind == BOTH else 1.0
     # the tolerances keep their scale of absolute heights and speeds: they bound the rounding of
@@ -1088,7 +1130,7 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
     # the static rest (~ mu ulp for a heavy upper ball); later phases must not take that for an
     # overlap, or a contact that just opened closes again at once, for ever.
     stepping = constants(prepared)
-    params, y_rest = stepping[0], stepping[9]
+    params, y_rest = stepping.params, stepping.y_rest
     both_offset = ROUNDING * params[P_NOISE] * _rest_size(y_rest)
     carried = 0.0
     for _ in range(MAX_PHASES):
@@ -1168,14 +1210,14 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
                 row[0], row[1], row[2] = contact, start[contact], t
                 n_contacts += 1
     return RunOutcome(
-        status,
-        t,
-        apexes[:n_apex, 0].copy(),
-        apexes[:n_apex, 1].copy(),
-        ball_first,
-        floor_first,
-        contacts[:n_contacts],
-        phases[:n_phases],
+        status=status,
+        end_time=t,
+        apex_t=apexes[:n_apex, 0].copy(),
+        apex_h=apexes[:n_apex, 1].copy(),
+        ball_contacts_first=ball_first,
+        floor_contacts_first=floor_first,
+        contacts=contacts[:n_contacts],
+        phases=phases[:n_phases],
     )
 
 
@@ -1208,7 +1250,8 @@ def sample(phases, times, prepared):
 
     Returns an array (len(times), 6): x1, x2, v1, v2, f01, f12.
     """
-    params, _, _, _, _, x, x_inv, blocks, _, y_rest, _, _ = prepared
+    params, x, x_inv = prepared.params, prepared.x, prepared.x_inv
+    blocks, y_rest = prepared.blocks, prepared.y_rest
     z01, z12 = params[P_Z01], params[P_Z12]
     out = np.empty((times.size, 6))
     starts = phases[:, 0]
@@ -1244,12 +1287,23 @@ def run_drop(mu, z01, z12, x1, x2, apexes_wanted, t_end):
     return run(x1, x2, apexes_wanted, t_end, prepare(mu, z01, z12), True, False)
 
 
-def solve(drop: Drop, apexes: int, t_end: float, *, dense_output: bool = False) -> Outcome:
-    """Run the exact solver on a validated drop; see :func:`twoball.simulate`.
+def solve(
+    drop: Drop,
+    apexes: int,
+    t_end: float,
+    *,
+    rtol: float | None = None,
+    atol: float | None = None,
+    dense_output: bool = False,
+) -> Outcome:
+    """Run the exact solver on a validated drop; see :func:`twoball.simulate`. It has no
+    tolerances (``rtol`` and ``atol`` are refused: they belong to the other methods).
 
     With ``dense_output`` the phases are recorded, and the outcome's ``evaluate`` gives the exact
     state at any times.
     """
+    if rtol is not None or atol is not None:
+        raise ParameterError("rtol and atol apply to the scipy methods only, not to 'exact'")
     evaluate = plot_times = None
     if not dense_output:
         out = run_drop(
@@ -1266,16 +1320,16 @@ def solve(drop: Drop, apexes: int, t_end: float, *, dense_output: bool = False) 
         plot_times = default_times(phases, out.end_time)
     status = Status(out.status)
     return Outcome(
-        out.apex_t.tolist(),
-        out.apex_h.tolist(),
-        out.contacts,
-        out.end_time,
-        status,
-        status.message or None,
-        out.ball_contacts_first,
-        out.floor_contacts_first,
-        evaluate,
-        plot_times,
+        apex_t=out.apex_t.tolist(),
+        apex_h=out.apex_h.tolist(),
+        contacts=out.contacts,
+        end_time=out.end_time,
+        status=status,
+        message=status.message or None,
+        contacts_first=out.ball_contacts_first,
+        floor_contacts_first=out.floor_contacts_first,
+        evaluate=evaluate,
+        plot_times=plot_times,
     )
 
 

@@ -50,6 +50,14 @@ from scipy.optimize import brentq
 
 from twoball import hertz_kernel
 from twoball.errors import Status
+from twoball.kernels.codes import (
+    EVENT_APEX,
+    EVENT_FAILED,
+    EVENT_REST,
+    EVENT_STEPS,
+    EVENT_SWITCH,
+    EVENT_TIME,
+)
 
 # The work a run may take: 30 000 steps, 15-40 s. Inside the domain check_stack accepts the
 # largest measured runs take about 10 000 (masses 1e4: 9 825; six balls: 6 004; a heavy stack
@@ -293,21 +301,21 @@ def solve(
                 not resting,
             )
             steps += 1  # a phase counts, so that a run always ends
-        if kind == "time" or (resting and next_sample == len(times)):
+        if kind == EVENT_TIME or (resting and next_sample == len(times)):
             status = Status.REST if resting else Status.DONE
             break
-        if kind == "steps":
+        if kind == EVENT_STEPS:
             break
-        if kind == "failed":  # DOP853 could not go on (a step size below its minimum)
+        if kind == EVENT_FAILED:  # DOP853 could not go on (a step size below its minimum)
             status = Status.FAILED
             break
-        if kind == "switch":
+        if kind == EVENT_SWITCH:
             if not fresh.any() or t != switched_at:
                 fresh[:] = False
             fresh[index], switched_at = True, t
         else:
             fresh[:] = False
-        if kind == "apex":
+        if kind == EVENT_APEX:
             y[n + index] = 0.0
             apexes.append((index, t, float(y[index])))
             if index == n - 1:
@@ -316,7 +324,7 @@ def solve(
                     status = Status.DONE
                     break
             continue
-        if kind == "rest":
+        if kind == EVENT_REST:
             status = Status.REST
             if times is None or next_sample == len(times):
                 break
@@ -337,25 +345,25 @@ def solve(
     return status, t, apexes, contacts, first, samples
 
 
-def _next_in_flight(stack: _Stack, y: np.ndarray, horizon: float) -> tuple[float, str, int]:
+def _next_in_flight(stack: _Stack, y: np.ndarray, horizon: float) -> tuple[float, int, int]:
     """Time to the next touch or apex with every ball in free flight (exact: parabolas)."""
     n = stack.n
-    best, kind, index = horizon, "time", -1
+    best, kind, index = horizon, EVENT_TIME, -1
     eta, deta = stack.overlaps(y)
     for c in range(n):
         curvature = -0.5 if c == 0 else 0.0  # eta_0 = x_0 falls at 1; the others' relative
         root = hertz_kernel._first_fall(curvature, deta[c], eta[c])  # (shared with it)
         if root < best:
-            best, kind, index = root, "switch", c
+            best, kind, index = root, EVENT_SWITCH, c
     # a floor contact clamped while still compressed (leaving faster than 1/lam) pushes again
     # once ball 0 slows below that: g_0 = lam (v_0 - s) - 1 falls to zero
     if eta[0] < 0.0 and stack.lam[0] > 0.0:
         again = y[n] - 1.0 / stack.lam[0]
         if 0.0 < again < best:
-            best, kind, index = again, "switch", 0
+            best, kind, index = again, EVENT_SWITCH, 0
     for ball in range(n):
         if 0.0 < y[n + ball] < best:
-            best, kind, index = y[n + ball], "apex", ball
+            best, kind, index = y[n + ball], EVENT_APEX, ball
     return best, kind, index
 
 
@@ -442,8 +450,9 @@ def _contact_phase(
     marks the contacts switched at its start time: their functions start at zero, and they do
     not switch again before a step is taken.
 
-    Returns (kind, index, t, y, steps); kind "failed" when DOP853 cannot go on (its step
-    fell below the smallest it takes, as beyond the domain double precision carries).
+    Returns (kind, index, t, y, steps): kind an event of :mod:`twoball.kernels.codes`,
+    EVENT_FAILED when DOP853 cannot go on (its step fell below the smallest it takes, as beyond
+    the domain double precision carries).
 
     Watched: each contact's switching function (:func:`_switching`), an event when it falls
     below zero, and the velocity of each ball in free flight going up (its apex)."""
@@ -467,14 +476,14 @@ def _contact_phase(
         if solver.t == t:
             due &= ~fresh  # they have just switched
         if due.any():
-            return "switch", int(np.flatnonzero(due)[0]), solver.t, solver.y.copy(), steps
+            return EVENT_SWITCH, int(np.flatnonzero(due)[0]), solver.t, solver.y.copy(), steps
         solver.max_step = _certified_step(stack, solver.y, solver.t, force_bound, active)
         t_old = solver.t
         before = functions(solver.y)
         solver.step()
         steps += 1
         if solver.status == "failed":  # reported as the run's status, not an exception
-            return "failed", -1, solver.t, solver.y.copy(), steps
+            return EVENT_FAILED, -1, solver.t, solver.y.copy(), steps
         dense = solver.dense_output()
         hit = None
         previous_t, previous = t_old, before
@@ -499,13 +508,13 @@ def _contact_phase(
             root, k = hit
             state = dense(root)
             if k >= n:
-                return "apex", k - n, root, state, steps
-            return "switch", k, root, state, steps
+                return EVENT_APEX, k - n, root, state, steps
+            return EVENT_SWITCH, k, root, state, steps
         if solver.status == "finished":
-            return "time", -1, solver.t, solver.y.copy(), steps
+            return EVENT_TIME, -1, solver.t, solver.y.copy(), steps
         if watch_rest and _settled(stack, solver.y):
-            return "rest", -1, solver.t, solver.y.copy(), steps
-    return "steps", -1, solver.t, solver.y.copy(), steps
+            return EVENT_REST, -1, solver.t, solver.y.copy(), steps
+    return EVENT_STEPS, -1, solver.t, solver.y.copy(), steps
 
 
 def _settled(stack: _Stack, y: np.ndarray) -> bool:

@@ -31,8 +31,8 @@ import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _dop853
 
 from twoball import exact
-from twoball.errors import Status
 from twoball.jit import njit
+from twoball.kernels.codes import STATUS_DONE, STATUS_FAILED, STATUS_PHASES, STATUS_REST
 
 MAX_STEPS = 300_000  # a run that cannot end fails within seconds (a step takes ~3 us)
 RTOL = 1e-14  # local error of w (and w') per step, relative to the contact's scale
@@ -54,8 +54,6 @@ SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 
 # what ends a phase
 K_SWITCH, K_APEX, K_TIME, K_REST, K_STEPS, K_FAILED = 0, 1, 2, 3, 4, 5
-STATUS_DONE, STATUS_REST = int(Status.DONE), int(Status.REST)
-STATUS_PHASES, STATUS_FAILED = int(Status.PHASE_LIMIT), int(Status.FAILED)
 
 
 @njit

@@ -41,7 +41,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent
-KERNEL_MODULES = ("twoball.model", "twoball.exact", "twoball.stack", "twoball.hertz_kernel")
+KERNEL_MODULES = (
+    "twoball.model",
+    "twoball.kernels.codes",
+    "twoball.exact",
+    "twoball.stack",
+    "twoball.hertz_kernel",
+)
 # what compiles every kernel in a new process (the Dockerfile runs it too)
 WARM_UP = "from twoball import jit; jit.warm_up()"
 
@@ -62,11 +68,16 @@ def _private_directory() -> Path:
     return Path(tempfile.gettempdir()) / f"twoball-numba-{os.getuid()}"
 
 
+def source_of(name: str) -> Path:
+    """The source file of the kernel module ``name`` (twoball.kernels.codes: kernels/codes.py)."""
+    return PACKAGE.joinpath(*name.split(".")[1:]).with_suffix(".py")
+
+
 def sources_key() -> str:
     """A hash of the sources of every kernel module (:data:`KERNEL_MODULES`)."""
     digest = hashlib.sha256()
     for name in KERNEL_MODULES:
-        digest.update((PACKAGE / f"{name.rpartition('.')[2]}.py").read_bytes())
+        digest.update(source_of(name).read_bytes())
     return digest.hexdigest()[:16]
 
 

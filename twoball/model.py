@@ -311,6 +311,16 @@ def domain_error(
     )
 
 
+# An apex above the energy bound by more than this (relative) is a failed run, not a value.
+APEX_BOUND_SLACK = 1e-9
+
+
+def beyond_bound(height: float, bound: float) -> bool:
+    """Whether an apex is not finite or above what the energy at release allows (``bound``:
+    :func:`apex_bound`, or the stack's), beyond :data:`APEX_BOUND_SLACK`."""
+    return not math.isfinite(height) or height > bound * (1.0 + APEX_BOUND_SLACK)
+
+
 def apex_bound(drop: Drop) -> float:
     """The highest apex the energy at release allows the upper ball (docs/model.md, "The
     domain double precision can carry"): X2(0) + (X1(0) + 1/2) / mu."""

@@ -83,17 +83,16 @@ def time_limit(drop: Drop, apexes: int) -> float:
 
 def solve(
     drop: Drop,
-    method: str,
     apexes: int,
     t_end: float,
-    rtol: float | None,
-    atol: float | None,
+    *,
+    method: str,
+    rtol: float,
+    atol: float,
     dense_output: bool = False,
 ) -> Outcome:
-    """Integrate with scipy; returns an :class:`~twoball.observables.Outcome` like
+    """Integrate with scipy's ``method``; returns an :class:`~twoball.observables.Outcome` like
     :func:`twoball.exact.solve` (``evaluate`` interpolates the integrator's output)."""
-    rtol = DEFAULT_TOL if rtol is None else rtol
-    atol = DEFAULT_TOL if atol is None else atol
     horizon = min(t_end, time_limit(drop, apexes))
     if method == "odeint":
         return _solve_odeint(drop, apexes, horizon, t_end, rtol, atol, dense_output)
@@ -218,7 +217,18 @@ def outcome_from_events(
         status = Status.NO_APEX
         reason = f"no apex {len(apex_t) + 1} before t = {horizon:.6g}"
     rows = np.array(contacts, dtype=float).reshape(-1, 3)
-    return Outcome(apex_t, apex_h, rows, end, status, reason, counts[1], counts[0], None, None)
+    return Outcome(
+        apex_t=apex_t,
+        apex_h=apex_h,
+        contacts=rows,
+        end_time=end,
+        status=status,
+        message=reason,
+        contacts_first=counts[1],
+        floor_contacts_first=counts[0],
+        evaluate=None,
+        plot_times=None,
+    )
 
 
 def _evaluate_pieces(pieces, times: np.ndarray) -> np.ndarray:
@@ -331,5 +341,14 @@ def _solve_odeint(drop, apexes, horizon, t_end, rtol, atol, dense_output):
         plot_times = grid
     rows = np.array(contacts, dtype=float).reshape(-1, 3)
     return Outcome(
-        apex_t, apex_h, rows, end, status, reason, counts[1], counts[0], evaluate, plot_times
+        apex_t=apex_t,
+        apex_h=apex_h,
+        contacts=rows,
+        end_time=end,
+        status=status,
+        message=reason,
+        contacts_first=counts[1],
+        floor_contacts_first=counts[0],
+        evaluate=evaluate,
+        plot_times=plot_times,
     )

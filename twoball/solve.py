@@ -3,21 +3,40 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from functools import partial
 
 from numpy.typing import ArrayLike
 
-from twoball import exact, reference
+from twoball import cvode, exact, reference
 from twoball.errors import ParameterError, SolverError, Status, phase_limit_hint
 from twoball.model import (
     DEFAULT_HEIGHT,
     apex_bound,
+    beyond_bound,
     check_parameters,
     is_real_number,
     with_ranges,
 )
-from twoball.observables import Result, as_times, check_span, contact_intervals, trajectory_of
+from twoball.observables import (
+    Outcome,
+    Result,
+    as_times,
+    check_span,
+    contact_intervals,
+    trajectory_of,
+)
 
-METHODS = ("exact", *reference.METHODS, "CVODE")  # CVODE needs the cvode extra
+# Every method by name, as scipy's ``integrate._ivp.ivp.METHODS``: one signature,
+# solve(drop, apexes, t_end, *, rtol, atol, dense_output) -> Outcome. rtol and atol are None for
+# "exact" (it has none) and reference.DEFAULT_TOL unless given for the others. CVODE needs the
+# cvode extra (imported when it runs).
+Solver = Callable[..., Outcome]
+METHODS: dict[str, Solver] = {
+    "exact": exact.solve,
+    **{name: partial(reference.solve, method=name) for name in reference.METHODS},
+    "CVODE": cvode.solve,
+}
 UNTIL = {"first": 1, "second": 2}
 # A run "until a time" wants no apex limit; the kernel's apex table grows with what it finds.
 NO_APEX_LIMIT = 2**62
@@ -110,21 +129,10 @@ def simulate(
         times = as_times("t_eval", t_eval)
         check_span("t_eval", times, math.inf, False)  # no time before the release
     keep = dense_output or times is not None
-    if method == "exact":
-        if rtol is not None or atol is not None:
-            raise ParameterError("rtol and atol apply to the scipy methods only, not to 'exact'")
-        outcome = exact.solve(drop, apexes, t_end, dense_output=keep)
-    else:  # a reference method: its tolerances, defaulted once here
+    if method != "exact":  # a reference method: its tolerances, defaulted once here
         rtol = reference.DEFAULT_TOL if rtol is None else rtol
         atol = reference.DEFAULT_TOL if atol is None else atol
-        if method == "CVODE":
-            if keep:
-                raise ParameterError("CVODE gives no dense output here (t_eval, dense_output)")
-            from twoball import cvode
-
-            outcome = cvode.solve(drop, apexes, t_end, rtol, atol)
-        else:
-            outcome = reference.solve(drop, method, apexes, t_end, rtol, atol, keep)
+    outcome = METHODS[method](drop, apexes, t_end, rtol=rtol, atol=atol, dense_output=keep)
     if outcome.status is Status.PHASE_LIMIT and outcome.message:
         outcome = outcome._replace(message=outcome.message + phase_limit_hint(drop.eps))
     failure = _failure(outcome.message, outcome.apex_h, drop)
@@ -162,7 +170,7 @@ def _failure(reason: str | None, apex_h: list[float], drop) -> str | None:
     """Why the apexes cannot be right (not finite, or above the energy bound), else None."""
     bound = apex_bound(drop)
     for number, height in enumerate(apex_h, start=1):
-        if not math.isfinite(height) or height > bound * (1.0 + 1e-9):
+        if beyond_bound(height, bound):
             return (
                 f"apex {number} at {height:.6g} is impossible: the energy at release allows "
                 f"{bound:.6g} at most ({reason or 'no reason given by the solver'})"

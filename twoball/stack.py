@@ -46,12 +46,27 @@ import numpy as np
 
 from twoball import exact
 from twoball.errors import ParameterError, SolverError, Status, phase_limit_hint
-from twoball.exact import ROUNDING
 from twoball.jit import njit
+from twoball.kernels.codes import (
+    EVENT_APEX,
+    EVENT_REST,
+    EVENT_STEPS,
+    EVENT_STUCK,
+    EVENT_SWITCH,
+    EVENT_TIME,
+    MAX_PHASES,
+    MAX_STEPS_PER_PHASE,
+    ROUNDING,
+    STATUS_DONE,
+    STATUS_PHASES,
+    STATUS_REST,
+    STATUS_STUCK,
+)
 from twoball.model import (
     DEFAULT_HEIGHT,
     MASS_RATIO_RANGE,
     RESOLUTION,
+    beyond_bound,
     chain_rounding_ratio,
     check_value,
     decay_ratio,
@@ -78,13 +93,6 @@ HERTZ_LARGEST_DAMPING = 50.0
 # The heaviest ball relative to ball 0 with the Hertz force: 1e4 takes 4 s, 1e6 runs out of
 # steps after 60 s (the light ball 0 rings fast under it).
 HERTZ_LARGEST_MASS = 1e4
-MAX_STEPS_PER_PHASE = 100_000
-MAX_PHASES = 1_000_000
-
-# Events of one phase.
-EV_SWITCH, EV_APEX, EV_TIME, EV_REST, EV_STUCK, EV_STEPS = 0, 1, 2, 3, 4, 5
-STATUS_DONE, STATUS_REST = int(Status.DONE), int(Status.REST)
-STATUS_STUCK, STATUS_PHASES = int(Status.STUCK), int(Status.PHASE_LIMIT)
 # How a block's future is bounded (:func:`_block_kind`).
 BLOCK_ROTATION, BLOCK_DIAGONAL, BLOCK_EXPONENTIALS, BLOCK_ENERGY = 0, 1, 2, 3
 
@@ -770,7 +778,7 @@ def advance_phase(
                 mode_z,
                 mode_w,
             )
-            return EV_SWITCH, event, best, x, v
+            return EVENT_SWITCH, event, best, x, v
         if everything:
             margin_ok = True
             cid = cids[0]
@@ -786,7 +794,7 @@ def advance_phase(
             if not margin_ok and n == 2:
                 margin_ok = _pair_at_rest(pair, x, v, phase.size[0], phase.speed[0], tau, carried)
             if margin_ok:
-                return EV_REST, -1, tau, x, v
+                return EVENT_REST, -1, tau, x, v
         if tau + step >= horizon:
             _evaluate_arrays(
                 horizon,
@@ -811,13 +819,13 @@ def advance_phase(
                 mode_w,
             )
             if horizon_ball >= 0:
-                return EV_APEX, horizon_ball, horizon, x, v
-            return EV_TIME, -1, horizon, x, v
+                return EVENT_APEX, horizon_ball, horizon, x, v
+            return EVENT_TIME, -1, horizon, x, v
         if not 0.0 < step < np.inf:
-            return EV_STUCK, -1, tau, x0.copy(), v0.copy()
+            return EVENT_STUCK, -1, tau, x0.copy(), v0.copy()
         tau += step
         last_step = step
-    return EV_STEPS, -1, tau, x0.copy(), v0.copy()
+    return EVENT_STEPS, -1, tau, x0.copy(), v0.copy()
 
 
 @njit
@@ -827,7 +835,8 @@ def _pair_at_rest(pair, x, v, size, speed, tau, carried):
     mode (:func:`twoball.exact._overdamped_bound`). The cluster's total energy, which the test
     above uses, bounds a slow overdamped mode far too loosely (eps = 0.01 under a heavy upper
     ball: rest proven at t = 3310 by twoball.simulate, never by that energy)."""
-    params, _, _, _, rest, _, x_inv, blocks, companions, y_rest, rates, mode_rows = pair
+    params, rest, x_inv, blocks = pair.params, pair.rest, pair.x_inv, pair.blocks
+    companions, y_rest, rates, mode_rows = pair.companions, pair.y_rest, pair.rates, pair.mode_rows
     # the two-ball solver's state is in its relative coordinates (x1, eta, v1, eta')
     eta, deta = x[1] - x[0], v[1] - v[0]
     block_states = exact._block_states(x[0], eta, v[0], deta, x_inv, companions, y_rest)
@@ -909,9 +918,9 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
             cid = _cluster_id(0, grounded_top, True, n)
             offset = np.abs(store.eta_rest[cid, : grounded_top + 1]).sum()
             carried = max(carried, ROUNDING * store.noise[cid] * offset)
-        entered_by = index if event == EV_SWITCH else -1
+        entered_by = index if event == EVENT_SWITCH else -1
         t += tau
-        if event == EV_SWITCH:
+        if event == EVENT_SWITCH:
             if active[index]:
                 contacts = exact._room_for_one(contacts, n_contacts)
                 contacts[n_contacts, 0], contacts[n_contacts, 1] = index, opened[index]
@@ -922,7 +931,7 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
                 if top_apexes == 0:
                     first[index] += 1
             active[index] = not active[index]
-        elif event == EV_APEX:
+        elif event == EVENT_APEX:
             v[index] = 0.0
             apexes = exact._room_for_one(apexes, n_apex)
             apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, x[index]
@@ -932,13 +941,13 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
                 if top_apexes == apexes_wanted:
                     status = STATUS_DONE
                     break
-        elif event == EV_TIME:
+        elif event == EVENT_TIME:
             status = STATUS_DONE
             break
-        elif event == EV_REST:
+        elif event == EVENT_REST:
             status = STATUS_REST
             break
-        elif event == EV_STEPS:
+        elif event == EVENT_STEPS:
             status = STATUS_PHASES
             break
         else:
@@ -954,7 +963,12 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
             )
             n_contacts += 1
     return StackRun(
-        status, t, apexes[:n_apex].copy(), contacts[:n_contacts].copy(), first, phases[:n_phases]
+        status=status,
+        end_time=t,
+        apexes=apexes[:n_apex].copy(),
+        contacts=contacts[:n_contacts].copy(),
+        contacts_first=first,
+        phases=phases[:n_phases],
     )
 
 
@@ -1356,7 +1370,7 @@ def simulate_stack(
         check_span("t_eval", times, result.end_time, result.status is Status.REST)
     bound = _apex_bound(stack, force)
     top = [h for _, h in result.apexes[-1]]
-    if any(not math.isfinite(h) or h > bound * (1.0 + 1e-9) for h in top):
+    if any(beyond_bound(h, bound) for h in top):
         result.status = Status.IMPOSSIBLE
     if throw and not result.success:
         message = result.status.message

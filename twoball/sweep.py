@@ -30,7 +30,7 @@ import numpy as np
 
 from twoball import exact
 from twoball.errors import ParameterError
-from twoball.exact import STATUS_DONE, STATUS_PHASES, STATUS_REST, STATUS_STUCK
+from twoball.kernels.codes import STATUS_DONE, STATUS_PHASES, STATUS_REST, STATUS_STUCK
 from twoball.model import (
     DEFAULT_HEIGHT,
     check_parameters,

@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from twoball.errors import ParameterError, Status
-from twoball.exact import ROUNDING  # per phase, of the exact solver's state
+from twoball.kernels.codes import ROUNDING  # per phase, of the exact solver's state
 from twoball.model import check_parameters
 from twoball.observables import relative_error
 from twoball.reference import METHODS as REFERENCE_METHODS
