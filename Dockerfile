@@ -27,7 +27,7 @@ COPY pyproject.toml README.md ./
 COPY twoball ./twoball
 COPY app ./app
 RUN pip install --quiet --no-deps . && cp app/start.sh /opt/start.sh && rm -rf build twoball app \
-    && python -c "from twoball import jit; jit.warm_up()" && chown -R 1000:1000 "$NUMBA_CACHE_DIR"
+    && python -c "from twoball import warmup; warmup.warm_up()" && chown -R 1000:1000 "$NUMBA_CACHE_DIR"
 
 USER 1000:1000
 EXPOSE 5006

@@ -2,7 +2,7 @@
 
 At start-up the kernels' Python functions stand in for them (same results, a drop in ~25 ms)
 while another process compiles them (15-40 s on a new machine or CPU, ~2 s from the disk cache);
-then the machine code takes over (:func:`twoball.jit.compile_in_background`). The map cube is
+then the machine code takes over (:func:`twoball.warmup.compile_in_background`). The map cube is
 opened once per server. A page closed while an update is being sent to it is a client leaving,
 not an error (:func:`drop_messages_to_closed_sockets`).
 """
@@ -21,7 +21,7 @@ import panel.io.document
 from tornado.ioloop import IOLoop
 from tornado.websocket import WebSocketClosedError
 
-from twoball import jit
+from twoball import warmup
 
 from .delayed_map import map_cube
 
@@ -95,7 +95,7 @@ def on_server_loaded(server_context) -> None:
     loop = IOLoop.current().asyncio_loop
     loop.set_exception_handler(closed_socket_handler(loop.get_exception_handler()))
     started = time.monotonic()
-    jit.compile_in_background(
+    warmup.compile_in_background(
         done=lambda: log.info("compiled kernels in use after %.1f s", time.monotonic() - started)
     )
     try:

@@ -30,7 +30,7 @@ from holoviews.operation import contours
 
 import twoball
 from twoball import jit
-from twoball.sweep import compute_block
+from twoball.batch.sweep import compute_block
 
 from .scene import AnsweringMarkdown, Scene, answers_pending, font_sizes, later, on_screen
 from .state import validate

@@ -23,7 +23,7 @@ from bokeh.models import (
 from bokeh.plotting import figure
 
 from twoball.errors import ParameterError
-from twoball.stack import StackResult, icm_chain, simulate_stack
+from twoball.stacks import StackResult, icm_chain, simulate_stack
 from twoball.units import number_text
 
 from .controls import ReleasedIntSlider, ReleasedSlider, plain

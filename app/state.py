@@ -63,7 +63,7 @@ class ExplorerState(Parameters):
     presentation = param.Boolean(
         default=False, doc="Large text and plots for a projector (URL: present=1)."
     )
-    # the Stack scene's drop (twoball.stack): one mass ratio, restitution and gap for every pair
+    # the Stack scene's drop (twoball.stacks): one mass ratio, restitution and gap for every pair
     balls = param.Integer(default=3, bounds=(2, 6), doc="Balls in the stack.")
     stack_ratio = param.Number(
         default=0.2, bounds=(0.01, 1.0), doc="Each ball's mass over the one below it."

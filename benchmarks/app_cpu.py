@@ -93,9 +93,9 @@ def main() -> None:
     parser.add_argument("--moves", type=int, default=40)
     args = parser.parse_args()
     pn.extension()
-    from twoball import jit
+    from twoball import warmup
 
-    jit.warm_up()  # compiled kernels, as a running server has them
+    warmup.warm_up()  # compiled kernels, as a running server has them
     rows = [("baseline (10-point line)", *baseline_moves(args.moves))]
     rows += [(scene, *scene_moves(scene, args.moves)) for scene in MOVES]
     print(f"server CPU per slider move, median of {args.moves} (ms), and the patch sent (bytes)")

@@ -285,9 +285,9 @@ def main() -> None:
     )
     parser.add_argument("--no-baseline", action="store_true")
     args = parser.parse_args()
-    from twoball import jit
+    from twoball import warmup
 
-    jit.warm_up()  # the disk cache filled: the server starts on compiled kernels
+    warmup.warm_up()  # the disk cache filled: the server starts on compiled kernels
     asyncio.run(measure(args))
     print(f"(--num-procs {args.num_procs}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f})")
 

@@ -1,12 +1,12 @@
 """Where the exact solver loses accuracy, phase by phase (docs/accuracy.md, "Many-contact drops").
 
-Runs one drop with its phases recorded, then propagates each phase's start state exactly (40
-digits, ``mpmath.expm`` of the phase's matrix from twoball.studies.truth, which shares no code
-with twoball/exact.py) over the phase's own duration, and prints the solver's end state against
+Runs one drop with its phases recorded, then propagates each phase's start state exactly (40 digits,
+``mpmath.expm`` of the phase's matrix from twoball.studies.truth, which shares no code with
+twoball/kernels/phases.py) over the phase's own duration, and prints the solver's end state against
 that, in ulps of each coordinate's size over the phase (the larger of its start and end values):
 the phase's local error. The coordinates are the solver's (docs/model.md, "Bodies, coordinates,
 forces"): the lower ball's height and speed, the overlap eta = X2 - X1 and its rate. A closing
-switch sets its overlap to zero (twoball.exact.run), so the error printed for eta at such a
+switch sets its overlap to zero (twoball.kernels.runs.run), so the error printed for eta at such a
 switch is what that removed.
 
     .venv/bin/python benchmarks/phase_audit.py EPS MU TAU_RATIO [--height 1e4]
@@ -20,11 +20,11 @@ import math
 import mpmath
 import numpy as np
 
-from twoball import exact
+from twoball.kernels import phases, runs
 from twoball.model import check_parameters
 from twoball.studies.truth import _phase_matrix
 
-KINDS = {exact.FREE: "free", exact.FLOOR: "floor", exact.BALL: "ball", exact.BOTH: "both"}
+KINDS = {phases.FREE: "free", phases.FLOOR: "floor", phases.BALL: "ball", phases.BOTH: "both"}
 NAMES = ("x1", "eta", "v1", "eta'")
 
 
@@ -36,8 +36,8 @@ def main() -> None:
     parser.add_argument("--height", type=float, default=1e4)
     args = parser.parse_args()
     drop = check_parameters(args.eps, args.mu, args.tau_ratio, height=args.height)
-    prepared = exact.prepare(drop.mu, drop.zeta01, drop.zeta12)
-    out = exact.run(drop.x1_0, drop.x2_0, 2, np.inf, prepared, False, True)
+    prepared = phases.prepare(drop.mu, drop.zeta01, drop.zeta12)
+    out = runs.run(drop.x1_0, drop.x2_0, 2, np.inf, prepared, False, True)
     print(f"{out.phases.shape[0]} phases; apexes {out.apex_h.tolist()}")
     print("   t         phase  tau        local error, ulps: " + "  ".join(NAMES))
     with mpmath.workdps(40):

@@ -25,7 +25,7 @@ import numpy as np
 from perfdoc import write_section  # benchmarks/ is on the path of a script run from it
 
 from twoball.errors import ParameterError
-from twoball.stack import simulate_stack
+from twoball.stacks import simulate_stack
 
 
 def draw_bench(rng: np.random.Generator) -> tuple[list[float], float, float, float]:

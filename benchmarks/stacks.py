@@ -1,4 +1,4 @@
-"""Benchmark and comparison: stacks of N balls (twoball.stack, twoball.hertz).
+"""Benchmark and comparison: stacks of N balls (twoball.stacks.stack, twoball.stacks.hertz).
 
     .venv/bin/python benchmarks/stacks.py [--repeats 7] [--write]
 
@@ -23,7 +23,7 @@ from pathlib import Path
 from perfdoc import write_section  # benchmarks/ is on the path of a script run from it
 
 import twoball
-from twoball.stack import simulate_stack
+from twoball.stacks import simulate_stack
 
 STACKS_DOC = Path(__file__).resolve().parents[1] / "docs" / "stacks.md"
 # (label, mass ratios, eps, tau ratios): the paper's two drops, then stacks

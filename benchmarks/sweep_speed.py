@@ -23,7 +23,7 @@ from pathlib import Path
 from perfdoc import write_section  # benchmarks/ is on the path of a script run from it
 
 import twoball
-from twoball.sweep import Grid, compute_block, parse_axis, sweep
+from twoball.batch.sweep import Grid, compute_block, parse_axis, sweep
 
 PAPER = ("0.5:1:50", "0.01:1/3:50", "0.01:1:50")
 

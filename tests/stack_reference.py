@@ -1,6 +1,6 @@
 """An independent reference for stacks of N balls: scipy's DOP853, phase by phase, with events.
 
-It shares nothing with twoball.stack but the equations of docs/model.md, "Stacks of N balls":
+It shares nothing with twoball.stacks but the equations of docs/model.md, "Stacks of N balls":
 inside a phase (a fixed set of active contacts) the right-hand side is smooth and integrated at
 tight tolerances; a contact switch or the top ball's apex is an event. Steps are bounded by a
 twentieth of the shortest contact period, so that no brief contact falls between two steps.

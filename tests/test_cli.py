@@ -85,7 +85,7 @@ def test_unknown_command_exits_2():
 
 
 def test_stack_json_matches_the_library():
-    from twoball.stack import simulate_stack
+    from twoball.stacks import simulate_stack
 
     completed = _run(
         "stack", "--mass-ratios", "0.3,0.1", "--eps", "0.8,0.7,0.9", "--tau-ratios", "0.5,0.1",
@@ -201,7 +201,8 @@ def test_report_on_an_array_inside_a_store_is_one_line(tmp_path):
 def test_a_hertz_integrator_failure_is_one_line_and_status_1(monkeypatch, capsys):
     """DOP853 (the Hertz reference method) failing in a contact phase printed a RuntimeError
     traceback (exit 1)."""
-    from twoball import cli, hertz
+    from twoball import cli
+    from twoball.stacks import hertz
 
     class Failing(hertz.DOP853):
         def step(self):
@@ -236,7 +237,7 @@ def test_many_contacts_without_the_studies_extra_is_one_line(tmp_path):
 def test_a_stack_run_to_a_time_before_the_top_balls_apexes_says_why():
     """The top ball of this stack first rises to h1 after t = 500 (the library says when), so
     a run to t = 500 has no apex of it, and says so."""
-    from twoball.stack import simulate_stack
+    from twoball.stacks import simulate_stack
 
     assert simulate_stack([0.2, 0.2], 0.9, 0.2).apexes[-1][0][0] > 500  # the premise
     completed = _run("stack", "--mass-ratios", "0.2,0.2", "--until", "500")

@@ -9,6 +9,7 @@ from cases import RESTITUTION
 import twoball
 from twoball import exact
 from twoball.errors import ParameterError, SolverError, Status
+from twoball.kernels import phases, runs
 
 
 def test_status_of_a_completed_run_and_of_a_run_that_ends_at_rest():
@@ -38,8 +39,8 @@ def test_evaluate_needs_dense_output():
 
 
 def test_until_a_time_allocates_only_the_apexes_found():
-    prepared = exact.prepare(0.05, RESTITUTION[0.816][0], 0.01)
-    out = exact.run(1e4, 1.1e4, 2**62, 500.0, prepared, False, False)
+    prepared = phases.prepare(0.05, RESTITUTION[0.816][0], 0.01)
+    out = runs.run(1e4, 1.1e4, 2**62, 500.0, prepared, False, False)
     assert out.status == Status.DONE and out.end_time == 500.0
     assert out.apex_t.size == out.apex_h.size < 10
 

@@ -68,7 +68,8 @@ def test_docstring_examples_run(name):
 
 
 def test_the_public_functions_show_an_example():
-    from twoball import model, sweep
+    from twoball import model
+    from twoball.batch import sweep
 
     public = (
         *(twoball.simulate, twoball.check_parameters, twoball.Result.evaluate, twoball.load_cube),

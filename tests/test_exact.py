@@ -12,17 +12,17 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
 import twoball
-from twoball import exact
+from twoball.kernels import codes, phases
 from twoball.model import damping_ratios, decay_ratio, restitution
 
 
 def _advance(kind, state, mu, z01, z12, horizon=np.inf):
     """One phase from the absolute state (x1, x2, v1, v2); returns (event, tau, x1, x2, v1, v2).
-    The kernel carries (x1, eta, v1, eta') with eta = x2 - x1 (exact.state_at)."""
+    The kernel carries (x1, eta, v1, eta') with eta = x2 - x1 (phases.state_at)."""
     x1, x2, v1, v2 = state
-    prepared = exact.prepare(mu, z01, z12)
-    event, tau, y1, eta, w1, deta = exact.advance_phase(
-        kind, 0.0, x1, x2 - x1, v1, v2 - v1, horizon, exact.EVENT_TIME, prepared
+    prepared = phases.prepare(mu, z01, z12)
+    event, tau, y1, eta, w1, deta = phases.advance_phase(
+        kind, 0.0, x1, x2 - x1, v1, v2 - v1, horizon, codes.EVENT_TIME, prepared
     )
     return event, tau, y1, y1 + eta, w1, w1 + deta
 
@@ -36,11 +36,11 @@ def test_isolated_ball_contact_returns_eps(mu, eps):
     z01, z12 = damping_ratios(eps, eps, mu)
     approach = 100.0
     event, tau, *touching = _advance(
-        exact.FREE, (1e3, 1e3 + approach, 0.0, -approach), mu, z01, z12
+        phases.FREE, (1e3, 1e3 + approach, 0.0, -approach), mu, z01, z12
     )
-    assert event == exact.EVENT_BALL and tau == pytest.approx(1.0, rel=1e-14)
-    event, tau, x1, x2, v1, v2 = _advance(exact.BALL, touching, mu, z01, z12)
-    assert event == exact.EVENT_BALL
+    assert event == codes.EVENT_BALL and tau == pytest.approx(1.0, rel=1e-14)
+    event, tau, x1, x2, v1, v2 = _advance(phases.BALL, touching, mu, z01, z12)
+    assert event == codes.EVENT_BALL
     assert (v2 - v1) / approach == pytest.approx(eps, rel=1e-9)
     # momentum of the pair changes by gravity only: (v1 + mu v2) drops by (1 + mu) tau
     before = touching[2] + mu * touching[3]
@@ -53,8 +53,8 @@ def test_isolated_floor_contact_returns_eps(eps):
     z01, z12 = damping_ratios(eps, eps, 0.1)
     speed = 1e11
     state = (0.0, 1e13, -speed, 0.0)  # the upper ball far above, out of the way
-    event, tau, x1, x2, v1, v2 = _advance(exact.FLOOR, state, 0.1, z01, z12)
-    assert event == exact.EVENT_FLOOR
+    event, tau, x1, x2, v1, v2 = _advance(phases.FLOOR, state, 0.1, z01, z12)
+    assert event == codes.EVENT_FLOOR
     assert v1 / speed == pytest.approx(eps, rel=1e-9)
     r = decay_ratio(eps)
     assert restitution(r) == pytest.approx(eps, rel=1e-12)
@@ -182,16 +182,16 @@ def _grazing_state(depth):
 def test_grazing_touch_is_found(depth):
     state, mu, z01, z12, touch_time = _grazing_state(depth)
     assert state[1] - state[0] < 0  # overlapping at the start, but the force is off: g > 0
-    event, tau, *_ = _advance(exact.FLOOR, tuple(state), mu, z01, z12)
-    assert event == exact.EVENT_BALL
+    event, tau, *_ = _advance(phases.FLOOR, tuple(state), mu, z01, z12)
+    assert event == codes.EVENT_BALL
     assert tau == pytest.approx(touch_time, abs=10 * math.sqrt(depth))
 
 
 @pytest.mark.parametrize("depth", [1e-6, 1e-10])
 def test_near_miss_is_not_a_contact(depth):
     state, mu, z01, z12, touch_time = _grazing_state(-depth)
-    event, tau, *_ = _advance(exact.FLOOR, tuple(state), mu, z01, z12)
-    assert event == exact.EVENT_FLOOR  # the floor contact ends first, the balls never push
+    event, tau, *_ = _advance(phases.FLOOR, tuple(state), mu, z01, z12)
+    assert event == codes.EVENT_FLOOR  # the floor contact ends first, the balls never push
     assert tau > touch_time
 
 
@@ -259,10 +259,10 @@ def test_compiled_kernels_load_from_the_disk_cache_in_any_order():
     twoball.simulate(0.9, 0.01, 0.01, dense_output=True)  # make sure the cache is on disk
     script = (
         "import numpy as np, twoball\n"
-        "from twoball import exact\n"
+        "from twoball.kernels import phases, runs\n"
         "twoball.simulate(0.9, 0.01, 0.01)\n"
-        "prepared = exact.prepare(0.01, 0.05, 0.005)\n"
-        "exact.run(1e4, 1e4, 2, np.inf, prepared, False, False)\n"
+        "prepared = phases.prepare(0.01, 0.05, 0.005)\n"
+        "runs.run(1e4, 1e4, 2, np.inf, prepared, False, False)\n"
         "print(twoball.simulate(0.9, 0.01, 0.01, dense_output=True).h1)\n"
     )
     completed = subprocess.run(

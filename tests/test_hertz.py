@@ -1,4 +1,4 @@
-"""The Hertz force with Hunt-Crossley damping (twoball.hertz): restitution against an
+"""The Hertz force with Hunt-Crossley damping (twoball.stacks.hertz): restitution against an
 independent integration, energy, and the textbook limit."""
 
 from __future__ import annotations
@@ -11,9 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
-from twoball import hertz
 from twoball.errors import Status
-from twoball.stack import icm_chain, simulate_stack
+from twoball.stacks import hertz, icm_chain, simulate_stack
 
 
 def _restitution_in_free_space(eps: float, mass1: float, mass2: float, speed: float) -> float:
@@ -221,7 +220,7 @@ def test_hertz_refuses_overdamped_slow_impacts_with_the_smallest_height():
     speed v, overdamps the settling. The smallest height in the message is where lam, computed
     here from the ICM chain's closing speeds, is 50."""
     from twoball.errors import ParameterError
-    from twoball.stack import check_stack
+    from twoball.stacks import check_stack
 
     with pytest.raises(ParameterError, match="height must be at least") as caught:
         simulate_stack([0.2], 0.9, 0.2, force="hertz", height=1e-9)

@@ -113,9 +113,9 @@ def test_prebuilt_cache_that_cannot_be_written_is_copied(tmp_path, monkeypatch):
 
 
 def test_the_kernel_cache_is_keyed_on_every_kernel_module(tmp_path, monkeypatch):
-    """An edit to any kernel module (here twoball/stack.py, whose kernels carry the code of
-    twoball/exact.py's) moves the disk cache to a fresh directory: numba itself would check only
-    the timestamp of each kernel's own file and serve stale code of the modules it calls."""
+    """An edit to any kernel module (here twoball/kernels/stack.py, whose kernels carry the code of
+    twoball/kernels/phases.py's) moves the disk cache to a fresh directory: numba itself would check
+    only the timestamp of each kernel's own file and serve stale code of the modules it calls."""
     from twoball import jit
 
     for name in jit.KERNEL_MODULES:
@@ -125,7 +125,7 @@ def test_the_kernel_cache_is_keyed_on_every_kernel_module(tmp_path, monkeypatch)
     monkeypatch.setattr(jit, "PACKAGE", tmp_path)
     before = jit.sources_key()
     assert jit.CACHE_DIR is False or Path(jit.CACHE_DIR).name == before
-    with open(tmp_path / "stack.py", "a") as handle:
+    with open(tmp_path / "kernels" / "stack.py", "a") as handle:
         handle.write("\n# an edit\n")
     assert jit.sources_key() != before
 
@@ -163,8 +163,8 @@ def test_one_compiler_at_a_time_per_cache():
         pytest.skip("no disk cache can be written here, so no compiler process to serialise")
     jit.CACHE_DIR.mkdir(parents=True, exist_ok=True)
     script = (
-        "from twoball import jit\n"
-        "thread = jit.compile_in_background()\n"
+        "from twoball import jit, warmup\n"
+        "thread = warmup.compile_in_background()\n"
         "thread.join(timeout=6)\n"
         "print(jit.state, flush=True)\n"
         "thread.join(timeout=300)\n"

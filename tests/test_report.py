@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import twoball
+from twoball.batch.sweep import Axis, Grid, sweep
 from twoball.cli import main
 from twoball.studies.report import close_up_row, contact_row, sweep_rows
-from twoball.sweep import Axis, Grid, sweep
 
 PAPER_VALUES = ["12.3 %", "93 %", "22 %", "all", "0.87 to 1.27", "0.49 to 1.48", "1 to 12"]
 

@@ -17,8 +17,10 @@ from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 import twoball
-from twoball import cli, exact, sweep
+from twoball import cli, exact
+from twoball.batch import sweep
 from twoball.errors import Status
+from twoball.kernels import closed_forms, phases
 from twoball.model import apex_bound, check_parameters
 
 
@@ -122,7 +124,7 @@ def test_rest_is_an_answer_not_a_failure():
 def test_a_strongly_overdamped_drop_comes_to_rest_where_an_integrator_sees_no_switch():
     """eps = 0.023: the slow overdamped mode's energy bound (which counts w^2 u'^2) was ~w/s too
     loose, so the certified steps crawled and the root finder stalled before rest was proven;
-    the two-exponential bound (exact._overdamped_bound) proves rest at once."""
+    the two-exponential bound (closed_forms._overdamped_bound) proves rest at once."""
     drop = dict(eps=0.02294046722074834, mu=0.00031392552790641373, tau_ratio=0.0)
     height = 42042.49414996337
     result = twoball.simulate(**drop, height=height)
@@ -164,7 +166,7 @@ def test_a_light_ball_under_a_heavy_one_conserves_energy_through_its_chatter(mu,
 )  # fmt: skip
 def test_balls_touching_at_release_on_an_elastic_floor_agree_with_dop853(mu, eps12, height):
     """tau_ratio = 0 and eps = 1: both contacts start together with F, F' and F'' zero, where
-    rounding once switched a contact off and on for ever (exact.advance_phase's ``fresh``)."""
+    rounding once switched a contact off and on for ever (phases.advance_phase's ``fresh``)."""
     result = twoball.simulate(1.0, mu, 0.0, eps12=eps12, height=height)
     integrated = twoball.simulate(1.0, mu, 0.0, eps12=eps12, height=height, method="DOP853",
                                   rtol=1e-12, atol=1e-14)  # fmt: skip
@@ -186,38 +188,40 @@ def test_a_light_ball_under_a_heavy_one_agrees_with_the_40_digit_reference():
 
 
 def test_the_overdamped_bound_holds_along_the_closed_form():
-    """The two-exponential bound on |eta''| and |g - g_rest| (exact._overdamped_bound, via
+    """The two-exponential bound on |eta''| and |g - g_rest| (closed_forms._overdamped_bound, via
     _curvature_bound and _at_rest's excursion) is never exceeded later in the phase."""
     rng = np.random.default_rng(3)
     for eps, mu in ((0.023, 3.1e-4), (0.05, 1e-3), (0.02, 0.5), (0.1, 30.0)):
         drop = check_parameters(eps, mu, 0.01)
-        prepared = exact.prepare(drop.mu, drop.zeta01, drop.zeta12)
+        prepared = phases.prepare(drop.mu, drop.zeta01, drop.zeta12)
         params, c0, c1, c2, rest, x, x_inv, blocks, companions, y_rest, rates, rows = prepared
         assert rates[:, 1].max() > 0.0  # at least one strongly overdamped mode
         for _ in range(20):
             state = y_rest + rng.normal(size=4) * np.array([1.0, 1.0, 3.0, 3.0])
-            y1, y2, w1, w2, a1, a2 = exact.state_at(exact.BOTH, 0.0, *state, params, x, x_inv,
+            y1, y2, w1, w2, a1, a2 = phases.state_at(phases.BOTH, 0.0, *state, params, x, x_inv,
                                                     blocks, y_rest)  # fmt: skip
-            modes = exact._block_states(y1, y2, w1, w2, x_inv, companions, y_rest)
-            roots = exact._energy_roots(exact.BOTH, w1, w2, a1, a2, params, blocks, modes)
-            bound = exact._curvature_bound(exact.BOTH, 1, 0, c0, c1, c2, roots, rates, rows, modes)
+            modes = phases._block_states(y1, y2, w1, w2, x_inv, companions, y_rest)
+            roots = phases._energy_roots(phases.BOTH, w1, w2, a1, a2, params, blocks, modes)
+            bound = phases._curvature_bound(
+                phases.BOTH, 1, 0, c0, c1, c2, roots, rates, rows, modes
+            )
             later = np.array(
                 [
-                    exact.state_at(exact.BOTH, tau, *state, params, x, x_inv, blocks, y_rest)
+                    phases.state_at(phases.BOTH, tau, *state, params, x, x_inv, blocks, y_rest)
                     for tau in np.linspace(0.0, 30.0, 3001)
                 ]
             )
-            # the state is (x1, eta, v1, eta') with eta = x2 - x1 (exact.state_at)
+            # the state is (x1, eta, v1, eta') with eta = x2 - x1 (phases.state_at)
             eta_curvature = np.abs(later[:, 5])
             assert eta_curvature.max() <= bound * (1 + 1e-9) + 1e-12
-            z12 = params[exact.P_Z12]
+            z12 = params[phases.P_Z12]
             g = later[:, 1] + 2 * z12 * later[:, 3]
             excursion = 0.0
             for block in range(2):
                 energy_bound = rest[1, block] * roots[block]
                 if rates[block, 1] > 0.0:
                     block_state = modes[2 * block], modes[2 * block + 1]
-                    tight = exact._overdamped_bound(
+                    tight = closed_forms._overdamped_bound(
                         rates[block], rows[1, 1, block], *block_state, 0
                     )
                     energy_bound = min(energy_bound, tight)

@@ -1,4 +1,4 @@
-"""The N-ball stack (twoball.stack) against independent computations: the two-ball solver, a
+"""The N-ball stack (twoball.stacks) against independent computations: the two-ball solver, a
 DOP853 reference, energy, and the ICM chain (docs/model.md, "Stacks of N balls")."""
 
 from __future__ import annotations
@@ -14,7 +14,8 @@ from stack_reference import reference_stack
 
 import twoball
 from twoball.errors import ParameterError, SolverError, Status
-from twoball.stack import _apex_bound, check_stack, icm_chain, simulate_stack
+from twoball.stacks import check_stack, icm_chain, simulate_stack
+from twoball.stacks.model import _apex_bound
 
 
 def _energy(stack, trajectory) -> np.ndarray:
@@ -221,9 +222,9 @@ def test_failure_is_loud(monkeypatch):
     """A run cut off by the phase limit raises unless throw=False, as simulate does (run with
     the kernels' Python functions, which read the limit when called)."""
     from twoball import jit
-    from twoball import stack as stack_module
+    from twoball.kernels import stack as stack_kernel
 
-    monkeypatch.setattr(stack_module, "MAX_PHASES", 3)
+    monkeypatch.setattr(stack_kernel, "MAX_PHASES", 3)
     jit.use_python_kernels()
     try:
         with pytest.raises(SolverError, match="phase or step limit"):
@@ -347,9 +348,9 @@ def test_text_and_booleans_are_not_numbers(arguments, words):
 def test_a_phase_limit_says_what_is_true(monkeypatch):
     """The message said "e.g. an elastic floor, eps = 1" whatever eps was."""
     from twoball import jit
-    from twoball import stack as stack_module
+    from twoball.kernels import stack as stack_kernel
 
-    monkeypatch.setattr(stack_module, "MAX_PHASES", 3)
+    monkeypatch.setattr(stack_kernel, "MAX_PHASES", 3)
     jit.use_python_kernels()
     try:
         with pytest.raises(SolverError) as damped:
@@ -366,7 +367,7 @@ def test_a_reused_cluster_store_gives_the_same_drop():
     """Drops of the same balls reuse the clusters' closed forms (stack._store_for); a drop run
     after others of the same balls (other heights, a time limit) is the same, to the bit, as
     with a fresh store, and a store is never shared by different balls."""
-    from twoball import stack as stack_module
+    from twoball.stacks import stack as stack_module
 
     drop = ([0.2, 0.3, 0.5], 0.6, 0.1)
     stack_module._STORES.clear()

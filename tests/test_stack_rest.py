@@ -11,7 +11,8 @@ import pytest
 from scipy.linalg import expm
 
 from twoball.errors import ParameterError, Status
-from twoball.stack import _apex_bound, simulate_stack
+from twoball.stacks import simulate_stack
+from twoball.stacks.model import _apex_bound
 
 SEED = 20261125
 STACKS = 10_000  # in-domain damped stacks of the seeded property test

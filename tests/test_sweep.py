@@ -22,9 +22,9 @@ from cases import BENIGN, CLOSE_UP
 from scipy.optimize import brentq
 
 import twoball
-import twoball.sweep
+import twoball.batch.sweep
+from twoball.batch.sweep import VARIABLES, Axis, Grid, compute_block, parse_axis, sweep
 from twoball.cli import main
-from twoball.sweep import VARIABLES, Axis, Grid, compute_block, parse_axis, sweep
 
 OBSERVABLES = [name for name in VARIABLES if name != "status"]
 
@@ -128,7 +128,7 @@ def test_shipped_cube_regenerates(name):
         assert cube[variable].attrs["units"] and cube[variable].attrs["long_name"], variable
     for key in ("height", "grid", "solver", "twoball_version", "sweep_command", "precision"):
         assert key in cube.attrs
-    command = (Path(twoball.cubes.PRECOMPUTED) / f"{name}.cmd").read_text().split()
+    command = (Path(twoball.batch.cubes.PRECOMPUTED) / f"{name}.cmd").read_text().split()
     assert command[:3] == ["twoball", "sweep", f"twoball/precomputed/{name}.zarr"]
     piece = cube.isel(SHIPPED[name]).load()
     arguments = json.loads(cube.attrs["sweep_arguments"])
@@ -328,7 +328,7 @@ def test_bad_arguments_exit_2_with_one_line(tmp_path, capsys, words, named):
 
 
 def test_unreachable_scheduler_exits_2_with_one_line(tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr(twoball.sweep, "SCHEDULER_TIMEOUT", "1s")
+    monkeypatch.setattr(twoball.batch.sweep, "SCHEDULER_TIMEOUT", "1s")
     store = tmp_path / "cube.zarr"
     argv = ["sweep", str(store), "--eps", "0.8", "--mu", "0.1", "--tau-ratio", "0.1", "--quiet"]
     assert main([*argv, "--scheduler", "tcp://127.0.0.1:1"]) == 2
@@ -358,8 +358,8 @@ def test_sweep_returns_the_cube_and_shows_progress_with_time_left(tmp_path, caps
 
 
 def test_the_batch_path_runs_the_same_as_plain_python_and_states_rest():
-    """exact.run_block compiled (GIL released) and as its Python function (what runs while the
-    kernels compile) give the same numbers, to rounding (numba's LAPACK and floating-point
+    """twoball.kernels.runs.run_block compiled (GIL released) and as its Python function (what runs
+    while the kernels compile) give the same numbers, to rounding (numba's LAPACK and floating-point
     contraction differ from numpy's by ~1e-13); a drop that ends at rest says so in status."""
     from twoball import jit
 
@@ -380,7 +380,7 @@ def test_the_batch_path_runs_the_same_as_plain_python_and_states_rest():
 def test_default_chunks_are_whole_planes_of_about_chunk_drops():
     """Whole (mu, tau_ratio) planes, as many eps values a chunk as make ~CHUNK_DROPS drops,
     at least one and no more than the grid has."""
-    from twoball.sweep import CHUNK_DROPS
+    from twoball.batch.sweep import CHUNK_DROPS
 
     def grid(eps: str, mu: str, tau_ratio: str) -> Grid:
         names = ("eps", "mu", "tau_ratio")

@@ -1,18 +1,12 @@
 """twoball: the two-ball bounce solved exactly (see docs/model.md and the README)."""
 
-from importlib.metadata import PackageNotFoundError, version
-
-from twoball.cubes import load_cube
+from twoball.batch.cubes import load_cube
 from twoball.errors import ParameterError, Status
 from twoball.model import Parameters, check_parameters
 from twoball.observables import ContactInterval, Result, Trajectory
 from twoball.solve import METHODS, SolverError, simulate
-from twoball.stack import Stack, StackResult, icm_chain, simulate_stack
-
-try:
-    __version__ = version("twoball")
-except PackageNotFoundError:  # running from a source tree that was not installed
-    __version__ = "0+unknown"
+from twoball.stacks import Stack, StackResult, icm_chain, simulate_stack
+from twoball.version import __version__
 
 __all__ = [
     "METHODS",

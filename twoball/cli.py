@@ -1,8 +1,8 @@
 """The ``twoball`` command line: every command's arguments, checks and printing, in one place.
 
-The modules of the library compute (:func:`twoball.simulate`, :mod:`twoball.sweep`, the studies
-in :mod:`twoball.studies`); this module only parses, checks ranges and prints. A command's module
-is imported when the command runs, so that a command whose extra is not installed says which
+The modules of the library compute (:func:`twoball.simulate`, :mod:`twoball.batch.sweep`, the
+studies in :mod:`twoball.studies`); this module only parses, checks ranges and prints. A command's
+module is imported when the command runs, so that a command whose extra is not installed says which
 one, and the others work without it.
 
 Bad input never shows a traceback: a :class:`~twoball.errors.ParameterError` (or argparse's own
@@ -21,11 +21,11 @@ import os
 import sys
 from collections.abc import Callable
 
+from twoball.batch.sweep import DIMS as SWEEP_AXES
+from twoball.batch.sweep import MAX_DROPS as MAX_SWEEP_DROPS
+from twoball.batch.sweep import parse_number
 from twoball.errors import ParameterError, SolverError, Status
 from twoball.model import DEFAULT_HEIGHT, Parameters, allowed_range
-from twoball.sweep import DIMS as SWEEP_AXES
-from twoball.sweep import MAX_DROPS as MAX_SWEEP_DROPS
-from twoball.sweep import parse_number
 
 # The optional dependencies, by the extra that installs them (pyproject.toml).
 EXTRAS = {
@@ -56,7 +56,8 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _number(text: str) -> float:
-    """A number or a fraction such as 1/3 (:func:`twoball.sweep.parse_number`), for argparse."""
+    """A number or a fraction such as 1/3 (:func:`twoball.batch.sweep.parse_number`), for
+    argparse."""
     try:
         return parse_number(text)
     except ValueError as error:
@@ -162,7 +163,7 @@ def _add_simulate(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from twoball import simulate
+    from twoball.solve import simulate
 
     result = simulate(
         args.eps,
@@ -211,7 +212,7 @@ def _numbers(text: str) -> list[float]:
 
 
 def _add_stack(subparsers: argparse._SubParsersAction) -> None:
-    from twoball.stack import HERTZ_LARGEST_MASS, HERTZ_SMALLEST_RESTITUTION
+    from twoball.stacks.model import HERTZ_LARGEST_MASS, HERTZ_SMALLEST_RESTITUTION
 
     parser = subparsers.add_parser(
         "stack", help="drop a stack of N balls and print the top ball's bounces"
@@ -249,7 +250,7 @@ def _add_stack(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _stack(args: argparse.Namespace) -> int:
-    from twoball.stack import simulate_stack
+    from twoball.stacks import simulate_stack
 
     result = simulate_stack(
         args.mass_ratios,
@@ -365,7 +366,7 @@ def _add_sweep(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from twoball.sweep import Grid, parse_axis, plan, sweep
+    from twoball.batch.sweep import Grid, parse_axis, plan, sweep
 
     axes = [parse_axis(name, getattr(args, name)) for name in SWEEP_AXES]
     chunks = None
@@ -542,7 +543,7 @@ def _one_line(text: object) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``twoball`` parser with every command."""
-    from twoball import __version__
+    from twoball.version import __version__
 
     parser = _Parser(prog="twoball", description="The two-ball bounce, solved exactly.")
     parser.add_argument("--version", action="version", version=f"twoball {__version__}")

@@ -1,8 +1,8 @@
 """How the kernels are compiled: numba's disk cache where it can be written, and the kernels'
 own Python functions standing in for them while the compiler runs.
 
-The kernels are the ``@njit`` functions of :mod:`twoball.model`, :mod:`twoball.exact`,
-:mod:`twoball.stack` and :mod:`twoball.hertz_kernel`. numba compiles them on first call (15-40 s
+The kernels are the ``@njit`` functions of :mod:`twoball.model` and of :mod:`twoball.kernels`
+(:data:`KERNEL_MODULES`). numba compiles them on first call (15-40 s
 for the two-ball solver, about as long again for the N-ball one, 15 s for the Hertz one) and
 keeps the machine code on disk, beside the sources or in ``NUMBA_CACHE_DIR``. Two rules follow
 from how programs are deployed:
@@ -14,16 +14,17 @@ from how programs are deployed:
   default beside the sources, else ``~/.cache/twoball-numba``, else the temporary directory. If
   nothing can be written at all, the kernels compile in every process without a disk cache.
 - A cache never serves machine code of older sources. numba checks only the timestamp of the
-  file a kernel is defined in, but a kernel carries the code of every kernel it calls, and
-  those of :mod:`twoball.stack` call :mod:`twoball.exact`'s. So the cache lives in a
-  subdirectory named by a hash of all the kernel modules' sources (:func:`sources_key`): an
-  edit to any of them starts a fresh cache. (Older subdirectories are left behind; delete them
+  file a kernel is defined in, but a kernel carries the code of every kernel it calls, and those of
+  :mod:`twoball.kernels.stack` call :mod:`twoball.kernels.phases`'s. So the cache lives in a
+  subdirectory named by a hash of all the kernel modules' sources (:func:`sources_key`): an edit to
+  any of them starts a fresh cache. (Older subdirectories are left behind; delete them
   at will.)
 - A program that cannot wait for the compiler (the app's first start) calls
   :func:`use_python_kernels`: every kernel is replaced by its pure-Python function (numba keeps
   it as ``py_func``; the calls between kernels follow, since they look each other up in their
-  module). Same results, about 100 times slower. :func:`compile_in_background` compiles in a
-  separate process, which fills the disk cache, and then switches back to the machine code.
+  module). Same results, about 100 times slower. :func:`twoball.warmup.compile_in_background`
+  compiles in a separate process, which fills the disk cache, and then switches back to the
+  machine code.
 """
 
 from __future__ import annotations
@@ -33,8 +34,6 @@ import importlib
 import logging
 import os
 import shutil
-import subprocess
-import sys
 import tempfile
 import threading
 from collections.abc import Callable
@@ -44,12 +43,13 @@ PACKAGE = Path(__file__).resolve().parent
 KERNEL_MODULES = (
     "twoball.model",
     "twoball.kernels.codes",
-    "twoball.exact",
-    "twoball.stack",
-    "twoball.hertz_kernel",
+    "twoball.kernels.closed_forms",
+    "twoball.kernels.phases",
+    "twoball.kernels.runs",
+    "twoball.kernels.clusters",
+    "twoball.kernels.stack",
+    "twoball.kernels.hertz",
 )
-# what compiles every kernel in a new process (the Dockerfile runs it too)
-WARM_UP = "from twoball import jit; jit.warm_up()"
 
 log = logging.getLogger(__name__)
 
@@ -159,53 +159,3 @@ def use_compiled_kernels() -> None:
             for attribute, dispatcher in saved.items():
                 setattr(module, attribute, dispatcher)
         state = "compiled"
-
-
-def warm_up() -> None:
-    """Call every kernel path once (a drop to its second apex with a sampled trajectory)."""
-    from twoball.solve import simulate
-
-    simulate(0.9, 0.01, 0.01, until="second", dense_output=True)
-    from twoball.sweep import compute_block  # the batch path (twoball.exact.run_block)
-
-    compute_block([0.9], [0.01], [0.01])
-    from twoball.stack import simulate_stack  # the N-ball solver (twoball.stack)
-
-    simulate_stack([0.2, 0.2], 0.9, 0.2, t_eval=[0.0, 1.0])
-    # the Hertz stack (twoball.hertz_kernel)
-    simulate_stack([0.2, 0.2], 0.9, 0.2, force="hertz", t_eval=[0.0, 1.0])
-
-
-def compile_in_background(done: Callable[[], None] | None = None) -> threading.Thread:
-    """Stand the Python functions in for the kernels now; compile them in another process
-    (:data:`WARM_UP`, which fills the disk cache) and switch back when it is done.
-
-    Without a disk cache the other process cannot help: the kernels then compile in this
-    process's thread, under the lock that numba takes, and the switch comes after that.
-    ``done`` is called once the compiled kernels are in use.
-    """
-    use_python_kernels()
-
-    def work() -> None:
-        global state
-        state = "compiling"
-        if CACHING:
-            # niced: the pages being served come first; one compiler at a time per cache (the
-            # processes of `twoball serve --num-procs N` start together: the others wait on
-            # the lock without using a core, then find the cache filled)
-            lock = CACHE_DIR / "compiling.lock"
-            script = (
-                f"import fcntl, os; os.nice(10); lock = open({str(lock)!r}, 'w'); "
-                f"fcntl.flock(lock, fcntl.LOCK_EX); {WARM_UP}"
-            )
-            outcome = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
-            if outcome.returncode != 0:
-                log.warning("compiling the kernels failed: %s", outcome.stderr.strip()[-2000:])
-        use_compiled_kernels()
-        warm_up()  # loads the machine code from the cache (or compiles it here)
-        if done is not None:
-            done()
-
-    thread = threading.Thread(target=work, name="twoball-compile", daemon=True)
-    thread.start()
-    return thread

@@ -17,8 +17,9 @@ from twoball.errors import ParameterError, Status
 from twoball.model import Drop, icm_height, is_real_number
 
 FLOOR_CONTACT, BALL_CONTACT = 0, 1
-# The one early end that is an answer, not a failure (docs/model.md, "What is measured").
-REST = Status.REST.message  # the reason a run gives when the upper ball came to rest
+UNTIL = {"first": 1, "second": 2}
+# A run "until a time" wants no apex limit; the kernel's apex table grows with what it finds.
+NO_APEX_LIMIT = 2**62
 
 
 @dataclass(frozen=True)
@@ -298,3 +299,17 @@ def contact_intervals(rows: np.ndarray) -> list[ContactInterval]:
     names = {FLOOR_CONTACT: "floor", BALL_CONTACT: "ball"}
     intervals = [ContactInterval(names[int(c)], s, e) for c, s, e in np.asarray(rows).tolist()]
     return sorted(intervals, key=lambda interval: interval.start)
+
+
+def stop_rule(until: str | float) -> tuple[int, float]:
+    """(apexes wanted, end time) for an ``until`` argument."""
+    if isinstance(until, str):
+        if until not in UNTIL:
+            raise ParameterError(f"until must be 'first', 'second' or a time > 0; got {until!r}")
+        return UNTIL[until], math.inf
+    if not is_real_number(until):  # a boolean or bytes is no time
+        raise ParameterError(f"until must be 'first', 'second' or a time > 0; got {until!r}")
+    t_end = float(until)
+    if not (math.isfinite(t_end) and t_end > 0.0):
+        raise ParameterError(f"until must be 'first', 'second' or a finite time > 0; got {until!r}")
+    return NO_APEX_LIMIT, t_end

@@ -15,7 +15,6 @@ from twoball.model import (
     apex_bound,
     beyond_bound,
     check_parameters,
-    is_real_number,
     with_ranges,
 )
 from twoball.observables import (
@@ -24,6 +23,7 @@ from twoball.observables import (
     as_times,
     check_span,
     contact_intervals,
+    stop_rule,
     trajectory_of,
 )
 
@@ -37,9 +37,6 @@ METHODS: dict[str, Solver] = {
     **{name: partial(reference.solve, method=name) for name in reference.METHODS},
     "CVODE": cvode.solve,
 }
-UNTIL = {"first": 1, "second": 2}
-# A run "until a time" wants no apex limit; the kernel's apex table grows with what it finds.
-NO_APEX_LIMIT = 2**62
 
 
 @with_ranges
@@ -176,17 +173,3 @@ def _failure(reason: str | None, apex_h: list[float], drop) -> str | None:
                 f"{bound:.6g} at most ({reason or 'no reason given by the solver'})"
             )
     return None
-
-
-def stop_rule(until: str | float) -> tuple[int, float]:
-    """(apexes wanted, end time) for an ``until`` argument."""
-    if isinstance(until, str):
-        if until not in UNTIL:
-            raise ParameterError(f"until must be 'first', 'second' or a time > 0; got {until!r}")
-        return UNTIL[until], math.inf
-    if not is_real_number(until):  # a boolean or bytes is no time
-        raise ParameterError(f"until must be 'first', 'second' or a time > 0; got {until!r}")
-    t_end = float(until)
-    if not (math.isfinite(t_end) and t_end > 0.0):
-        raise ParameterError(f"until must be 'first', 'second' or a finite time > 0; got {until!r}")
-    return NO_APEX_LIMIT, t_end

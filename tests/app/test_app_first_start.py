@@ -1,6 +1,6 @@
 """The first start after an install, with nothing compiled: pages are served at once on the
 kernels' Python functions, saying that the solver is being compiled, and the machine code takes
-over when the compiler, in another process, is done (app/app_hooks.py, twoball/jit.py).
+over when the compiler, in another process, is done (app/app_hooks.py, twoball/warmup.py).
 
 How long each step takes is measured by benchmarks/first_start.py, not asserted here."""
 

@@ -10,7 +10,7 @@ import pytest
 from appdriver import open_page, press_slider, slider_titles, sources_with
 from playwright.sync_api import expect
 
-from twoball.stack import simulate_stack
+from twoball.stacks import simulate_stack
 from twoball.units import number_text
 
 pytestmark = pytest.mark.browser

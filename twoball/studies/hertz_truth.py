@@ -1,9 +1,10 @@
 """A slow, high-precision reference for the Hertz stack: mpmath Taylor series at 30 digits.
 
-It shares no code with :mod:`twoball.hertz_kernel` or the DOP853 path of :mod:`twoball.hertz`:
-only the model's inputs (the masses, each contact's Hunt-Crossley lam and the heights at release,
-as :func:`inputs` takes them from the model's public functions), converted exactly to mpmath
-numbers. The method is deliberately different (docs/model.md, "The Hertz force"):
+It shares no code with :mod:`twoball.kernels.hertz` or the DOP853 path of
+:mod:`twoball.stacks.hertz`: only the model's inputs (the masses, each contact's Hunt-Crossley lam
+and the heights at release, as :func:`inputs` takes them from the model's public functions),
+converted exactly to mpmath numbers. The method is deliberately different (docs/model.md, "The Hertz
+force"):
 
 - **No singularity.** The force delta^(3/2) (1 + lam delta') is not smooth where a contact
   touches or releases (delta = 0). With rho_c = sqrt(delta_c) for each active contact and the
@@ -56,8 +57,7 @@ class HertzTruth:
 def inputs(mass_ratios, eps, tau_ratios, height: float) -> tuple:
     """(masses, lam, heights at release) of a Hertz stack, from the model's public functions:
     the values the solvers are handed."""
-    from twoball import hertz
-    from twoball.stack import check_stack, release_heights
+    from twoball.stacks import check_stack, hertz, release_heights
 
     stack = check_stack(mass_ratios, eps, tau_ratios, height=height, force="hertz")
     restitutions = np.asarray(stack.eps, dtype=float)
@@ -300,7 +300,7 @@ def reference(case: dict) -> dict:
 
 
 def _heights(case: dict, **changed) -> np.ndarray:
-    from twoball.stack import simulate_stack
+    from twoball.stacks import simulate_stack
 
     args = {**case, **changed}
     result = simulate_stack(
@@ -340,7 +340,7 @@ def conditioning(case: dict) -> np.ndarray:
 
 def against(case: dict, stored: dict, method: str = "compiled") -> dict:
     """One row of the table: the solver (``method``) against the stored reference values."""
-    from twoball.stack import simulate_stack
+    from twoball.stacks import simulate_stack
 
     result = simulate_stack(
         case["mass_ratios"],

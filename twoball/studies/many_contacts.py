@@ -23,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
+from twoball.batch.workers import Workers
 from twoball.errors import ParameterError
 from twoball.solve import simulate
 from twoball.studies.conditioning import against_reference, reference_text, within_rule
-from twoball.workers import Workers
 
 HEIGHT = 1e4
 SEED = 10

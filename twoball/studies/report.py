@@ -145,7 +145,7 @@ def close_up_row() -> Row:
 def paper_table(paper: str = "paper", contacts: str = "contacts") -> list[Row]:
     """All rows of the table in docs/model.md, "The paper's sweep and its headline numbers", from
     the named (or given) cubes."""
-    from twoball.cubes import load_cube
+    from twoball.batch.cubes import load_cube
 
     return [
         *sweep_rows(load_cube(paper)),

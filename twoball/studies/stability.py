@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from twoball.batch.workers import Workers
 from twoball.errors import ParameterError, Status
 from twoball.kernels.codes import ROUNDING  # per phase, of the exact solver's state
 from twoball.model import check_parameters
@@ -40,7 +41,6 @@ from twoball.observables import relative_error
 from twoball.reference import METHODS as REFERENCE_METHODS
 from twoball.solve import simulate
 from twoball.studies import precision
-from twoball.workers import Workers
 
 # The study's checks read the dense solution, which CVODE does not give here: scipy's methods.
 METHODS = ("exact", *REFERENCE_METHODS)
@@ -128,10 +128,10 @@ def energy(x1, x2, v1, v2, mu: float):
 def energy_rounding(x1, x2, v1, v2, mu: float, phases: int):
     """A bound on the rounding of :func:`energy` along an exact run of ``phases`` phases.
 
-    The exact solver's state carries at most 16 units of rounding of its size
-    S = |x1| + |x2| + |v1| + |v2| + 1 per phase (twoball/exact.py); through the gradient of E,
-    bounded by 1 + mu + |v1| + mu |v2| + 2 (overlaps), that moves E by at most
-    16 eps S |grad E| per phase, and the phases add up.
+    The exact solver's state carries at most 16 units of rounding of its size S = |x1| + |x2| + |v1|
+    + |v2| + 1 per phase (twoball/kernels/phases.py); through the gradient of E, bounded by 1 + mu +
+    |v1| + mu |v2| + 2 (overlaps), that moves E by at most 16 eps S |grad E| per phase, and the
+    phases add up.
     """
     x1, x2, v1, v2 = (np.asarray(a, dtype=float) for a in (x1, x2, v1, v2))
     overlaps = -np.minimum(x1, 0.0) - np.minimum(x2 - x1, 0.0)

@@ -28,8 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
-from twoball import exact
 from twoball.errors import ParameterError
+from twoball.kernels import runs
 from twoball.kernels.codes import STATUS_DONE, STATUS_PHASES, STATUS_REST, STATUS_STUCK
 from twoball.model import (
     DEFAULT_HEIGHT,
@@ -158,7 +158,7 @@ def parse_axis(name: str, text: str) -> Axis:
 
     Examples
     --------
-    >>> from twoball.sweep import parse_axis
+    >>> from twoball.batch.sweep import parse_axis
     >>> parse_axis("mu", "0.01:1/3:3").values().round(4).tolist()
     [0.01, 0.1717, 0.3333]
     >>> parse_axis("eps", "0.5:1:3:log").spacing
@@ -215,7 +215,7 @@ class Grid:
 
     Examples
     --------
-    >>> from twoball.sweep import Grid, parse_axis
+    >>> from twoball.batch.sweep import Grid, parse_axis
     >>> grid = Grid(parse_axis("eps", "0.9"), parse_axis("mu", "0.01:0.1:2"),
     ...             parse_axis("tau_ratio", "0.01:1:5:log"))
     >>> grid.shape, grid.size
@@ -272,7 +272,7 @@ class Grid:
 
     def arguments(self) -> dict:
         """Everything that determines the stored numbers, as plain JSON values."""
-        from twoball import __version__
+        from twoball.version import __version__
 
         return {
             "axes": {axis.name: asdict(axis) for axis in self.axes},
@@ -321,7 +321,7 @@ def compute_block(
     apex_t = np.full((2, *shape), np.nan)
     contacts = np.full(shape, np.nan)
     status = np.zeros(shape, dtype=np.int8)
-    exact.run_block(mu, zeta01, zeta12, x2_0_plane, height, apex_h, apex_t, contacts, status)
+    runs.run_block(mu, zeta01, zeta12, x2_0_plane, height, apex_h, apex_t, contacts, status)
     x2_0 = np.broadcast_to(x2_0_plane[:, None, :], shape)
     eps01 = eps[:, None, None]
     h_icm = icm_height(
@@ -357,7 +357,7 @@ def _template(grid: Grid, command: str):
     import dask.array as da
     import xarray as xr
 
-    from twoball import __version__
+    from twoball.version import __version__
 
     data_vars = {}
     for name, (units, long_name) in VARIABLES.items():
@@ -506,7 +506,7 @@ def sweep(
 
     Examples
     --------
-    >>> from twoball.sweep import Grid, parse_axis, sweep
+    >>> from twoball.batch.sweep import Grid, parse_axis, sweep
     >>> grid = Grid(parse_axis("eps", "0.816"), parse_axis("mu", "0.05"),
     ...             parse_axis("tau_ratio", "0.3"))
     >>> import pathlib, tempfile
@@ -549,7 +549,7 @@ def sweep(
                     _write_chunk(grid, store, variables, futures[future], future.result())
                     bar.update(_cases(futures[future]))
             elif todo:
-                # Threads, not processes: the batch path (exact.run_block) runs compiled with
+                # Threads, not processes: the batch path (runs.run_block) runs compiled with
                 # the GIL released, so threads compute in parallel with no start-up cost. Each
                 # thread writes its own chunks, so writing one chunk overlaps computing others.
                 threads = min(workers or os.cpu_count() or 1, len(todo))
@@ -576,7 +576,7 @@ def sweep(
         lock.unlink(missing_ok=True)
         if client is not None:
             client.close()
-    from twoball.cubes import load_cube
+    from twoball.batch.cubes import load_cube
 
     return load_cube(store)
 
@@ -624,7 +624,7 @@ def plan(grid: Grid, workers: int) -> str:
 
     Examples
     --------
-    >>> from twoball.sweep import Grid, parse_axis, plan
+    >>> from twoball.batch.sweep import Grid, parse_axis, plan
     >>> grid = Grid(parse_axis("eps", "0.5:1:50"), parse_axis("mu", "0.01:1/3:50"),
     ...             parse_axis("tau_ratio", "0.01:1:50"))
     >>> plan(grid, 2).split(", about")[0]

@@ -30,9 +30,9 @@ import math
 import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _dop853
 
-from twoball import exact
 from twoball.jit import njit
 from twoball.kernels.codes import STATUS_DONE, STATUS_FAILED, STATUS_PHASES, STATUS_REST
+from twoball.kernels.runs import _room_for_one
 
 MAX_STEPS = 300_000  # a run that cannot end fails within seconds (a step takes ~3 us)
 RTOL = 1e-14  # local error of w (and w') per step, relative to the contact's scale
@@ -88,7 +88,7 @@ def _weights(masses):
 @njit
 def force_bounds(masses, lam, total) -> np.ndarray:
     """F_c >= f_c for the rest of the run, from the energy ``total``, which never rises (the
-    argument of twoball.hertz._force_bounds)."""
+    argument of twoball.stacks.hertz._force_bounds)."""
     n = masses.size
     weights = _weights(masses)
     wells = 0.6 * weights ** (5.0 / 3.0)
@@ -108,8 +108,8 @@ def force_bounds(masses, lam, total) -> np.ndarray:
 
 @njit
 def _phase_bounds(masses, force, active, both, towards) -> None:
-    """Bounds on eta_c'' while the phase lasts (twoball.hertz._phase_bounds): |eta''| <= both,
-    and towards, the bound towards each contact's switch."""
+    """Bounds on eta_c'' while the phase lasts (twoball.stacks.hertz._phase_bounds): |eta''| <=
+    both, and towards, the bound towards each contact's switch."""
     n = masses.size
     for c in range(n):
         own_force = force[c] if active[c] else 0.0
@@ -147,7 +147,7 @@ def _rounding(x, deta, t, c) -> float:
 @njit
 def _step_for(x, eta, deta, t, bound, active) -> float:
     """The largest h keeping each eta (or -eta, for a contact that pushes) above -tol by
-    eta + eta' h - M h^2 / 2 (twoball.hertz._step_for)."""
+    eta + eta' h - M h^2 / 2 (twoball.stacks.hertz._step_for)."""
     step = math.inf
     for c in range(eta.size):
         value, rate = (-eta[c], -deta[c]) if active[c] else (eta[c], deta[c])
@@ -161,7 +161,7 @@ def _step_for(x, eta, deta, t, bound, active) -> float:
 @njit
 def _local_forces(masses, lam, eta, deta, active, span, force_bound, both, towards, bound):
     """Bounds F_c (into ``bound``) on each force over the next ``span``, by bootstrap
-    (twoball.hertz._local_forces); the run's bound when the bootstrap does not close."""
+    (twoball.stacks.hertz._local_forces); the run's bound when the bootstrap does not close."""
     n = masses.size
     for c in range(n):
         delta = max(-eta[c], 0.0)
@@ -192,7 +192,7 @@ def _local_forces(masses, lam, eta, deta, active, span, force_bound, both, towar
 
 @njit
 def certified_step(masses, lam, x, v, t, force_bound, active, wanted, work) -> float:
-    """A step over which no overlap changes sign unseen (twoball.hertz._certified_step): from
+    """A step over which no overlap changes sign unseen (twoball.stacks.hertz._certified_step): from
     the run's force bounds, then doubled while the forces bounded over the step certify it.
     ``wanted`` (the integrator's next step) is tried first: if certified, it is the answer.
     ``work``: (5, N) scratch; its row 2 is left holding bounds on |eta''| valid over the step
@@ -229,7 +229,7 @@ def _clamp_possible(lam, deta, span, both) -> bool:
 
 @njit
 def settled(masses, x, v, level) -> bool:
-    """True when no contact can open again, proven by the energy (twoball.hertz._settled):
+    """True when no contact can open again, proven by the energy (twoball.stacks.hertz._settled):
     below ``level`` (:func:`rest_level`)."""
     return energy(masses, x, v) < level
 
@@ -345,7 +345,7 @@ def _switch_values(lam, active, s, z, eta0, deta0, out) -> None:
 @njit
 def _due(masses, lam, x, v, t, active, fresh, at_start, accel, forces) -> int:
     """The first contact whose switch is here (at its root to rounding and moving through it,
-    or past it), -1 if none (twoball.hertz._switching)."""
+    or past it), -1 if none (twoball.stacks.hertz._switching)."""
     n = masses.size
     heights = 1.0 + np.abs(x).sum()
     for c in range(n):
@@ -658,7 +658,7 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
             fresh[:] = False
         if kind == K_APEX:
             v[index] = 0.0
-            apexes = exact._room_for_one(apexes, n_apex)
+            apexes = _room_for_one(apexes, n_apex)
             apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, x[index]
             n_apex += 1
             if index == n - 1:
@@ -675,7 +675,7 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
             continue
         # a switch: the contact's function fell through zero, so it toggles
         if active[index]:
-            contacts = exact._room_for_one(contacts, n_contacts)
+            contacts = _room_for_one(contacts, n_contacts)
             contacts[n_contacts, 0], contacts[n_contacts, 1] = index, opened[index]
             contacts[n_contacts, 2] = t
             n_contacts += 1
@@ -686,7 +686,7 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
         active[index] = not active[index]
     for c in range(n):
         if active[c]:
-            contacts = exact._room_for_one(contacts, n_contacts)
+            contacts = _room_for_one(contacts, n_contacts)
             contacts[n_contacts, 0], contacts[n_contacts, 1] = c, opened[c]
             contacts[n_contacts, 2] = t
             n_contacts += 1

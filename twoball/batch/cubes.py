@@ -9,7 +9,7 @@ from pathlib import Path
 
 from twoball.errors import ParameterError
 
-PRECOMPUTED = Path(__file__).resolve().parent / "precomputed"
+PRECOMPUTED = Path(__file__).resolve().parent.parent / "precomputed"
 
 
 def cube_names() -> list[str]:

@@ -23,7 +23,7 @@ lam = Lambda / v at its *calibration speed* v: the closing speed of its collisio
 chain (sqrt(2H) for the floor). A slower contact is bouncier (1 - e ~ lam v), as real balls
 are. The floor contact time tau_f, which sets the gaps, is that of the calibrated floor contact.
 
-**Solution.** The default is the compiled path of :mod:`twoball.hertz_kernel` (the same method
+**Solution.** The default is the compiled path of :mod:`twoball.kernels.hertz` (the same method
 with a compiled DOP853 on the contact forces' displacement, accurate to ~1e-13). This module's
 own, ``method="DOP853"``, is kept as a reference. Free flight is exact: with no contact active,
 every ball is a parabola and the next touch, clamp or apex is a root of a polynomial of degree
@@ -33,7 +33,7 @@ over: the energy never rises, so it bounds every overlap, speed and force over t
 (:func:`_force_bounds`); with the contacts active in a phase, that bounds eta'' towards each
 switch by M (:func:`_phase_bounds`: an active contact opens only by its own force, an inactive
 one closes only by its neighbours'); a step keeps eta + eta' h - M h^2 / 2 on its side (the
-certified step of twoball.exact). That part is proven for the exact solution (the integrator's
+XX
 error, ~1e-12 relative, is not part of the proof). The clamp (1 + lam delta' = 0) and the apexes
 are located by sign changes at the step's ends and 8 points of its dense output: estimated, not
 proven. A root is refined by Brent's method on the dense output.
@@ -41,15 +41,15 @@ proven. A root is refined by Brent's method on the dense output.
 
 from __future__ import annotations
 
-import functools
 import math
+from dataclasses import replace
 
 import numpy as np
-from scipy.integrate import DOP853, solve_ivp
+from scipy.integrate import DOP853
 from scipy.optimize import brentq
 
-from twoball import hertz_kernel
-from twoball.errors import Status
+from twoball.errors import ParameterError, Status
+from twoball.kernels import hertz as hertz_kernel
 from twoball.kernels.codes import (
     EVENT_APEX,
     EVENT_FAILED,
@@ -58,6 +58,8 @@ from twoball.kernels.codes import (
     EVENT_SWITCH,
     EVENT_TIME,
 )
+from twoball.stacks.hertz_contact import calibration_speeds, damping_factor, floor_contact_time
+from twoball.stacks.model import StackContact, StackResult, StackTrajectory, release_heights
 
 # The work a run may take: 30 000 steps, 15-40 s. Inside the domain check_stack accepts the
 # largest measured runs take about 10 000 (masses 1e4: 9 825; six balls: 6 004; a heavy stack
@@ -67,63 +69,6 @@ from twoball.kernels.codes import (
 MAX_STEPS = 30_000
 RTOL = 1e-12
 PROBES = 8  # dense-output points per step where the clamp and the apexes are looked for
-
-
-@functools.lru_cache(maxsize=256)
-def _normalised_contact(factor: float) -> tuple[float, float]:
-    """(restitution, duration) of u'' = -u^(3/2) (1 + factor u'), u(0) = 0, u'(0) = 1, the
-    contact ending when u returns to 0 or the force reaches zero (the clamp)."""
-
-    def rhs(_t, y):
-        u, du = y
-        return [du, -(max(u, 0.0) ** 1.5) * (1.0 + factor * du)]
-
-    def back_to_zero(_t, y):
-        return y[0]
-
-    def clamp(_t, y):
-        return 1.0 + factor * y[1]
-
-    back_to_zero.terminal, back_to_zero.direction = True, -1.0
-    clamp.terminal, clamp.direction = True, -1.0
-    solution = solve_ivp(
-        rhs, (0.0, 100.0), [1e-300, 1.0], method="DOP853", rtol=1e-13, atol=1e-15,
-        events=[back_to_zero, clamp], dense_output=False,
-    )  # fmt: skip
-    ends = [(e[0], k) for k, e in enumerate(solution.t_events) if len(e)]
-    end, which = min(ends)
-    speed = solution.y_events[which][0][1]
-    return -speed, end
-
-
-@functools.lru_cache(maxsize=256)
-def damping_factor(eps: float) -> float:
-    """Lambda = lam v with an isolated Hunt-Crossley contact's restitution equal to eps."""
-    if eps >= 1.0:
-        return 0.0
-    high = 1.0
-    while _normalised_contact(high)[0] > eps:
-        high *= 2.0
-    return brentq(lambda f: _normalised_contact(f)[0] - eps, 0.0, high, xtol=1e-14, rtol=1e-13)
-
-
-def calibration_speeds(masses: np.ndarray, eps: np.ndarray, height: float) -> np.ndarray:
-    """Each contact's closing speed in the ICM chain (the floor's: sqrt(2H))."""
-    impact = math.sqrt(2.0 * height)
-    speeds = np.empty(len(masses))
-    speeds[0] = impact
-    up = eps[0] * impact
-    for i in range(1, len(masses)):
-        speeds[i] = up + impact
-        below, mass = masses[i - 1], masses[i]
-        up = (below * up - mass * impact + eps[i] * below * (up + impact)) / (below + mass)
-    return speeds
-
-
-def floor_contact_time(eps0: float, height: float) -> float:
-    """tau_f of the calibrated floor contact of ball 0 (mass 1) at impact speed sqrt(2H)."""
-    speed = math.sqrt(2.0 * height)
-    return speed ** (-0.2) * _normalised_contact(damping_factor(eps0))[1]
 
 
 class _Stack:
@@ -536,16 +481,11 @@ METHODS = ("compiled", "DOP853")
 def simulate(
     stack, apexes_wanted: int, t_end: float, times: np.ndarray | None, method: str = "compiled"
 ):
-    """A :class:`twoball.stack.StackResult` for a validated stack with the Hertz force: its
+    """A :class:`twoball.stacks.model.StackResult` for a validated stack with the Hertz force: its
     gaps in units of the Hertz floor contact time (:func:`floor_contact_time`).
 
-    ``method`` "compiled" runs :func:`twoball.hertz_kernel.run` (the default, accurate to
+    ``method`` "compiled" runs :func:`twoball.kernels.hertz.run` (the default, accurate to
     rounding); "DOP853" runs :func:`solve`, scipy's integrator, kept as the reference."""
-    from dataclasses import replace
-
-    from twoball.errors import ParameterError
-    from twoball.stack import StackContact, StackResult, StackTrajectory, release_heights
-
     if method not in METHODS:
         raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     tau_f = floor_contact_time(stack.eps[0], stack.height)

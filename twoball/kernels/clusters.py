@@ -1,0 +1,582 @@
+"""The N-ball kernel's clusters: stacks of N balls with linear contacts, solved exactly phase by
+phase (docs/model.md, "Stacks
+of N balls").
+
+The two-ball solver of :mod:`twoball.kernels.phases`, generalised. In a phase a set of contacts is
+active; it splits the stack into *clusters*, runs of balls joined by active ball contacts. A
+cluster resting on the floor through an active floor contact is *grounded*.
+
+- A cluster's shape is given by the overlaps eta_c of its active contacts. They obey
+  eta'' = -W (eta - eta_rest + 2 Z eta') with W = D M^-1 D^T (D maps heights to overlaps, M is
+  diagonal in the masses, Z in the damping ratios): the state z = (eta - eta_rest, eta') of a
+  cluster with k active contacts satisfies z' = B z, B = [[0, I], [-W, -W 2Z]]. eta_rest is the
+  static compression under the weight above each contact (grounded) or zero (free clusters).
+- A free cluster's centre of mass is a parabola; a ball on its own is one.
+- z' = B z is solved in closed form through a real block-diagonal form
+  B = X diag(B_1..B_k) X^-1 with 2x2 blocks, each advanced exactly on every damping branch
+  (:func:`twoball.kernels.phases._block_flow`).
+  One contact: X = I. Two contacts: the refined mode split of the two-ball solver
+  (:func:`twoball.kernels.closed_forms._split_modes`). More: eigenvectors, complex pairs as
+  rotations and real eigenvalues paired in order; a near-defective pair then costs accuracy in
+  proportion to the condition of X, which the tolerance carries.
+
+Why no contact can be missed: the certified steps of :mod:`twoball.kernels.phases`. Every switching
+function is linear in the heights and velocities of at most two balls; its second derivative is
+a constant (from gravity, for balls of free clusters) plus a linear form in each involved
+cluster's w = z' (which obeys the same equation as z). In the block coordinates X^-1 w that form
+is a sum over the blocks, and each block's share is bounded for the rest of the phase by sizes
+of its state that never grow (a rotation's norm, a diagonal's entries, a strongly overdamped
+block's two exponentials, else its oscillator energy): :func:`_block_weights`. So each step
+keeps F + F' h - bound h^2/2 above -tol, and a root can be approached but not stepped over.
+Bounding mode by mode, as the two-ball solver does, steps each contact at the pace of the modes
+that move it: the cluster's total energy weighs a light top ball's contact by 1/sqrt(its mass)
+times the whole stack's motion.
+
+A stack is at rest when every contact is active and the same per-mode bounds, on z, leave every
+contact force above zero for ever, beyond the rounding of the phase's start
+(:func:`_rest_rounding`): docs/stacks.md, "Why every damped stack ends", has the argument.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from twoball.jit import njit
+from twoball.kernels.closed_forms import (
+    OVERDAMPED_SAFETY,
+    _companion,
+    _companion_row,
+    _overdamped_rates,
+    _split_modes,
+)
+from twoball.kernels.codes import ROUNDING
+from twoball.kernels.phases import _flow
+
+# How a block's future is bounded (:func:`_block_kind`).
+BLOCK_ROTATION, BLOCK_DIAGONAL, BLOCK_EXPONENTIALS, BLOCK_ENERGY = 0, 1, 2, 3
+
+
+class Clusters(NamedTuple):
+    """Every cluster's closed form, built on first use (cluster id from :func:`_cluster_id`)."""
+
+    ready: np.ndarray  # (ids,) bool
+    contacts: np.ndarray  # (ids,) active contacts k
+    x: np.ndarray  # (ids, 2N, 2N) X of the block form (first 2k rows and columns)
+    x_inv: np.ndarray
+    blocks: np.ndarray  # (ids, N, 2, 2)
+    kind: np.ndarray  # (ids, N) how each block's future is bounded (BLOCK_ROTATION, ...)
+    companion: np.ndarray  # (ids, N, 2, 2) (u, u') = R y of a block (BLOCK_ENERGY, _EXPONENTIALS)
+    rates: np.ndarray  # (ids, N, 2) slow and fast decay rates (BLOCK_EXPONENTIALS)
+    eta_rest: np.ndarray  # (ids, N) by local contact
+    shape: np.ndarray  # (ids, N, N) ball (local) height from z_1 (contact local)
+    offset: np.ndarray  # (ids, N) ball height at z = 0 (grounded), 0 for free clusters
+    # weights (ids, N, N, 2) of each functional on each block's sizes (:func:`_block_weights`):
+    # per ball, x'' and the g'' of its lower and upper contact, on w = z'; per active contact,
+    # eta'' and g'' on w and g - g_rest on z
+    w_x2: np.ndarray
+    w_g_low: np.ndarray
+    w_g_up: np.ndarray
+    w_eta: np.ndarray
+    w_g: np.ndarray
+    w_rest: np.ndarray
+    noise: np.ndarray  # (ids,) condition of X
+
+
+@njit
+def _cluster_id(lo, hi, grounded, n):
+    """Index of the cluster of balls lo..hi (grounded ones have lo = 0)."""
+    return n * n + hi if grounded else lo * n + hi
+
+
+@njit
+def new_clusters(n):
+    """Empty storage for every cluster of an n-ball stack."""
+    ids = n * n + n
+    d = 2 * n
+    return Clusters(
+        np.zeros(ids, dtype=np.bool_),
+        np.zeros(ids, dtype=np.int64),
+        np.zeros((ids, d, d)),
+        np.zeros((ids, d, d)),
+        np.zeros((ids, n, 2, 2)),
+        np.zeros((ids, n), dtype=np.int64),
+        np.zeros((ids, n, 2, 2)),
+        np.zeros((ids, n, 2)),
+        np.zeros((ids, n)),
+        np.zeros((ids, n, n)),
+        np.zeros((ids, n)),
+        np.zeros((ids, n, n, 2)),
+        np.zeros((ids, n, n, 2)),
+        np.zeros((ids, n, n, 2)),
+        np.zeros((ids, n, n, 2)),
+        np.zeros((ids, n, n, 2)),
+        np.zeros((ids, n, n, 2)),
+        np.zeros(ids),
+    )
+
+
+@njit
+def _real_blocks(b, k):
+    """X, X^-1 and k 2x2 blocks with B = X diag(blocks) X^-1 (see the module docstring)."""
+    d = 2 * k
+    x = np.zeros((d, d))
+    blocks = np.zeros((k, 2, 2))
+    if k == 1:
+        x[0, 0] = x[1, 1] = 1.0
+        blocks[0] = b
+        return x, x.copy(), blocks
+    if k == 2:
+        x4, x4_inv, blocks2 = _split_modes(b)
+        return x4, x4_inv, blocks2
+    lam, vec = np.linalg.eig(b.astype(np.complex128))
+    scale = np.abs(lam).max()
+    used = np.zeros(d, dtype=np.bool_)
+    count = 0
+    for i in range(d):
+        if used[i] or abs(lam[i].imag) <= 1e-12 * scale:
+            continue
+        partner, gap = -1, np.inf
+        for j in range(d):
+            if j != i and not used[j] and abs(lam[j] - np.conj(lam[i])) < gap:
+                partner, gap = j, abs(lam[j] - np.conj(lam[i]))
+        used[i] = used[partner] = True
+        top = i if lam[i].imag > 0.0 else partner
+        x[:, 2 * count] = vec[:, top].real
+        x[:, 2 * count + 1] = vec[:, top].imag
+        re, im = lam[top].real, lam[top].imag
+        blocks[count, 0, 0], blocks[count, 0, 1] = re, im
+        blocks[count, 1, 0], blocks[count, 1, 1] = -im, re
+        count += 1
+    real_index = np.array([i for i in range(d) if not used[i]], dtype=np.int64)
+    order = real_index[np.argsort(lam[real_index].real)]
+    for p in range(0, order.size, 2):
+        for q in range(2):
+            v = vec[:, order[p + q]]
+            big = np.argmax(np.abs(v))
+            phase = np.conj(v[big]) / abs(v[big])  # a real eigenvector times a phase
+            x[:, 2 * count + q] = (v * phase).real
+        blocks[count, 0, 0] = lam[order[p]].real
+        blocks[count, 1, 1] = lam[order[p + 1]].real
+        count += 1
+    return x, np.linalg.inv(x), blocks
+
+
+@njit
+def _block_kind(block):
+    """How a 2x2 block's future is bounded (docs/stacks.md, "Why every damped stack ends"):
+    a scaled rotation (a complex pair of the eigenvector form), a diagonal (two real
+    eigenvalues), a strongly overdamped block (two exponentials) or, otherwise, the energy of
+    its oscillator."""
+    if block[0, 1] == 0.0 and block[1, 0] == 0.0:
+        return BLOCK_DIAGONAL
+    if block[0, 0] == block[1, 1] and block[0, 1] == -block[1, 0]:
+        return BLOCK_ROTATION
+    if _overdamped_rates(block)[1] > 0.0:
+        return BLOCK_EXPONENTIALS
+    return BLOCK_ENERGY
+
+
+@njit
+def _block_weights(kind, block, companion, rates, r0, r1):
+    """(p, q) with |r . y(s)| <= p a + q b for every later time s of the phase, where
+    (a, b) = :func:`_sizes` of the block's state y now (docs/stacks.md, "Why every damped stack
+    ends"). A rotation keeps |y| or shrinks it, a diagonal each |y_i|; a strongly overdamped block
+    is two decaying exponentials (:func:`twoball.kernels.closed_forms._overdamped_bound`); otherwise
+    Cauchy-Schwarz on the oscillator energy of (u, u') = R y, which never rises."""
+    if kind == BLOCK_ROTATION:
+        return math.hypot(r0, r1), 0.0
+    if kind == BLOCK_DIAGONAL:
+        return abs(r0), abs(r1)
+    row = np.empty(2)
+    row[0], row[1] = r0, r1
+    alpha_beta = _companion_row(row, companion)
+    alpha, beta = alpha_beta[0], alpha_beta[1]
+    if kind == BLOCK_EXPONENTIALS:
+        slow, fast = rates[0], rates[1]
+        return (
+            abs(alpha - beta * slow) * OVERDAMPED_SAFETY,
+            abs(alpha - beta * fast) * OVERDAMPED_SAFETY,
+        )
+    omega = math.sqrt(block[0, 0] * block[1, 1] - block[0, 1] * block[1, 0])
+    return math.hypot(alpha / omega, beta), 0.0
+
+
+@njit
+def _store_weights(target, store, cid, index, row, k):
+    """target[cid, index] = the weights of the functional ``row`` (on z or w, length 2k) on
+    each block of the cluster: row X restricted to the block, through :func:`_block_weights`."""
+    x = store.x[cid]
+    for blk in range(k):
+        r0 = r1 = 0.0
+        for m in range(2 * k):
+            r0 += row[m] * x[m, 2 * blk]
+            r1 += row[m] * x[m, 2 * blk + 1]
+        p, q = _block_weights(
+            store.kind[cid, blk],
+            store.blocks[cid, blk],
+            store.companion[cid, blk],
+            store.rates[cid, blk],
+            r0,
+            r1,
+        )
+        target[cid, index, blk, 0] = p
+        target[cid, index, blk, 1] = q
+
+
+@njit
+def _build_cluster(store, cid, lo, hi, grounded, masses, zeta):
+    """Fill ``store`` at ``cid`` for the cluster of balls lo..hi (docs/model.md, "Stacks of N
+    balls")."""
+    n = masses.size
+    first = 0 if grounded else lo + 1  # its first active contact
+    k = hi - first + 1
+    balls = hi - lo + 1
+    store.contacts[cid] = k
+    if k == 0:
+        store.ready[cid] = True
+        store.noise[cid] = 1.0
+        return
+    # W = D M^-1 D^T on the active contacts (contact c joins balls c-1 and c)
+    w = np.zeros((k, k))
+    for i in range(k):
+        c = first + i
+        w[i, i] = 1.0 / masses[c] + (1.0 / masses[c - 1] if c >= 1 else 0.0)
+        if i + 1 < k:
+            w[i, i + 1] = w[i + 1, i] = -1.0 / masses[c]
+    b = np.zeros((2 * k, 2 * k))
+    for i in range(k):
+        b[i, k + i] = 1.0
+        for j in range(k):
+            b[k + i, j] = -w[i, j]
+            b[k + i, k + j] = -w[i, j] * 2.0 * zeta[first + j]
+    x, x_inv, blocks = _real_blocks(b, k)
+    store.x[cid, : 2 * k, : 2 * k] = x
+    store.x_inv[cid, : 2 * k, : 2 * k] = x_inv
+    store.blocks[cid, :k] = blocks
+    store.noise[cid] = np.abs(x).sum(axis=0).max() * np.abs(x_inv).sum(axis=0).max()
+    for blk in range(k):
+        kind = _block_kind(blocks[blk])
+        store.kind[cid, blk] = kind
+        if kind in (BLOCK_ENERGY, BLOCK_EXPONENTIALS):
+            store.companion[cid, blk] = _companion(np.ascontiguousarray(blocks[blk]))
+        if kind == BLOCK_EXPONENTIALS:
+            store.rates[cid, blk] = _overdamped_rates(blocks[blk])
+    # heights from the shape: x_j = offset_j + shape[j] . z_1 (+ centre of mass if free)
+    total = masses[lo : hi + 1].sum()
+    for jl in range(balls):
+        j = lo + jl
+        for i in range(k):
+            c = first + i
+            if grounded:
+                store.shape[cid, jl, i] = 1.0 if c <= j else 0.0
+            else:
+                above = masses[c : hi + 1].sum()
+                store.shape[cid, jl, i] = (1.0 if c <= j else 0.0) - above / total
+    if grounded:
+        for i in range(k):
+            store.eta_rest[cid, i] = -masses[i : hi + 1].sum()  # the weight above contact i
+        for jl in range(balls):
+            store.offset[cid, jl] = store.eta_rest[cid, : jl + 1].sum()
+    b2 = b @ b
+    for jl in range(balls):
+        j = lo + jl
+        row = np.zeros(2 * k)
+        row[:k] = store.shape[cid, jl, :k]
+        r1 = row @ b  # x'' = r1 . w
+        r2 = row @ b2  # x''' = r2 . w
+        _store_weights(store.w_x2, store, cid, jl, r1, k)
+        _store_weights(store.w_g_low, store, cid, jl, r1 + 2.0 * zeta[j] * r2, k)
+        above = zeta[j + 1] if j + 1 < n else 0.0
+        _store_weights(store.w_g_up, store, cid, jl, r1 + 2.0 * above * r2, k)
+    for i in range(k):
+        c = first + i
+        row = np.zeros(2 * k)
+        row[i] = 1.0
+        _store_weights(store.w_eta, store, cid, i, row @ b, k)
+        row[k + i] = 2.0 * zeta[c]
+        _store_weights(store.w_g, store, cid, i, row @ b, k)
+        _store_weights(store.w_rest, store, cid, i, row, k)  # g - g_rest on z
+    store.ready[cid] = True
+
+
+class Phase(NamedTuple):
+    """The clusters of one phase and their state at its start."""
+
+    count: int
+    lo: np.ndarray  # (N,) per phase cluster
+    hi: np.ndarray
+    cid: np.ndarray
+    grounded: np.ndarray
+    modes: np.ndarray  # (N, 2N) X^-1 z at the start
+    centre: np.ndarray  # (N, 2) centre of mass height and velocity (free clusters)
+    size: np.ndarray  # (N,) rounding scale of heights
+    speed: np.ndarray  # (N,) rounding scale of velocities
+    of_ball: np.ndarray  # (N,) the phase cluster of each ball
+
+
+@njit
+def _phase(active, x, v, store, masses, zeta):
+    """Split the stack into clusters for this set of active contacts; their modes at the start."""
+    n = masses.size
+    lo = np.zeros(n, dtype=np.int64)
+    hi = np.zeros(n, dtype=np.int64)
+    cid = np.zeros(n, dtype=np.int64)
+    grounded = np.zeros(n, dtype=np.bool_)
+    modes = np.zeros((n, 2 * n))
+    centre = np.zeros((n, 2))
+    size = np.zeros(n)
+    speed = np.zeros(n)
+    of_ball = np.zeros(n, dtype=np.int64)
+    z = np.empty(2 * n)
+    eta_rest, x_inv = store.eta_rest, store.x_inv
+    count = 0
+    j = 0
+    while j < n:
+        start = j
+        while j + 1 < n and active[j + 1]:
+            j += 1
+        lo[count], hi[count] = start, j
+        grounded[count] = start == 0 and active[0]
+        cid[count] = _cluster_id(start, j, grounded[count], n)
+        if not store.ready[cid[count]]:
+            _build_cluster(store, cid[count], start, j, grounded[count], masses, zeta)
+        here = cid[count]
+        k = store.contacts[here]
+        first = 0 if grounded[count] else start + 1
+        total = mass_x = mass_v = 0.0
+        size[count] = 1.0
+        for ball in range(start, j + 1):  # loops, not slices or temporaries (see _evaluate)
+            total += masses[ball]
+            mass_x += masses[ball] * x[ball]
+            mass_v += masses[ball] * v[ball]
+            of_ball[ball] = count
+            size[count] += abs(x[ball])
+            speed[count] += abs(v[ball])
+        centre[count, 0] = mass_x / total
+        centre[count, 1] = mass_v / total
+        for i in range(k):
+            c = first + i
+            below_x = x[c - 1] if c >= 1 else 0.0
+            below_v = v[c - 1] if c >= 1 else 0.0
+            z[i] = x[c] - below_x - eta_rest[here, i]
+            z[k + i] = v[c] - below_v
+            size[count] += abs(eta_rest[here, i])
+        for row in range(2 * k):  # modes = X^-1 z
+            total = 0.0
+            for col in range(2 * k):
+                total += x_inv[here, row, col] * z[col]
+            modes[count, row] = total
+        count += 1
+        j += 1
+    return Phase(count, lo, hi, cid, grounded, modes, centre, size, speed, of_ball)
+
+
+@njit
+def _evaluate(tau, phase, store, n, x, v, a, shape_z, shape_w, mode_z, mode_w):
+    """Heights, velocities, accelerations of every ball at tau into the phase (into x, v, a),
+    each phase cluster's z and w = z' (into shape_z, shape_w) and their block (mode)
+    coordinates X^-1 z and X^-1 w (into mode_z, mode_w)."""
+    _evaluate_arrays(
+        tau,
+        phase.count,
+        phase.cid,
+        phase.lo,
+        phase.hi,
+        phase.grounded,
+        phase.centre,
+        phase.modes,
+        store.contacts,
+        store.blocks,
+        store.x,
+        store.shape,
+        store.offset,
+        x,
+        v,
+        a,
+        shape_z,
+        shape_w,
+        mode_z,
+        mode_w,
+    )
+
+
+@njit
+def _evaluate_arrays(
+    tau,
+    count,
+    cids,
+    lows,
+    highs,
+    grounded,
+    centre,
+    modes,
+    contacts,
+    blocks,
+    big_x,
+    shape,
+    offset,
+    x,
+    v,
+    a,
+    shape_z,
+    shape_w,
+    mode_z,
+    mode_w,
+):
+    """:func:`_evaluate` on the phase's and the store's arrays, passed one by one: the step
+    loop reads them once per phase. Written without array slices or tuples of arrays: each
+    would count references, which took most of the time of a step."""
+    for p in range(count):
+        cid = cids[p]
+        k = contacts[cid]
+        d = 2 * k
+        for row in range(d):
+            shape_z[p, row] = 0.0
+            shape_w[p, row] = 0.0
+        for blk in range(k):
+            n0, n1, r0, r1 = _flow(
+                blocks[cid, blk, 0, 0],
+                blocks[cid, blk, 0, 1],
+                blocks[cid, blk, 1, 0],
+                blocks[cid, blk, 1, 1],
+                modes[p, 2 * blk],
+                modes[p, 2 * blk + 1],
+                tau,
+            )
+            mode_z[p, 2 * blk], mode_z[p, 2 * blk + 1] = n0, n1
+            mode_w[p, 2 * blk], mode_w[p, 2 * blk + 1] = r0, r1
+            for row in range(d):  # z = X flow, w = X rate, without allocating
+                left, right = big_x[cid, row, 2 * blk], big_x[cid, row, 2 * blk + 1]
+                shape_z[p, row] += left * n0 + right * n1
+                shape_w[p, row] += left * r0 + right * r1
+        if grounded[p]:
+            base_x = base_v = base_a = 0.0
+        else:
+            base_x = centre[p, 0] + tau * (centre[p, 1] - 0.5 * tau)
+            base_v = centre[p, 1] - tau
+            base_a = -1.0
+        for ball in range(lows[p], highs[p] + 1):
+            jl = ball - lows[p]
+            xs = vs = acc = 0.0
+            for i in range(k):
+                coefficient = shape[cid, jl, i]
+                xs += coefficient * shape_z[p, i]
+                vs += coefficient * shape_z[p, k + i]
+                acc += coefficient * shape_w[p, k + i]
+            x[ball] = base_x + offset[cid, jl] + xs
+            v[ball] = base_v + vs
+            a[ball] = base_a + acc
+
+
+@njit
+def _sizes(kinds, blocks, companions, rates, cid, k, modes, p, out):
+    """The two sizes of each block's state y = modes[p] (cluster cid, k blocks) that
+    :func:`_block_weights` weighs, into out[p]: |y| (rotation), |y_0| and |y_1| (diagonal), the
+    amplitudes of the slow and the fast exponential (strongly overdamped), sqrt(2 E) =
+    sqrt(u'^2 + det(B) u^2) (otherwise). None of them can grow. Whole arrays and indices, not
+    slices (see :func:`_evaluate`)."""
+    for blk in range(k):
+        kind = kinds[cid, blk]
+        y0, y1 = modes[p, 2 * blk], modes[p, 2 * blk + 1]
+        if kind == BLOCK_ROTATION:
+            out[p, blk, 0], out[p, blk, 1] = math.hypot(y0, y1), 0.0
+        elif kind == BLOCK_DIAGONAL:
+            out[p, blk, 0], out[p, blk, 1] = abs(y0), abs(y1)
+        else:
+            u = companions[cid, blk, 0, 0] * y0 + companions[cid, blk, 0, 1] * y1
+            du = companions[cid, blk, 1, 0] * y0 + companions[cid, blk, 1, 1] * y1
+            if kind == BLOCK_EXPONENTIALS:
+                slow, fast = rates[cid, blk, 0], rates[cid, blk, 1]
+                gap = fast - slow
+                out[p, blk, 0] = abs((du + fast * u) / gap)
+                out[p, blk, 1] = abs((du + slow * u) / gap)
+            else:
+                det = (
+                    blocks[cid, blk, 0, 0] * blocks[cid, blk, 1, 1]
+                    - blocks[cid, blk, 0, 1] * blocks[cid, blk, 1, 0]
+                )
+                out[p, blk, 0], out[p, blk, 1] = math.sqrt(du * du + det * u * u), 0.0
+
+
+@njit
+def _bounds(
+    count,
+    cids,
+    lows,
+    highs,
+    grounded,
+    contacts,
+    kinds,
+    blocks,
+    companions,
+    rates,
+    w_x2,
+    w_g_low,
+    w_g_up,
+    w_eta,
+    w_g,
+    mode_w,
+    sizes_w,
+    out,
+):
+    """Every bound on a switching function's curvature for the rest of the phase, from the
+    blocks' sizes of w (:func:`_sizes`, into sizes_w): out[ball] holds those of x'' and of the
+    g'' of the ball's lower and upper contact, out[contact, 3:5] those of eta'' and g'' of an
+    active contact. One call per step (see :func:`_evaluate_arrays`)."""
+    for p in range(count):
+        cid = cids[p]
+        k = contacts[cid]
+        _sizes(kinds, blocks, companions, rates, cid, k, mode_w, p, sizes_w)
+        for ball in range(lows[p], highs[p] + 1):
+            jl = ball - lows[p]
+            out[ball, 0] = _bound(w_x2, cid, jl, sizes_w, p, k)
+            out[ball, 1] = _bound(w_g_low, cid, jl, sizes_w, p, k)
+            out[ball, 2] = _bound(w_g_up, cid, jl, sizes_w, p, k)
+        first = 0 if grounded[p] else lows[p] + 1
+        for i in range(k):
+            out[first + i, 3] = _bound(w_eta, cid, i, sizes_w, p, k)
+            out[first + i, 4] = _bound(w_g, cid, i, sizes_w, p, k)
+
+
+@njit
+def _bound(weights, cid, index, sizes, p, k):
+    """sum over the k blocks of p a + q b, (p, q) = weights[cid, index, block] and (a, b) =
+    sizes[p, block]: a bound on a functional for the rest of the phase (:func:`_block_weights`)."""
+    total = 0.0
+    for blk in range(k):
+        total += weights[cid, index, blk, 0] * sizes[p, blk, 0]
+        total += weights[cid, index, blk, 1] * sizes[p, blk, 1]
+    return total
+
+
+@njit
+def _rest_rounding(store, cid, x, v, carried):
+    """Per contact, a bound (in units of ROUNDING) on how far the rounding of this phase's
+    start moves g - g_rest at any later time (docs/stacks.md, "Why every damped stack ends").
+
+    The start z = (eta - eta_rest, eta') is formed from the heights, each overlap rounded to
+    ~|x_c| + |x_(c-1)| + |eta_rest| (and what earlier closed forms ``carried``), each rate to
+    ~|v_c| + |v_(c-1)|; its modes X^-1 z then carry at most |X^-1| times that, and a mode's
+    error is a state of the same block, bounded for all later times as the mode is
+    (:func:`_block_weights`). Only for the eigenvector form (rotations and diagonals), that
+    is clusters of three or more contacts. Far tighter than the condition of X times the
+    heights: a light top ball's weight (1e-9 of ball 0) is below that, not below this."""
+    n = store.contacts[cid]
+    scale = np.zeros(2 * n)
+    for c in range(n):
+        scale[c] = abs(x[c]) + abs(store.eta_rest[cid, c]) + 2.0 * carried / ROUNDING
+        scale[n + c] = abs(v[c])
+        if c >= 1:
+            scale[c] += abs(x[c - 1])
+            scale[n + c] += abs(v[c - 1])
+    spread = np.zeros((1, 2 * n))
+    spread[0] = np.abs(store.x_inv[cid, : 2 * n, : 2 * n]) @ scale
+    sizes = np.zeros((1, n, 2))
+    _sizes(store.kind, store.blocks, store.companion, store.rates, cid, n, spread, 0, sizes)
+    out = np.empty(n)
+    for c in range(n):
+        out[c] = _bound(store.w_rest, cid, c, sizes, 0, n)
+    return out

@@ -1,0 +1,441 @@
+"""The N-ball kernel's phase loop (docs/model.md, "Stacks of N balls"): a phase advanced to its
+first event by certified steps over the clusters' closed forms (:mod:`twoball.kernels.clusters`),
+a stack run phase by phase, and the exact state at any times from the recorded phases."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from twoball.jit import njit
+from twoball.kernels.clusters import (
+    _bound,
+    _bounds,
+    _cluster_id,
+    _evaluate,
+    _evaluate_arrays,
+    _phase,
+    _rest_rounding,
+    _sizes,
+    new_clusters,
+)
+from twoball.kernels.codes import (
+    EVENT_APEX,
+    EVENT_REST,
+    EVENT_STEPS,
+    EVENT_STUCK,
+    EVENT_SWITCH,
+    EVENT_TIME,
+    MAX_PHASES,
+    MAX_STEPS_PER_PHASE,
+    ROUNDING,
+    STATUS_DONE,
+    STATUS_PHASES,
+    STATUS_REST,
+    STATUS_STUCK,
+)
+from twoball.kernels.phases import (
+    BOTH,
+    P_NOISE,
+    _at_rest,
+    _block_states,
+    _energy_roots,
+    _rest_size,
+    contact_switch,
+    prepare,
+)
+from twoball.kernels.runs import _room_for_one
+
+
+@njit
+def advance_phase(
+    t, x0, v0, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried, pair
+):
+    """Advance one phase, started at time t, to its first event.
+
+    Returns (event, index, tau, x, v): a contact switch (index the contact), an apex (index the
+    ball; horizon_ball's apex is ``horizon`` away, or -1 for the end of the run), the end, rest,
+    a stuck root finder or the step limit. ``pair`` is :func:`twoball.kernels.phases.prepare` of a
+    two-ball stack (a placeholder for more balls): its rest proof is used for N = 2.
+    """
+    n = masses.size
+    phase = _phase(active, x0, v0, store, masses, zeta)
+    x = np.empty(n)
+    v = np.empty(n)
+    a = np.empty(n)
+    shape_z = np.zeros((n, 2 * n))
+    shape_w = np.zeros((n, 2 * n))
+    mode_z = np.zeros((n, 2 * n))
+    mode_w = np.zeros((n, 2 * n))
+    sizes_w = np.zeros((n, n, 2))
+    sizes_z = np.zeros((1, n, 2))
+    curvature = np.zeros((n, 5))  # see _bounds
+    # the store's and the phase's arrays, read once (see _evaluate)
+    kinds, blocks, companions, rates = store.kind, store.blocks, store.companion, store.rates
+    contacts, noise, eta_rest = store.contacts, store.noise, store.eta_rest
+    w_x2, w_g_low, w_g_up = store.w_x2, store.w_g_low, store.w_g_up
+    w_eta, w_g, w_rest = store.w_eta, store.w_g, store.w_rest
+    cids, lows, grounded, of_ball = phase.cid, phase.lo, phase.grounded, phase.of_ball
+    sizes, speeds = phase.size, phase.speed
+    count, highs, centre, modes = phase.count, phase.hi, phase.centre, phase.modes
+    big_x, shape, offset = store.x, store.shape, store.offset
+    everything = phase.count == 1 and phase.grounded[0] and store.contacts[phase.cid[0]] == n
+    rest_rounding = np.zeros(n)
+    if everything and n >= 3:
+        rest_rounding = _rest_rounding(store, phase.cid[0], x0, v0, carried)
+    tau = 0.0
+    last_step = 0.0
+    for _ in range(MAX_STEPS_PER_PHASE):
+        _evaluate_arrays(
+            tau,
+            count,
+            cids,
+            lows,
+            highs,
+            grounded,
+            centre,
+            modes,
+            contacts,
+            blocks,
+            big_x,
+            shape,
+            offset,
+            x,
+            v,
+            a,
+            shape_z,
+            shape_w,
+            mode_z,
+            mode_w,
+        )
+        _bounds(
+            count,
+            cids,
+            lows,
+            highs,
+            grounded,
+            contacts,
+            kinds,
+            blocks,
+            companions,
+            rates,
+            w_x2,
+            w_g_low,
+            w_g_up,
+            w_eta,
+            w_g,
+            mode_w,
+            sizes_w,
+            curvature,
+        )
+        clock = 1.0 + t + tau
+        step = horizon - tau
+        event, best = -1, np.inf
+        for c in range(n):
+            upper = of_ball[c]
+            cid_u = cids[upper]
+            k_u = contacts[cid_u]
+            noise_u = noise[cid_u]
+            tol_state = noise_u * (sizes[upper] + speeds[upper] * (1.0 + tau) + tau * tau)
+            tol_rate = noise_u * (speeds[upper] + 1.0 + tau)
+            if active[c]:
+                i = c - (0 if grounded[upper] else lows[upper] + 1)
+                eta = eta_rest[cid_u, i] + shape_z[upper, i]
+                deta = shape_z[upper, k_u + i]
+                ddeta = shape_w[upper, k_u + i]
+                bound_eta, bound_g = curvature[c, 3], curvature[c, 4]
+            else:
+                rigid_u = 0.0 if grounded[upper] else -1.0
+                bound_eta, bound_g = curvature[c, 0], curvature[c, 1]
+                if c == 0:
+                    eta, deta, ddeta = x[0], v[0], a[0]
+                    rigid = -rigid_u
+                else:
+                    lower = of_ball[c - 1]
+                    cid_l = cids[lower]
+                    eta, deta, ddeta = x[c] - x[c - 1], v[c] - v[c - 1], a[c] - a[c - 1]
+                    rigid_l = 0.0 if grounded[lower] else -1.0
+                    rigid = abs(rigid_u - rigid_l)
+                    bound_eta += curvature[c - 1, 0]
+                    bound_g += curvature[c - 1, 2]
+                    tol_state += noise[cid_l] * (
+                        sizes[lower] + speeds[lower] * (1.0 + tau) + tau * tau
+                    )
+                    tol_rate += noise[cid_l] * (speeds[lower] + 1.0 + tau)
+                bound_eta += rigid
+                bound_g += rigid
+            tol_state = ROUNDING * tol_state + carried
+            value, rate, tol, h = contact_switch(
+                active[c], eta, deta, ddeta, zeta[c], bound_eta, bound_g, tol_state, clock
+            )
+            fresh = c == entered_by and tau == 0.0
+            # a rate within the rounding of the velocities has no sign: balls moving together
+            # (touching, unloaded) would otherwise switch on and off with the rounding
+            tol_rate = ROUNDING * tol_rate * (1.0 + 2.0 * zeta[c])
+            if value <= -tol or (value <= tol and rate < -tol_rate and not fresh):
+                shift = 0.0  # one Newton correction, as in twoball.kernels.phases.advance_phase
+                if rate < 0.0:
+                    shift = min(max(value / -rate, -last_step), h)
+                if c == entered_by and tau + shift <= 0.0:
+                    shift = 0.0
+                if tau + shift < best:
+                    best, event = tau + shift, c
+            else:
+                step = min(step, h)
+        if event >= 0:
+            _evaluate_arrays(
+                best,
+                count,
+                cids,
+                lows,
+                highs,
+                grounded,
+                centre,
+                modes,
+                contacts,
+                blocks,
+                big_x,
+                shape,
+                offset,
+                x,
+                v,
+                a,
+                shape_z,
+                shape_w,
+                mode_z,
+                mode_w,
+            )
+            return EVENT_SWITCH, event, best, x, v
+        if everything:
+            margin_ok = True
+            cid = cids[0]
+            _sizes(kinds, blocks, companions, rates, cid, n, mode_z, 0, sizes_z)
+            tol_rest = ROUNDING * noise[cid] * (sizes[0] + speeds[0] * (1.0 + tau) + tau * tau)
+            for c in range(n):
+                excursion = _bound(w_rest, cid, c, sizes_z, 0, n)
+                margin = -eta_rest[cid, c] - excursion
+                if n >= 3:  # each contact's own rounding (see _rest_rounding)
+                    tol_rest = ROUNDING * (rest_rounding[c] + excursion)
+                if not margin > tol_rest:
+                    margin_ok = False
+            if not margin_ok and n == 2:
+                margin_ok = _pair_at_rest(pair, x, v, phase.size[0], phase.speed[0], tau, carried)
+            if margin_ok:
+                return EVENT_REST, -1, tau, x, v
+        if tau + step >= horizon:
+            _evaluate_arrays(
+                horizon,
+                count,
+                cids,
+                lows,
+                highs,
+                grounded,
+                centre,
+                modes,
+                contacts,
+                blocks,
+                big_x,
+                shape,
+                offset,
+                x,
+                v,
+                a,
+                shape_z,
+                shape_w,
+                mode_z,
+                mode_w,
+            )
+            if horizon_ball >= 0:
+                return EVENT_APEX, horizon_ball, horizon, x, v
+            return EVENT_TIME, -1, horizon, x, v
+        if not 0.0 < step < np.inf:
+            return EVENT_STUCK, -1, tau, x0.copy(), v0.copy()
+        tau += step
+        last_step = step
+    return EVENT_STEPS, -1, tau, x0.copy(), v0.copy()
+
+
+@njit
+def _pair_at_rest(pair, x, v, size, speed, tau, carried):
+    """Rest of two balls, both contacts active, proven as :func:`twoball.kernels.runs.run` proves it
+    (docs/model.md, "What is measured"): per mode, with the tight bound of a strongly overdamped
+    mode (:func:`twoball.kernels.closed_forms._overdamped_bound`). The cluster's total energy, which
+    the test above uses, bounds a slow overdamped mode far too loosely (eps = 0.01 under a heavy
+    upper ball: rest proven at t = 3310 by twoball.simulate, never by that energy)."""
+    params, rest, x_inv, blocks = pair.params, pair.rest, pair.x_inv, pair.blocks
+    companions, y_rest, rates, mode_rows = pair.companions, pair.y_rest, pair.rates, pair.mode_rows
+    # the two-ball solver's state is in its relative coordinates (x1, eta, v1, eta')
+    eta, deta = x[1] - x[0], v[1] - v[0]
+    block_states = _block_states(x[0], eta, v[0], deta, x_inv, companions, y_rest)
+    roots = _energy_roots(BOTH, v[0], deta, 0.0, 0.0, params, blocks, block_states)
+    offset = _rest_size(y_rest)
+    tol = ROUNDING * params[P_NOISE] * (size + offset + speed * (1.0 + tau) + tau * tau)
+    return _at_rest(roots, params, rest, rates, mode_rows, block_states, tol + carried)
+
+
+class StackRun(NamedTuple):
+    """What :func:`run` returns."""
+
+    status: int
+    end_time: float
+    apexes: np.ndarray  # (n, 3): ball, t, height, in order
+    contacts: np.ndarray  # (n, 3): contact, start, end
+    contacts_first: np.ndarray  # (N,) intervals of each contact that start before h1
+    phases: np.ndarray  # (n, 2 + 2N): t, active bits, heights, velocities (if recorded)
+
+
+@njit
+def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
+    """Run a stack from rest at heights ``x_start`` until the top ball's ``apexes_wanted``-th
+    apex, ``t_end`` or rest (docs/model.md, "Stacks of N balls"). ``store`` holds the clusters'
+    closed forms for these masses and damping ratios (:func:`new_clusters`, or one that earlier
+    runs of the same balls filled: :func:`_store_for`)."""
+    n = masses.size
+    x = x_start.copy()
+    v = np.zeros(n)
+    # Balls released touching (a gap of zero) start with their contact active and unloaded
+    # (force zero either way): left inactive, the compression wave of the first impact reaches
+    # it as a tangency of high order (eta ~ -(t - t0)^6 for the fourth contact), which rounding
+    # toggles on and off for ever. Active, the contact simply starts to push.
+    active = np.zeros(n, dtype=np.bool_)
+    opened = np.zeros(n)
+    first = np.zeros(n, dtype=np.int64)
+    for c in range(1, n):
+        if x_start[c] == x_start[c - 1]:
+            active[c] = True
+            first[c] = 1
+    t = 0.0
+    apexes = np.empty((8, 3))
+    n_apex = 0
+    top_apexes = 0
+    contacts = np.empty((16, 3))
+    n_contacts = 0
+    phases = np.empty((16 if record_phases else 0, 2 + 2 * n))
+    n_phases = 0
+    status = STATUS_PHASES
+    entered_by = -1
+    carried = 0.0
+    # the two-ball solver's rest proof, for N = 2 (for more balls a placeholder of the same type)
+    pair = prepare(masses[1] if n == 2 else 1.0, zeta[0], zeta[1] if n == 2 else 0.1)
+    for _ in range(MAX_PHASES):
+        if record_phases:
+            phases = _room_for_one(phases, n_phases)
+            bits = 0
+            for c in range(n):
+                if active[c]:
+                    bits += 1 << c
+            phases[n_phases, 0], phases[n_phases, 1] = t, bits
+            phases[n_phases, 2 : 2 + n] = x
+            phases[n_phases, 2 + n :] = v
+            n_phases += 1
+        horizon, horizon_ball = t_end - t, -1
+        for ball in range(n):
+            free = not active[ball] and (ball == n - 1 or not active[ball + 1])
+            if free and 0.0 < v[ball] < horizon:
+                horizon, horizon_ball = v[ball], ball  # a free ball's apex is v away
+        event, index, tau, x, v = advance_phase(
+            t, x, v, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried, pair
+        )
+        # A state that leaves a grounded cluster of several contacts carries the rounding of its
+        # closed form about the static rest (see twoball.kernels.runs.run).
+        grounded_top = 0
+        while active[0] and grounded_top + 1 < n and active[grounded_top + 1]:
+            grounded_top += 1
+        if grounded_top > 0:
+            cid = _cluster_id(0, grounded_top, True, n)
+            offset = np.abs(store.eta_rest[cid, : grounded_top + 1]).sum()
+            carried = max(carried, ROUNDING * store.noise[cid] * offset)
+        entered_by = index if event == EVENT_SWITCH else -1
+        t += tau
+        if event == EVENT_SWITCH:
+            if active[index]:
+                contacts = _room_for_one(contacts, n_contacts)
+                contacts[n_contacts, 0], contacts[n_contacts, 1] = index, opened[index]
+                contacts[n_contacts, 2] = t
+                n_contacts += 1
+            else:
+                opened[index] = t
+                if top_apexes == 0:
+                    first[index] += 1
+            active[index] = not active[index]
+        elif event == EVENT_APEX:
+            v[index] = 0.0
+            apexes = _room_for_one(apexes, n_apex)
+            apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, x[index]
+            n_apex += 1
+            if index == n - 1:
+                top_apexes += 1
+                if top_apexes == apexes_wanted:
+                    status = STATUS_DONE
+                    break
+        elif event == EVENT_TIME:
+            status = STATUS_DONE
+            break
+        elif event == EVENT_REST:
+            status = STATUS_REST
+            break
+        elif event == EVENT_STEPS:
+            status = STATUS_PHASES
+            break
+        else:
+            status = STATUS_STUCK
+            break
+    for c in range(n):  # contacts still open at the end end there
+        if active[c]:
+            contacts = _room_for_one(contacts, n_contacts)
+            contacts[n_contacts, 0], contacts[n_contacts, 1], contacts[n_contacts, 2] = (
+                c,
+                opened[c],
+                t,
+            )
+            n_contacts += 1
+    return StackRun(
+        status=status,
+        end_time=t,
+        apexes=apexes[:n_apex].copy(),
+        contacts=contacts[:n_contacts].copy(),
+        contacts_first=first,
+        phases=phases[:n_phases],
+    )
+
+
+@njit
+def sample(phases, times, masses, zeta):
+    """Exact heights, velocities and contact forces at the given times from the recorded
+    phases: arrays (len(times), N) each."""
+    n = masses.size
+    store = new_clusters(n)
+    heights = np.empty((times.size, n))
+    speeds = np.empty((times.size, n))
+    forces = np.zeros((times.size, n))
+    x = np.empty(n)
+    v = np.empty(n)
+    a = np.empty(n)
+    shape_z = np.zeros((n, 2 * n))
+    shape_w = np.zeros((n, 2 * n))
+    mode_z = np.zeros((n, 2 * n))
+    mode_w = np.zeros((n, 2 * n))
+    active = np.zeros(n, dtype=np.bool_)
+    current = -1
+    phase = _phase(active, phases[0, 2 : 2 + n], phases[0, 2 + n :], store, masses, zeta)
+    for s in range(times.size):
+        index = max(np.searchsorted(phases[:, 0], times[s], side="right") - 1, 0)
+        bits = int(phases[index, 1])
+        for c in range(n):
+            active[c] = (bits >> c) & 1 == 1
+        if index != current:
+            phase = _phase(
+                active, phases[index, 2 : 2 + n], phases[index, 2 + n :], store, masses, zeta
+            )
+            current = index
+        tau = times[s] - phases[index, 0]
+        _evaluate(tau, phase, store, n, x, v, a, shape_z, shape_w, mode_z, mode_w)
+        heights[s] = x
+        speeds[s] = v
+        for c in range(n):
+            if active[c]:
+                eta = x[c] - (x[c - 1] if c >= 1 else 0.0)
+                deta = v[c] - (v[c - 1] if c >= 1 else 0.0)
+                forces[s, c] = max(-(eta + 2.0 * zeta[c] * deta), 0.0)
+    return heights, speeds, forces

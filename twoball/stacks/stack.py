@@ -1,0 +1,155 @@
+"""``simulate_stack``: a stack of N balls dropped and measured (docs/model.md, "Stacks of N
+balls"). The linear force runs the compiled N-ball kernel (:mod:`twoball.kernels.stack`; the
+method, and why no contact can be missed, in :mod:`twoball.kernels.clusters`), the Hertz force
+:mod:`twoball.stacks.hertz`."""
+
+from __future__ import annotations
+
+import math
+
+from twoball.errors import SolverError, Status, phase_limit_hint
+
+# by module, not by name: jit.use_python_kernels swaps the kernels in their own modules
+from twoball.kernels import clusters
+from twoball.kernels import stack as kernel
+from twoball.model import DEFAULT_HEIGHT, beyond_bound
+from twoball.observables import as_times, check_span, stop_rule
+from twoball.stacks.model import (
+    Stack,
+    StackContact,
+    StackResult,
+    StackTrajectory,
+    _apex_bound,
+    check_stack,
+)
+
+
+def simulate_stack(
+    mass_ratios: object,
+    eps: object,
+    tau_ratios: object,
+    *,
+    height: float = DEFAULT_HEIGHT,
+    force: str = "linear",
+    until: str | float = "second",
+    t_eval: object = None,
+    throw: bool = True,
+    method: str = "compiled",
+) -> StackResult:
+    """Drop a stack of N balls and measure the top ball's bounces (docs/model.md, "Stacks of N
+    balls").
+
+    Parameters
+    ----------
+    mass_ratios : sequence of float
+        The N - 1 ratios m_i / m_(i-1), bottom up (for N = 2, ``[mu]``).
+    eps : float or sequence of float
+        One restitution for every contact, or N of them: the floor's, then each pair's.
+    tau_ratios : float or sequence of float
+        One gap or N - 1: ball i + 1 reaches its touching height td_i = tau_ratio_i * tau_f
+        after ball i would, in free fall.
+    height : float
+        Dimensionless drop height H of ball 0.
+    force : "linear" or "hertz"
+        The contact force: the linear spring-dashpot, solved exactly, or Hertz's with
+        Hunt-Crossley damping (:mod:`twoball.stacks.hertz`).
+    until : "first", "second" or float
+        The top ball's apex to run to, or a dimensionless time.
+    t_eval : array_like, optional
+        Times at which ``StackResult.trajectory`` samples heights, velocities and forces.
+    throw : bool
+        A run that fails raises :class:`~twoball.errors.SolverError`; with False the result says
+        so (``success``, ``status``).
+    method : "compiled" or "DOP853"
+        With the Hertz force: the compiled integrator, or scipy's DOP853, kept as a reference
+        (:func:`twoball.stacks.hertz.simulate`).
+
+    Returns
+    -------
+    StackResult
+
+    Examples
+    --------
+    With two balls it is :func:`twoball.simulate`:
+
+    >>> import twoball
+    >>> from twoball.stacks import simulate_stack
+    >>> pair = simulate_stack([0.01], 0.9, 0.01)
+    >>> single = twoball.simulate(0.9, 0.01, 0.01)
+    >>> bool(abs(pair.h2 - single.h2) < 1e-9 * single.h2), pair.contacts_first[1]
+    (True, 4)
+    """
+    stack = check_stack(mass_ratios, eps, tau_ratios, height=height, force=force)
+    apexes_wanted, t_end = stop_rule(until)
+    times = None
+    if t_eval is not None:
+        times = as_times("t_eval", t_eval)
+        check_span("t_eval", times, math.inf, False)  # no time before the release
+    if force == "hertz":
+        from twoball.stacks import hertz
+
+        result = hertz.simulate(stack, apexes_wanted, t_end, times, method)
+        stack = result.stack  # its gaps are in units of the Hertz floor contact
+    else:
+        out = kernel.run(
+            stack.masses,
+            stack.zeta,
+            stack.x_start,
+            apexes_wanted,
+            t_end,
+            times is not None,
+            _store_for(stack),
+        )
+        apexes: list[list[tuple[float, float]]] = [[] for _ in range(stack.balls)]
+        for ball, when, where in out.apexes.tolist():
+            apexes[int(ball)].append((when, where))
+        trajectory = None
+        if times is not None:
+            heights, speeds, forces = kernel.sample(out.phases, times, stack.masses, stack.zeta)
+            trajectory = StackTrajectory(times, heights, speeds, forces)
+        result = StackResult(
+            stack=stack,
+            force=force,
+            apexes=apexes,
+            # tolist: Python floats at once, not a numpy scalar per value (a third of the
+            # three-ball drop's time outside the kernel)
+            contacts=[StackContact(int(c), s, e) for c, s, e in out.contacts.tolist()],
+            contacts_first=[int(count) for count in out.contacts_first],
+            end_time=float(out.end_time),
+            status=Status(out.status),
+            trajectory=trajectory,
+        )
+    if times is not None and result.status.success:
+        # after the end the closed form (linear) would be extrapolated, or nothing sampled
+        # (Hertz); after a proven rest every later state is that rest's
+        check_span("t_eval", times, result.end_time, result.status is Status.REST)
+    bound = _apex_bound(stack, force)
+    top = [h for _, h in result.apexes[-1]]
+    if any(beyond_bound(h, bound) for h in top):
+        result.status = Status.IMPOSSIBLE
+    if throw and not result.success:
+        message = result.status.message
+        if result.status is Status.PHASE_LIMIT:
+            message += phase_limit_hint(stack.eps[0])
+        raise SolverError(f"the stack run failed on {stack}: {message}", result)
+    return result
+
+
+# The clusters' closed forms of the last few stacks, by masses and damping ratios: a cluster is
+# built on first use (an eigenvector form: about 0.1 ms for all of three balls', 1.7 ms for
+# eight balls'), so drops of the same balls from other heights or gaps (a sweep, the app) reuse
+# them. The kernel holds the GIL, so one store is never filled by two runs at once.
+_STORES: dict[bytes, clusters.Clusters] = {}
+STORES_KEPT = 8
+
+
+def _store_for(stack: Stack) -> clusters.Clusters:
+    """The cluster store for this stack's balls, the most recently used kept last."""
+    key = stack.masses.tobytes() + stack.zeta.tobytes()
+    store = _STORES.pop(key, None)
+    if store is None:
+        store = clusters.new_clusters(stack.balls)
+    _STORES[key] = store
+    while len(_STORES) > STORES_KEPT:
+        del _STORES[next(iter(_STORES))]
+    return store
