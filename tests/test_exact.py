@@ -21,7 +21,7 @@ def _advance(kind, state, mu, z01, z12, horizon=np.inf):
     The kernel carries (x1, eta, v1, eta') with eta = x2 - x1 (phases.state_at)."""
     x1, x2, v1, v2 = state
     prepared = phases.prepare(mu, z01, z12)
-    event, tau, y1, eta, w1, deta = phases.advance_phase(
+    event, tau, y1, eta, w1, deta, _, _ = phases.advance_phase(
         kind, 0.0, x1, x2 - x1, v1, v2 - v1, horizon, codes.EVENT_TIME, prepared
     )
     return event, tau, y1, y1 + eta, w1, w1 + deta

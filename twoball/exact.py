@@ -11,8 +11,24 @@ from twoball.errors import ParameterError, Status
 
 # by module, not by name: jit.use_python_kernels swaps the kernels in their own modules
 from twoball.kernels import runs
+from twoball.kernels.phases import Prepared
 from twoball.model import Drop
-from twoball.observables import Outcome
+from twoball.observables import Outcome, RunStats
+
+
+class ExactDense:
+    """The exact state at any times from a run's recorded phases
+    (:func:`twoball.kernels.runs.sample`): arrays only, so that a result with dense output
+    pickles (a closure would not)."""
+
+    def __init__(self, phases: np.ndarray, prepared: Prepared) -> None:
+        self.phases = phases
+        self.prepared = prepared
+
+    def __call__(self, times: np.ndarray, side: str = "right") -> np.ndarray:
+        """Rows x1, x2, v1, v2, f01, f12 at ``times``; at a switch the side of it asked for."""
+        times = np.asarray(times, dtype=float)
+        return runs.sample(self.phases, times, self.prepared, side == "left")
 
 
 def solve(
@@ -40,12 +56,8 @@ def solve(
     else:
         prepared = runs.prepare(drop.mu, drop.zeta01, drop.zeta12)
         out = runs.run(drop.x1_0, drop.x2_0, max(apexes, 1), t_end, prepared, True, True)
-        phases = out.phases
-
-        def evaluate(times: np.ndarray) -> np.ndarray:
-            return runs.sample(phases, np.asarray(times, dtype=float), prepared)
-
-        plot_times = default_times(phases, out.end_time)
+        evaluate = ExactDense(out.phases, prepared)
+        plot_times = default_times(out.phases, out.end_time)
     status = Status(out.status)
     return Outcome(
         apex_t=out.apex_t.tolist(),
@@ -58,6 +70,7 @@ def solve(
         floor_contacts_first=out.floor_contacts_first,
         evaluate=evaluate,
         plot_times=plot_times,
+        stats=RunStats(out.phase_count, out.step_count, out.root_count),
     )
 
 

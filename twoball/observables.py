@@ -31,6 +31,20 @@ class ContactInterval:
     end: float
 
 
+class RunStats(NamedTuple):
+    """What a run took: its phases (the exact solver's closed-form phases, a reference method's
+    integrator calls), its steps (certified steps; the integrator's accepted steps) and its root
+    evaluations (the exact solver's closed-form release times); None where a method does not
+    say."""
+
+    phases: int | None = None
+    steps: int | None = None
+    root_evaluations: int | None = None
+
+
+SIDES = ("left", "right")
+
+
 class Outcome(NamedTuple):
     """What a solver (:func:`twoball.exact.solve`, :func:`twoball.reference.solve`) returns."""
 
@@ -42,9 +56,11 @@ class Outcome(NamedTuple):
     message: str | None  # None on success without remark, else what happened in words
     contacts_first: int  # ball contacts that start before the first apex
     floor_contacts_first: int
-    # state at any times -> array (n, 6): x1, x2, v1, v2, f01, f12; None unless asked for
-    evaluate: Callable[[np.ndarray], np.ndarray] | None
+    # state at any times (and side) -> array (n, 6): x1, x2, v1, v2, f01, f12; None unless
+    # asked for; an object holding arrays, never a closure, so that a result pickles
+    evaluate: Callable[[np.ndarray, str], np.ndarray] | None
     plot_times: np.ndarray | None  # times that show every contact; None unless asked for
+    stats: RunStats = RunStats()
 
 
 @dataclass(frozen=True)
@@ -85,16 +101,17 @@ class Result:
     atol: float | None = None
     trajectory: Trajectory | None = field(default=None, repr=False)
     status: Status = Status.DONE
-    dense: Callable[[np.ndarray], np.ndarray] | None = field(
+    dense: Callable[[np.ndarray, str], np.ndarray] | None = field(
         default=None, repr=False, compare=False
     )
+    stats: RunStats = field(default=RunStats(), compare=False)
 
     @property
     def success(self) -> bool:
         """True when the run reached what was asked or the upper ball came to rest."""
         return self.status.success
 
-    def evaluate(self, t: np.ndarray | float) -> Trajectory:
+    def evaluate(self, t: np.ndarray | float, side: str = "right") -> Trajectory:
         """The state and forces at times ``t`` (exact at every t for the exact method).
 
         Parameters
@@ -102,6 +119,10 @@ class Result:
         t : float or array
             Dimensionless times; the run must have been made with
             ``simulate(..., dense_output=True)``.
+        side : "right" or "left"
+            At a switch the contact forces jump (docs/model.md, "Bodies, coordinates, forces"):
+            the state just after it ("right", the default) or just before it ("left"). The
+            reference methods interpolate continuously, so both sides are the same there.
 
         Returns
         -------
@@ -118,9 +139,11 @@ class Result:
         """
         if self.dense is None:
             raise ValueError("evaluate needs a run with dense_output=True")
+        if side not in SIDES:
+            raise ParameterError(f"side must be 'left' or 'right'; got {side!r}")
         times = as_times("t", t)
         check_span("t", times, self.end_time, self.status is Status.REST and self.method == "exact")
-        return trajectory_of(times, self.dense(times))
+        return trajectory_of(times, self.dense(times, side))
 
     def _apex(self, values: list[float], index: int) -> float | None:
         return values[index] if len(values) > index else None
@@ -214,6 +237,7 @@ class Result:
             "h2_over_drop": self.h2_over_drop,
             "h2_over_h1": self.h2_over_h1,
             "delayed_rebound": self.delayed_rebound,
+            "status": self.status.name,
             "reason": self.reason,
         }
 

@@ -20,7 +20,7 @@ import numpy as np
 
 from twoball.errors import Status
 from twoball.model import Drop
-from twoball.observables import Outcome
+from twoball.observables import Outcome, RunStats
 
 IVP_METHODS = ("LSODA", "Radau", "BDF", "DOP853", "RK45")
 METHODS = (*IVP_METHODS, "odeint")
@@ -130,6 +130,7 @@ def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense_output):
     events = ([], [])
     pieces = []
     failure = None
+    calls = steps = 0
     # One solve_ivp call per flight: it stops at a fall of v2 through zero, which is an apex
     # only if the balls do not push then (docs/model.md, "Bodies, coordinates, forces"); otherwise
     # it goes on from there.
@@ -149,6 +150,8 @@ def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense_output):
         except (ValueError, ArithmeticError) as error:  # e.g. NaN in a Newton iteration
             failure = f"{method} failed: {error}"
             break
+        calls += 1
+        steps += sol.t.size - 1
         if dense_output and sol.sol is not None and sol.t.size > 1:
             pieces.append(sol.sol)  # a call that stopped at once has no interpolant
         for contact in (0, 1):
@@ -166,15 +169,10 @@ def _solve_ivp(drop, method, apexes, horizon, t_end, rtol, atol, dense_output):
             apex_h.append(float(y0[1]))
         y0[3] = min(y0[3], 0.0)  # below the event's zero, so it does not fire again at once
     outcome = outcome_from_events(drop, apex_t, apex_h, events, t0, apexes, t_end, horizon, failure)
+    outcome = outcome._replace(stats=RunStats(phases=calls, steps=steps))
     if dense_output:
-
-        def evaluate(times: np.ndarray) -> np.ndarray:
-            states = _evaluate_pieces(pieces, np.asarray(times, dtype=float))
-            f01, f12 = forces(states, z01, z12)
-            return np.column_stack([states.T, f01, f12])
-
         plot_times = np.linspace(0.0, outcome.end_time, 4001)
-        outcome = outcome._replace(evaluate=evaluate, plot_times=plot_times)
+        outcome = outcome._replace(evaluate=PiecewiseDense(pieces, z01, z12), plot_times=plot_times)
     return outcome
 
 
@@ -229,6 +227,32 @@ def outcome_from_events(
         evaluate=None,
         plot_times=None,
     )
+
+
+class PiecewiseDense:
+    """The state and forces at any times from the interpolants of consecutive solve_ivp calls
+    (an object, not a closure, so that a result pickles). Continuous: both sides of a switch
+    are the same, ``side`` is accepted for the one signature of dense output."""
+
+    def __init__(self, pieces: list, zeta01: float, zeta12: float) -> None:
+        self.pieces, self.zeta01, self.zeta12 = pieces, zeta01, zeta12
+
+    def __call__(self, times: np.ndarray, side: str = "right") -> np.ndarray:
+        states = _evaluate_pieces(self.pieces, np.asarray(times, dtype=float))
+        f01, f12 = forces(states, self.zeta01, self.zeta12)
+        return np.column_stack([states.T, f01, f12])
+
+
+class GridDense:
+    """The odeint grid's rows (x1, x2, v1, v2, f01, f12), linearly interpolated at any times
+    (continuous: ``side`` makes no difference)."""
+
+    def __init__(self, grid: np.ndarray, values: np.ndarray) -> None:
+        self.grid, self.values = grid, values
+
+    def __call__(self, times: np.ndarray, side: str = "right") -> np.ndarray:
+        wanted = np.asarray(times, dtype=float)
+        return np.column_stack([np.interp(wanted, self.grid, c) for c in self.values.T])
 
 
 def _evaluate_pieces(pieces, times: np.ndarray) -> np.ndarray:
@@ -334,10 +358,7 @@ def _solve_odeint(drop, apexes, horizon, t_end, rtol, atol, dense_output):
         keep = times <= end
         grid, values = times[keep], np.column_stack([states[keep], f01[keep], f12[keep]])
 
-        def evaluate(wanted: np.ndarray) -> np.ndarray:
-            wanted = np.asarray(wanted, dtype=float)
-            return np.column_stack([np.interp(wanted, grid, column) for column in values.T])
-
+        evaluate = GridDense(grid, values)
         plot_times = grid
     rows = np.array(contacts, dtype=float).reshape(-1, 3)
     return Outcome(

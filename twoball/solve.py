@@ -157,6 +157,7 @@ def simulate(
         trajectory=trajectory,
         status=outcome.status,
         dense=outcome.evaluate if dense_output else None,
+        stats=outcome.stats,
     )
     if throw and not result.success:
         raise SolverError(f"{method} failed on {drop}: {result.reason}", result)

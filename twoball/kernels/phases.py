@@ -590,8 +590,9 @@ def advance_phase(
     """Advance one phase, started at time t from the state (x1, eta, v1, eta') of
     :func:`state_at`, to its first event.
 
-    Returns (event, tau, x1, eta, v1, eta') with tau the time into the phase. horizon is a known
-    event time (apex or end of the run) with its event code; prepared is what :func:`prepare`
+    Returns (event, tau, x1, eta, v1, eta', steps, solves) with tau the time into the phase, steps
+    the certified steps taken and solves the closed-form release times solved for. horizon is a
+    known event time (apex or end of the run) with its event code; prepared is what :func:`prepare`
     returned. With one contact active, that contact's oscillator moves on its own, so the time
     its force ends is found in closed form (:func:`_release_time`) and becomes the horizon; only
     the other contact is stepped.
@@ -619,7 +620,10 @@ def advance_phase(
     own = EVENT_FLOOR if kind == FLOOR else EVENT_BALL if kind == BALL else -1
     tau = 0.0
     last_step = 0.0
+    steps = 0
+    solves = 0
     for _ in range(MAX_STEPS_PER_PHASE):
+        steps += 1
         y1, y2, w1, w2, a1, a2 = state_at(
             kind, tau, x1, eta, v1, deta, params, x, x_inv, blocks, y_rest
         )
@@ -682,6 +686,7 @@ def advance_phase(
             elif contact == own:
                 # the force ends at -tol once it is within tol of zero just after switching on
                 level = tol if fresh and value <= tol else 0.0
+                solves += 1
                 if kind == FLOOR:
                     release = _release_time(x1 + 1.0, v1, z01, 1.0, z01, 1.0 + level, horizon)
                 else:
@@ -696,18 +701,18 @@ def advance_phase(
                 y1, y2, w1, w2, _, _ = state_at(
                     kind, best, x1, eta, v1, deta, params, x, x_inv, blocks, y_rest
                 )
-            return event, best, y1, y2, w1, w2
+            return event, best, y1, y2, w1, w2, steps, solves
         if kind == BOTH and _at_rest(
             roots, params, rest, rates, mode_rows, block_states, tol_state
         ):
-            return EVENT_REST, tau, y1, y2, w1, w2
+            return EVENT_REST, tau, y1, y2, w1, w2, steps, solves
         if tau + step >= horizon:
             y1, y2, w1, w2, _, _ = state_at(
                 kind, horizon, x1, eta, v1, deta, params, x, x_inv, blocks, y_rest
             )
-            return horizon_event, horizon, y1, y2, w1, w2
+            return horizon_event, horizon, y1, y2, w1, w2, steps, solves
         if not 0.0 < step < np.inf:
-            return EVENT_STUCK, tau, x1, eta, v1, deta
+            return EVENT_STUCK, tau, x1, eta, v1, deta, steps, solves
         tau += step
         last_step = step
-    return EVENT_STEPS, tau, x1, eta, v1, deta
+    return EVENT_STEPS, tau, x1, eta, v1, deta, steps, solves

@@ -52,6 +52,9 @@ class RunOutcome(NamedTuple):
     # (the difference of two rounded start times is not; benchmarks/phase_audit.py needs it);
     # empty unless recorded
     phases: np.ndarray
+    phase_count: int  # the run's statistics: phases, certified steps, closed-form root solves
+    step_count: int
+    root_count: int
 
 
 @njit
@@ -102,6 +105,7 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
     params, y_rest = stepping.params, stepping.y_rest
     both_offset = ROUNDING * params[P_NOISE] * _rest_size(y_rest)
     carried = 0.0
+    phase_count = step_count = root_count = 0
     for _ in range(MAX_PHASES):
         if record_phases:
             phases = _room_for_one(phases, n_phases)
@@ -114,9 +118,12 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
         if rising and (kind & 2) == 0 and v2 > 0.0 and v2 < horizon:
             horizon = v2  # the upper ball flies freely: its apex is exactly v2 away
             horizon_event = EVENT_APEX
-        event, tau, x1, eta, v1, deta = advance_phase(
+        event, tau, x1, eta, v1, deta, steps, roots = advance_phase(
             kind, t, x1, eta, v1, deta, horizon, horizon_event, stepping, entered_by, carried
         )
+        phase_count += 1
+        step_count += steps
+        root_count += roots
         if record_phases:
             phases[n_phases - 1, 6] = tau
         if kind == BOTH:  # the state leaves it with the rounding of its offset (see below)
@@ -187,6 +194,9 @@ def run(x1, x2, apexes_wanted, t_end, prepared, record_contacts, record_phases):
         floor_contacts_first=floor_first,
         contacts=contacts[:n_contacts],
         phases=phases[:n_phases],
+        phase_count=phase_count,
+        step_count=step_count,
+        root_count=root_count,
     )
 
 
@@ -214,10 +224,12 @@ def run_block(mu, zeta01, zeta12, x2_0, height, apex_h, apex_t, contacts, status
 
 
 @njit
-def sample(phases, times, prepared):
+def sample(phases, times, prepared, left=False):
     """Exact state and forces at the given times from the recorded phases.
 
-    Returns an array (len(times), 6): x1, x2, v1, v2, f01, f12.
+    At a switch the forces jump (docs/model.md, "Bodies, coordinates, forces"): a time at which
+    a phase starts is taken in that phase (the right side), or with ``left`` at the end of the
+    phase before it. Returns an array (len(times), 6): x1, x2, v1, v2, f01, f12.
     """
     params, x, x_inv = prepared.params, prepared.x, prepared.x_inv
     blocks, y_rest = prepared.blocks, prepared.y_rest
@@ -226,6 +238,8 @@ def sample(phases, times, prepared):
     starts = phases[:, 0]
     for i in range(times.size):
         index = max(np.searchsorted(starts, times[i], side="right") - 1, 0)
+        if left and index > 0 and starts[index] == times[i]:
+            index -= 1
         row = phases[index]
         kind = int(row[1])
         x1, eta, v1, deta, _, _ = state_at(

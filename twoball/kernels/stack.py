@@ -283,6 +283,7 @@ class StackRun(NamedTuple):
     contacts: np.ndarray  # (n, 3): contact, start, end
     contacts_first: np.ndarray  # (N,) intervals of each contact that start before h1
     phases: np.ndarray  # (n, 2 + 2N): t, active bits, heights, velocities (if recorded)
+    phase_count: int
 
 
 @njit
@@ -318,7 +319,9 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
     carried = 0.0
     # the two-ball solver's rest proof, for N = 2 (for more balls a placeholder of the same type)
     pair = prepare(masses[1] if n == 2 else 1.0, zeta[0], zeta[1] if n == 2 else 0.1)
+    phase_count = 0
     for _ in range(MAX_PHASES):
+        phase_count += 1
         if record_phases:
             phases = _room_for_one(phases, n_phases)
             bits = 0
@@ -397,6 +400,7 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
         contacts=contacts[:n_contacts].copy(),
         contacts_first=first,
         phases=phases[:n_phases],
+        phase_count=phase_count,
     )
 
 

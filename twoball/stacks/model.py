@@ -19,6 +19,7 @@ from twoball.model import (
     domain_error,
     floor_contact_time,
 )
+from twoball.observables import RunStats
 
 MAX_BALLS = 16
 
@@ -258,11 +259,23 @@ class StackResult:
     end_time: float
     status: Status
     trajectory: StackTrajectory | None = field(default=None, repr=False)
+    reason: str | None = None  # None when the run reached what was asked, else why not
+    stats: RunStats = field(default=RunStats(), compare=False)
 
     @property
     def success(self) -> bool:
         """True when the run reached what was asked or the stack came to rest."""
         return self.status.success
+
+    @property
+    def apex_t(self) -> list[float]:
+        """The times of the top ball's apexes (as :attr:`twoball.Result.apex_t`)."""
+        return [t for t, _ in self.apexes[-1]]
+
+    @property
+    def apex_h(self) -> list[float]:
+        """The heights of the top ball's apexes (as :attr:`twoball.Result.apex_h`)."""
+        return [h for _, h in self.apexes[-1]]
 
     @property
     def h1(self) -> float | None:
@@ -300,6 +313,7 @@ class StackResult:
             "contacts_first": list(self.contacts_first),
             "first_apexes": [apexes[0][1] if apexes else None for apexes in self.apexes],
             "status": self.status.name,
+            "reason": self.reason,
         }
 
 

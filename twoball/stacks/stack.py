@@ -13,7 +13,7 @@ from twoball.errors import SolverError, Status, phase_limit_hint
 from twoball.kernels import clusters
 from twoball.kernels import stack as kernel
 from twoball.model import DEFAULT_HEIGHT, beyond_bound
-from twoball.observables import as_times, check_span, stop_rule
+from twoball.observables import RunStats, as_times, check_span, stop_rule
 from twoball.stacks.model import (
     Stack,
     StackContact,
@@ -118,6 +118,7 @@ def simulate_stack(
             end_time=float(out.end_time),
             status=Status(out.status),
             trajectory=trajectory,
+            stats=RunStats(phases=out.phase_count),
         )
     if times is not None and result.status.success:
         # after the end the closed form (linear) would be extrapolated, or nothing sampled
@@ -127,11 +128,11 @@ def simulate_stack(
     top = [h for _, h in result.apexes[-1]]
     if any(beyond_bound(h, bound) for h in top):
         result.status = Status.IMPOSSIBLE
+    result.reason = result.status.message or None
+    if result.status is Status.PHASE_LIMIT:
+        result.reason += phase_limit_hint(stack.eps[0])
     if throw and not result.success:
-        message = result.status.message
-        if result.status is Status.PHASE_LIMIT:
-            message += phase_limit_hint(stack.eps[0])
-        raise SolverError(f"the stack run failed on {stack}: {message}", result)
+        raise SolverError(f"the stack run failed on {stack}: {result.reason}", result)
     return result
 
 
