@@ -16,20 +16,9 @@ import panel as pn
 import param
 from bokeh.palettes import Category10
 
-from twoball.studies.precision import work_precision
+from twoball.studies.precision import ERROR_FLOOR, FAILED_ERROR, PrecisionRow, work_precision
 
 from .scene import AnsweringMarkdown, Scene, font_sizes
-
-ERROR_FLOOR = 1e-17  # a relative error of 0 (the exact solver against itself) is drawn here
-FAILED_ERROR = 10.0  # where failed runs and missed bounces are drawn
-
-
-def shown_error(row: dict) -> float:
-    """The larger relative error of h1 and h2, NaN (no such bounce for anyone) counting as 0,
-    floored at :data:`ERROR_FLOOR`, failures at :data:`FAILED_ERROR`."""
-    errors = [0.0 if math.isnan(e) else e for e in (row["rel_err_h1"], row["rel_err_h2"])]
-    error = max(errors)
-    return FAILED_ERROR if not math.isfinite(error) else max(error, ERROR_FLOOR)
 
 
 class AccuracyScene(Scene):
@@ -39,7 +28,7 @@ class AccuracyScene(Scene):
 
     def __init__(self, **params):
         super().__init__(**params)
-        self.rows: list[dict] | None = None
+        self.rows: list[PrecisionRow] | None = None
         self._request = 0
         # a new figure per result (rare): the number of methods drawn varies
         self.plot = pn.pane.HoloViews(
@@ -57,8 +46,9 @@ class AccuracyScene(Scene):
             pn.pane.Markdown(
                 "Relative error of h1 and h2 (the larger) against the exact solver, and the "
                 "run time to the second apex, for each scipy integrator at rtol = atol = "
-                "1e-3, 1e-6, 1e-9. The exact solver is the reference: its error is drawn at 1e-17. "
-                "An error of 10: the method failed or missed a bounce."
+                "1e-3, 1e-6, 1e-9. The exact solver is the reference: its error is drawn at "
+                f"{ERROR_FLOOR:.0e}. An error of {FAILED_ERROR:g}: the method failed or missed a "
+                "bounce."
             ),
             self.plot,
             self.table,
@@ -87,7 +77,7 @@ class AccuracyScene(Scene):
         else:  # no server (a script or a test): compute now
             self._show(self._request, self._work())
 
-    def _work(self) -> list[dict]:
+    def _work(self) -> list[PrecisionRow]:
         s = self.state
         self.computations += 1
         return work_precision(s.eps, s.mu, s.tau_ratio, eps12=s.eps12, height=s.height)
@@ -98,7 +88,7 @@ class AccuracyScene(Scene):
         # coroutine with no current document (or another session's).
         document.add_next_tick_callback(functools.partial(self._show, request, rows))
 
-    def _show(self, request: int, rows: list[dict]) -> None:
+    def _show(self, request: int, rows: list[PrecisionRow]) -> None:
         if request != self._request:
             return  # superseded by a newer drop
         self.rows = rows
@@ -109,10 +99,10 @@ class AccuracyScene(Scene):
         time_dim = hv.Dimension("seconds", label="run time per drop [s]")
         error_dim = hv.Dimension("error", label="relative error of h1, h2 (larger)")
         layers = []
-        methods = dict.fromkeys(r["method"] for r in self.rows or [])
+        methods = dict.fromkeys(r.method for r in self.rows or [])
         for method, color in zip(methods, Category10[10], strict=False):
-            mine = [r for r in self.rows if r["method"] == method and math.isfinite(r["seconds"])]
-            points = [(r["seconds"], shown_error(r)) for r in mine]
+            mine = [r for r in self.rows if r.method == method and math.isfinite(r.seconds)]
+            points = [(r.seconds, r.shown_error) for r in mine]
             layers.append(hv.Curve(points, time_dim, error_dim, label=method).opts(color=color))
             layers.append(
                 hv.Scatter(points, time_dim, error_dim, label=method).opts(color=color, size=8)
@@ -136,22 +126,22 @@ class AccuracyScene(Scene):
     def _table(self, revision: bool) -> str:
         if not self.rows:
             return ""
-        exact = next(r for r in self.rows if r["tolerance"] is None)
-        if math.isnan(exact["rel_err_h1"]):
+        exact = next(r for r in self.rows if r.tolerance is None)
+        if math.isnan(exact.rel_err_h1):
             return (
                 "**This drop has no bounce to measure:** the upper ball comes to rest on the "
                 "lower one (the Drop scene shows it), so there is no h1 or h2 to compare the "
                 "methods on. Choose a bouncier drop (a larger eps) to compare them."
             )
         lines = []
-        if math.isnan(exact["rel_err_h2"]):
+        if math.isnan(exact.rel_err_h2):
             lines += ["*No second bounce in this drop: the errors are those of h1 alone.*", ""]
         lines += ["| method | tolerance | error h1 | error h2 | seconds |", "|---|---|---|---|---|"]
         for r in self.rows:
-            tol = "-" if r["tolerance"] is None else f"{r['tolerance']:.0e}"
+            tol = "-" if r.tolerance is None else f"{r.tolerance:.0e}"
             lines.append(
-                f"| {r['method']} | {tol} | {r['rel_err_h1']:.2e} | {r['rel_err_h2']:.2e} "
-                f"| {r['seconds']:.3g} |"
+                f"| {r.method} | {tol} | {r.rel_err_h1:.2e} | {r.rel_err_h2:.2e} "
+                f"| {r.seconds:.3g} |"
             )
         return "\n".join(lines)
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import math
+from dataclasses import asdict
 
 import mpmath
 import pytest
@@ -17,19 +18,19 @@ from twoball.studies.truth import solve_truth
 
 
 @pytest.fixture(scope="module")
-def benign_rows() -> list[dict]:
+def benign_rows() -> list[precision.PrecisionRow]:
     return precision.work_precision(*BENIGN.drop, tolerances=(1e-3, 1e-9))
 
 
 def test_rows_follow_the_contract(benign_rows):
-    methods = [row["method"] for row in benign_rows]
+    methods = [row.method for row in benign_rows]
     assert methods == ["exact"] + [m for m in precision.METHODS[1:] for _ in range(2)]
     for row in benign_rows:
-        assert set(row) == set(precision.COLUMNS)
-        assert (row["tolerance"] is None) == (row["method"] == "exact")
-        assert math.isfinite(row["seconds"]) and row["seconds"] > 0.0
+        assert set(asdict(row)) == set(precision.COLUMNS)
+        assert (row.tolerance is None) == (row.method == "exact")
+        assert math.isfinite(row.seconds) and row.seconds > 0.0
     exact = benign_rows[0]
-    assert exact["rel_err_h1"] == 0.0 and exact["rel_err_h2"] == 0.0
+    assert exact.rel_err_h1 == 0.0 and exact.rel_err_h2 == 0.0
 
 
 def test_errors_are_against_the_model_values_and_shrink_with_the_tolerance(benign_rows):
@@ -37,13 +38,13 @@ def test_errors_are_against_the_model_values_and_shrink_with_the_tolerance(benig
     # 1e-9 every scipy method
     # agrees with them to 1e-6, and its error is far below its error at 1e-3
     for method in precision.METHODS[1:]:
-        loose, tight = (r for r in benign_rows if r["method"] == method)
-        assert tight["rel_err_h1"] < 1e-5 and tight["rel_err_h2"] < 1e-5, method
-        assert max(loose["rel_err_h1"], loose["rel_err_h2"]) > 30 * max(
-            tight["rel_err_h1"], tight["rel_err_h2"]
+        loose, tight = (r for r in benign_rows if r.method == method)
+        assert tight.rel_err_h1 < 1e-5 and tight.rel_err_h2 < 1e-5, method
+        assert max(loose.rel_err_h1, loose.rel_err_h2) > 30 * max(
+            tight.rel_err_h1, tight.rel_err_h2
         )
         result = twoball.simulate(*BENIGN.drop, method=method, rtol=1e-9, atol=1e-9)
-        assert abs(result.h1 - BENIGN.h1) / BENIGN.h1 < 2e-9 + tight["rel_err_h1"]
+        assert abs(result.h1 - BENIGN.h1) / BENIGN.h1 < 2e-9 + tight.rel_err_h1
 
 
 def test_a_failing_method_gives_infinite_errors_not_an_exception(monkeypatch):
@@ -56,16 +57,16 @@ def test_a_failing_method_gives_infinite_errors_not_an_exception(monkeypatch):
 
     monkeypatch.setattr(precision, "simulate", failing)
     rows = precision.work_precision(*BENIGN.drop, methods=("exact", "BDF"), tolerances=(1e-6,))
-    assert rows[1]["method"] == "BDF"
-    assert rows[1]["rel_err_h1"] == math.inf and rows[1]["rel_err_h2"] == math.inf
+    assert rows[1].method == "BDF"
+    assert rows[1].rel_err_h1 == math.inf and rows[1].rel_err_h2 == math.inf
 
 
 def test_no_second_bounce_gives_nan_for_h2():
     # eps = 0.05 is overdamped: the upper ball comes to rest after one bounce
     assert twoball.simulate(0.05, 0.01, 0.5).h2 is None
     rows = precision.work_precision(0.05, 0.01, 0.5, methods=("exact", "LSODA"), tolerances=(1e-8,))
-    assert all(math.isnan(row["rel_err_h2"]) for row in rows)
-    assert rows[1]["rel_err_h1"] < 1e-5
+    assert all(math.isnan(row.rel_err_h2) for row in rows)
+    assert rows[1].rel_err_h1 < 1e-5
 
 
 def test_relative_error_says_which_side_lacks_the_bounce():

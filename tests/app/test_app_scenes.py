@@ -232,11 +232,11 @@ def test_accuracy_computes_only_when_opened():
     explorer.state.scene = "accuracy"
     scene = explorer.scenes["accuracy"]
     assert scene.computations == 1
-    exact = [r for r in scene.rows if r["method"] == "exact"]
-    assert exact and exact[0]["rel_err_h1"] == 0.0
-    lsoda = {r["tolerance"]: r for r in scene.rows if r["method"] == "LSODA"}
+    exact = [r for r in scene.rows if r.method == "exact"]
+    assert exact and exact[0].rel_err_h1 == 0.0
+    lsoda = {r.tolerance: r for r in scene.rows if r.method == "LSODA"}
     # tighter tolerance, smaller error against the exact solver
-    assert lsoda[1e-9]["rel_err_h1"] < lsoda[1e-3]["rel_err_h1"]
+    assert lsoda[1e-9].rel_err_h1 < lsoda[1e-3].rel_err_h1
     assert "LSODA" in scene.table.object
     assert scene.view.loading is False and scene.status.object == ""  # done: nothing pending
 

@@ -18,6 +18,7 @@ import math
 import textwrap
 import time
 from collections.abc import Sequence
+from dataclasses import asdict, dataclass, is_dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -42,6 +43,42 @@ FULL_TOLERANCES = tuple(10.0**-k for k in range(3, 13))
 APP_BUDGET_SECONDS = 2.0
 REST_MARGIN = 1.5  # see measure_case
 COLUMNS = ("method", "tolerance", "case", "rel_err_h1", "rel_err_h2", "seconds")
+# Errors below this are drawn on it (a relative error of 0 has no place on a log axis).
+ERROR_FLOOR = 1e-17
+FAILED_ERROR = 10.0  # where failed runs (infinite error) are drawn
+
+
+@dataclass(frozen=True)
+class PrecisionRow:
+    """One run of the work-precision study (:func:`work_precision`): a method at a tolerance
+    (None for the exact solver) on a case, its relative errors in h1 and h2 against the exact
+    solver (inf: it failed or missed a bounce; NaN: nobody has that bounce) and its run time.
+    The figures and the app read these; :data:`COLUMNS` are its fields."""
+
+    method: str
+    tolerance: float | None
+    case: str
+    rel_err_h1: float
+    rel_err_h2: float
+    seconds: float
+
+    @property
+    def error(self) -> float:
+        """The larger relative error of h1 and h2, NaN (no such bounce for anyone) counting as
+        no error."""
+        return max(_finite_or(self.rel_err_h1), _finite_or(self.rel_err_h2))
+
+    @property
+    def failed(self) -> bool:
+        """The failure rule: the method failed or missed a bounce (an infinite error)."""
+        return not math.isfinite(self.error)
+
+    @property
+    def shown_error(self) -> float:
+        """The error as drawn: floored at :data:`ERROR_FLOOR`, a failure at
+        :data:`FAILED_ERROR`."""
+        return FAILED_ERROR if self.failed else max(self.error, ERROR_FLOOR)
+
 
 # The documented cases of ``twoball precision``: name -> (eps, mu, tau_ratio), H = 1e4.
 CASES = {
@@ -69,7 +106,7 @@ def work_precision(
     methods: Sequence[str] | None = None,
     tolerances: Sequence[float] | None = None,
     repeats: int = 1,
-) -> list[dict]:
+) -> list[PrecisionRow]:
     """Error against run time of each method at each tolerance, on one drop.
 
     methods: any of :data:`METHODS` (default all); tolerances: rtol = atol for the scipy methods
@@ -105,7 +142,7 @@ def measure_case(
     tolerances: Sequence[float] | None = None,
     repeats: int = 1,
     budget: float = math.inf,
-) -> list[dict]:
+) -> list[PrecisionRow]:
     """:func:`work_precision` with a case name and a per-method time budget (see
     :data:`APP_BUDGET_SECONDS`)."""
     check_parameters(eps, mu, tau_ratio, eps12=eps12, height=height)
@@ -130,8 +167,8 @@ def measure_case(
         for tol in (None,) if method == "exact" else tolerances:
             row = {"method": method, "tolerance": tol, "case": case}
             if over_budget:
-                rows.append({**row, "rel_err_h1": math.nan, "rel_err_h2": math.nan})
-                rows[-1]["seconds"] = math.inf
+                rows.append(PrecisionRow(**row, rel_err_h1=math.nan, rel_err_h2=math.nan,
+                                         seconds=math.inf))  # fmt: skip
                 continue
 
             def run(method=method, tol=tol):
@@ -153,35 +190,36 @@ def measure_case(
                 first = time.perf_counter() - start
                 seconds = first if repeats == 1 else median_seconds(run, repeats)
             over_budget = seconds > budget
-            row["rel_err_h1"] = relative_error(h1, truth.h1)
-            row["rel_err_h2"] = relative_error(h2, truth.h2)
-            row["seconds"] = seconds
-            rows.append(row)
+            rows.append(
+                PrecisionRow(
+                    **row,
+                    rel_err_h1=relative_error(h1, truth.h1),
+                    rel_err_h2=relative_error(h2, truth.h2),
+                    seconds=seconds,
+                )
+            )
     return rows
 
 
-def write_csv(rows: Sequence[dict], path: str | Path, columns: Sequence[str] = COLUMNS) -> None:
-    """The rows as CSV with the given columns (default :data:`COLUMNS`); None is written empty
-    (the exact solver's tolerance), other keys are left out."""
+def write_csv(
+    rows: Sequence[PrecisionRow | dict], path: str | Path, columns: Sequence[str] = COLUMNS
+) -> None:
+    """The rows (typed, or dicts) as CSV with the given columns (default :data:`COLUMNS`); None
+    is written empty (the exact solver's tolerance), other keys are left out."""
     with open(path, "w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=columns, extrasaction="ignore")
         writer.writeheader()
-        writer.writerows(rows)
+        writer.writerows(asdict(row) if is_dataclass(row) else row for row in rows)
 
 
-# Errors below this are drawn on it (a relative error of 0 has no place on a log axis).
-ERROR_FLOOR = 1e-17
-FAILED_ERROR = 10.0  # where failed runs (infinite error) are drawn
-
-
-def work_precision_figure(rows: Sequence[dict], title: str | None = None) -> Figure:
+def work_precision_figure(rows: Sequence[PrecisionRow], title: str | None = None) -> Figure:
     """Error against run time, log-log, one panel per case and one line per method.
 
     The error of a run is the larger of its relative errors in h1 and h2; runs that failed or
     missed a bounce are drawn as crosses at the top of the panel.
     """
-    cases = list(dict.fromkeys(row["case"] for row in rows))
-    methods = list(dict.fromkeys(row["method"] for row in rows))
+    cases = list(dict.fromkeys(row.case for row in rows))
+    methods = list(dict.fromkeys(row.method for row in rows))
     columns = min(len(cases), 3)
     lines = math.ceil(len(cases) / columns)
     width = max(5.2 * columns, 7.0)
@@ -192,15 +230,11 @@ def work_precision_figure(rows: Sequence[dict], title: str | None = None) -> Fig
     markers = dict(zip(METHODS, "*osD^vP", strict=False))
     for axis, case in zip(axes, cases, strict=False):
         for index, method in enumerate(methods):
-            mine = [r for r in rows if r["case"] == case and r["method"] == method]
+            mine = [r for r in rows if r.case == case and r.method == method]
             color = f"C{index}"
-            good = [
-                (r["seconds"], max(_finite_or(r["rel_err_h1"]), _finite_or(r["rel_err_h2"])), r)
-                for r in mine
-                if math.isfinite(r["seconds"])
-            ]
-            shown = [(s, max(e, ERROR_FLOOR)) for s, e, _ in good if math.isfinite(e)]
-            failed = [s for s, e, _ in good if not math.isfinite(e)]
+            good = [(r.seconds, r.error, r) for r in mine if math.isfinite(r.seconds)]
+            shown = [(s, r.shown_error) for s, _, r in good if not r.failed]
+            failed = [s for s, _, r in good if r.failed]
             if shown:
                 axis.plot(
                     [s for s, _ in shown],
@@ -210,11 +244,11 @@ def work_precision_figure(rows: Sequence[dict], title: str | None = None) -> Fig
                     markersize=9 if method == "exact" else 5,
                     label=method,
                 )
-                for seconds, error, row in (good[0], good[-1]) if len(good) > 1 else ():
-                    if row["tolerance"] is not None and math.isfinite(error):
+                for seconds, _, row in (good[0], good[-1]) if len(good) > 1 else ():
+                    if row.tolerance is not None and not row.failed:
                         axis.annotate(
-                            f"{row['tolerance']:.0e}",
-                            (seconds, max(error, ERROR_FLOOR)),
+                            f"{row.tolerance:.0e}",
+                            (seconds, row.shown_error),
                             fontsize=7,
                             color=color,
                             xytext=(4, 2),
@@ -247,7 +281,7 @@ def work_precision_figure(rows: Sequence[dict], title: str | None = None) -> Fig
         "\n".join(
             textwrap.fill(line, int(width * 13))
             for line in (
-                title or _title(any(r["method"] == "exact" and r["rel_err_h1"] > 0 for r in rows))
+                title or _title(any(r.method == "exact" and r.rel_err_h1 > 0 for r in rows))
             ).split("\n")
         ),
         fontsize=10,
@@ -266,7 +300,9 @@ def _finite_or(value: float) -> float:
     return 0.0 if math.isnan(value) else value
 
 
-def plot_work_precision(rows: Sequence[dict], path: str | Path, title: str | None = None) -> None:
+def plot_work_precision(
+    rows: Sequence[PrecisionRow], path: str | Path, title: str | None = None
+) -> None:
     """Write :func:`work_precision_figure` of the rows to ``path`` (PNG)."""
     work_precision_figure(rows, title).savefig(path, dpi=110)
 
@@ -347,10 +383,12 @@ def run_study(out: Path, *, repeats: int = 3, budget: float = 20.0, truth: bool 
             repeats=repeats,
             budget=budget,
         )
-        for row in case_rows:  # the exact solver's own error, where it was established
-            if row["method"] == "exact" and case in established:
-                row["rel_err_h1"] = established[case]["rel_err_h1"]
-                row["rel_err_h2"] = established[case]["rel_err_h2"]
+        for index, row in enumerate(case_rows):  # the exact solver's own error, where known
+            if row.method == "exact" and case in established:
+                truth_row = established[case]
+                case_rows[index] = replace(
+                    row, rel_err_h1=truth_row["rel_err_h1"], rel_err_h2=truth_row["rel_err_h2"]
+                )
         rows += case_rows
     write_csv(rows, out / "work_precision.csv")
     plot_work_precision(rows, out / "work_precision.png", _title(bool(truth_rows), DEFAULT_HEIGHT))
