@@ -134,6 +134,8 @@ def check_value(name: str, value: object, *, text: bool = True) -> float:
 def is_real_number(value: object) -> bool:
     """True for a real number: an int or float of Python or numpy (or a 0-d array of one), not a
     string, bytes or a boolean."""
+    if type(value) is float or type(value) is int:  # the common case, without the ABC checks
+        return True
     if isinstance(value, (bool, np.bool_, str, bytes)):
         return False
     if isinstance(value, np.ndarray):

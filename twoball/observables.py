@@ -16,7 +16,7 @@ import numpy as np
 from twoball.errors import ParameterError, Status
 from twoball.model import Drop, icm_height, is_real_number
 
-FLOOR_CONTACT, BALL_CONTACT = 0, 1
+CONTACTS = ("floor", "ball")  # the two contacts by name, by index (0: the floor, 1: the balls)
 UNTIL = {"first": 1, "second": 2}
 # A run "until a time" wants no apex limit; the kernel's apex table grows with what it finds.
 NO_APEX_LIMIT = 2**62
@@ -320,8 +320,7 @@ def trajectory_of(times: np.ndarray, values: np.ndarray) -> Trajectory:
 
 def contact_intervals(rows: np.ndarray) -> list[ContactInterval]:
     """Contact intervals from rows (contact, start, end), sorted by start."""
-    names = {FLOOR_CONTACT: "floor", BALL_CONTACT: "ball"}
-    intervals = [ContactInterval(names[int(c)], s, e) for c, s, e in np.asarray(rows).tolist()]
+    intervals = [ContactInterval(CONTACTS[int(c)], s, e) for c, s, e in np.asarray(rows).tolist()]
     return sorted(intervals, key=lambda interval: interval.start)
 
 
