@@ -18,9 +18,10 @@ from bokeh.palettes import Category10
 
 from twoball.studies.precision import work_precision
 
-from .scene import AnsweringMarkdown, Scene, font_sizes
+from .scene import PROJECTOR_LINE_WIDTH, AnsweringMarkdown, Scene, font_sizes
 
 ERROR_FLOOR = 1e-17  # a relative error of 0 (the exact solver against itself) is drawn here
+PROJECTOR_PLOT_HEIGHT = 380  # presentation mode (scene.py): under the explanation, in 720 px
 FAILED_ERROR = 10.0  # where failed runs and missed bounces are drawn
 
 
@@ -113,9 +114,14 @@ class AccuracyScene(Scene):
         for method, color in zip(methods, Category10[10], strict=False):
             mine = [r for r in self.rows if r["method"] == method and math.isfinite(r["seconds"])]
             points = [(r["seconds"], shown_error(r)) for r in mine]
-            layers.append(hv.Curve(points, time_dim, error_dim, label=method).opts(color=color))
+            line, size = (PROJECTOR_LINE_WIDTH, 14) if self.state.presentation else (2, 8)
             layers.append(
-                hv.Scatter(points, time_dim, error_dim, label=method).opts(color=color, size=8)
+                hv.Curve(points, time_dim, error_dim, label=method).opts(
+                    color=color, line_width=line
+                )
+            )
+            layers.append(
+                hv.Scatter(points, time_dim, error_dim, label=method).opts(color=color, size=size)
             )
         if not layers:
             layers = [hv.Curve([], time_dim, error_dim)]
@@ -124,7 +130,7 @@ class AccuracyScene(Scene):
                 logx=True,
                 logy=True,
                 responsive=True,
-                height=420,
+                height=PROJECTOR_PLOT_HEIGHT if self.state.presentation else 420,
                 framewise=True,
                 padding=0.1,  # points at the ends of the axes are not cut in half
                 fontsize=font_sizes(self.state.presentation),

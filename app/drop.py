@@ -91,6 +91,9 @@ def stage():
     return fig
 
 
+PROJECTOR_PLOT_HEIGHT = 330  # presentation mode (scene.py): plots and player within 720 px
+
+
 class DropScene(Scene):
     """Heights against time to the second apex, apexes marked, drop height and ICM as lines."""
 
@@ -136,8 +139,8 @@ class DropScene(Scene):
         self.animation = self._animation_figure()
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)
-        if self.state.presentation:  # 1366x768: under the header, tabs, caption and summary
-            self.heights.height = self.animation.height = 400
+        if self.state.presentation:  # 1280x720: under the header, tabs and summary, the player
+            self.heights.height = self.animation.height = PROJECTOR_PLOT_HEIGHT
 
     def _heights_figure(self):
         fig = figure(

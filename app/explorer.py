@@ -130,7 +130,9 @@ class Explorer(Built):
         """The scene ``name``, built (and put into its tab) the first time it is asked for."""
         if name not in self.scenes:
             self.scenes[name] = SCENE_REGISTRY[name].viewer(state=self.state)
-            self._holders[name].extend([self._caption(name), self.scenes[name]])
+            # on a projector the teacher says what the scene shows: its plots get the room
+            caption = [] if self.state.presentation else [self._caption(name)]
+            self._holders[name].extend([*caption, self.scenes[name]])
         return self.scenes[name]
 
     @staticmethod
@@ -202,10 +204,16 @@ class Explorer(Built):
         return [pn.pane.Alert(text, alert_type="info", sizing_mode="stretch_width")]
 
     def sidebar(self) -> pn.Column:
-        """The controls (and a note while the solver compiles), for the page's sidebar."""
-        return pn.Column(
-            *self._compiling_notice(), self.lesson, self.controls, sizing_mode="stretch_width"
-        )
+        """The controls (and a note while the solver compiles), for the page's sidebar.
+
+        On a projector the sliders come first, within the screen's 720 px (the lesson's
+        question is then shown large in the main area, and the notice matters less than the
+        sliders the class watches)."""
+        if self.state.presentation:
+            parts = [self.controls, self.lesson, *self._compiling_notice()]
+        else:
+            parts = [*self._compiling_notice(), self.lesson, self.controls]
+        return pn.Column(*parts, sizing_mode="stretch_width")
 
     def layout(self) -> pn.viewable.Viewable:
         """The scenes under their lesson cover (the controls go into the page's sidebar,
