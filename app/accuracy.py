@@ -21,7 +21,7 @@ from twoball.studies.precision import work_precision
 from .scene import PROJECTOR_LINE_WIDTH, AnsweringMarkdown, Scene, font_sizes
 
 ERROR_FLOOR = 1e-17  # a relative error of 0 (the exact solver against itself) is drawn here
-PROJECTOR_PLOT_HEIGHT = 380  # presentation mode (scene.py): under the explanation, in 720 px
+PROJECTOR_PLOT_HEIGHT = 280  # presentation mode (scene.py): under the explanation, in 720 px
 FAILED_ERROR = 10.0  # where failed runs and missed bounces are drawn
 
 

@@ -36,7 +36,7 @@ def collision_window(contacts: list[twoball.ContactInterval], end: float) -> tup
     return max(start - pad, 0.0), min(stop + pad, end)
 
 
-PROJECTOR_PLOT_HEIGHT = 520  # presentation mode (scene.py): positions; each force half of it
+PROJECTOR_PLOT_HEIGHT = 470  # presentation mode (scene.py): positions; each force half of it
 
 
 class CloseUpScene(Scene):
@@ -67,7 +67,8 @@ class CloseUpScene(Scene):
         self.ball_force.line("t", "f12", source=self.samples, color=UPPER, line_width=2)
         for fig in (self.positions, self.floor_force, self.ball_force):
             readable(fig, self.state.presentation)
-        if self.state.presentation:  # side by side within 720 px (layout)
+        if self.state.presentation:  # side by side within 720 px (layout), a shorter title
+            self.positions.title.text = "Positions (< 0: compressed)"
             self.positions.height = PROJECTOR_PLOT_HEIGHT
             self.floor_force.height = self.ball_force.height = PROJECTOR_PLOT_HEIGHT // 2
 

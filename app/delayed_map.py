@@ -47,7 +47,7 @@ from .worksheet import slice_csv
 
 CUBE = "map"
 SMALLEST_OUTLINED = 4  # cells: a delayed-rebound patch smaller than this is not outlined
-PROJECTOR_MAP_HEIGHT = 540  # presentation mode (scene.py): both axes and the colour bar in 720 px
+PROJECTOR_MAP_HEIGHT = 490  # presentation mode (scene.py): both axes and the colour bar in 720 px
 SHOWN = ("h2_over_h1", "h1_over_icm", "h1_over_drop", "h2_over_drop", "contacts_first")
 RATIO_CENTRES = {"h2_over_h1": 1.0, "h1_over_icm": 1.0}
 # colour-bar ticks of the ratios' log scale: values below 1 get numbers too (LogTicker: powers

@@ -91,7 +91,7 @@ def stage():
     return fig
 
 
-PROJECTOR_PLOT_HEIGHT = 330  # presentation mode (scene.py): plots and player within 720 px
+PROJECTOR_PLOT_HEIGHT = 290  # presentation mode (scene.py): plots and player within 720 px
 
 
 class DropScene(Scene):

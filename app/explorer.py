@@ -123,6 +123,7 @@ class Explorer(Built):
         )
         self.tabs.param.watch(self._tab_chosen, "active")
         self.cover = pn.pane.Alert(alert_type="info", sizing_mode="stretch_width")
+        self.stage = self.lesson.stage()  # on a projector the question covers the scene
         self._cover()
         self.scene(self.state.scene).active = True
 
@@ -151,9 +152,11 @@ class Explorer(Built):
         """A lesson step's scene stays covered until its answer is revealed (it would give the
         answer away); it keeps computing underneath, so it shows at once."""
         covered = self.state.step > 0 and not self.state.revealed
-        if covered:  # (its text is sent only to a page that follows the lesson)
+        if self.state.presentation:
+            self.stage.visible = covered
+        elif covered:  # (its text is sent only to a page that follows the lesson)
             self.cover.object = COVER_TEXT
-        self.cover.visible = covered
+        self.cover.visible = covered and not self.state.presentation
         self.tabs.visible = not covered
 
     @param.depends("state.scene", watch=True)
@@ -218,7 +221,9 @@ class Explorer(Built):
     def layout(self) -> pn.viewable.Viewable:
         """The scenes under their lesson cover (the controls go into the page's sidebar,
         :meth:`page`)."""
-        return pn.Column(self.cover, self.tabs, sizing_mode="stretch_width")
+        projected = self.state.presentation
+        parts = [self.stage, self.lesson.answer_line] if projected else [self.cover]
+        return pn.Column(*parts, self.tabs, sizing_mode="stretch_width")
 
     def page(self) -> pn.template.BootstrapTemplate:
         """The served page: a template gives the viewport meta tag, a sidebar that folds away

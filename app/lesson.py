@@ -21,6 +21,9 @@ from .state import ExplorerState
 
 HEIGHT = 1e4  # about a 1 m drop (twoball.presets), and the height of the shipped map
 TENNIS = presets.PRESETS["tennis"]
+# presentation mode: the question, its choices and the answer read from the back of a room
+PROJECTED = {"font-size": "30px", "line-height": "1.3"}
+PROJECTED_CHOICES = ":host { font-size: 30px; } :host input { width: 26px; height: 26px; }"
 
 
 @dataclass(frozen=True)
@@ -172,6 +175,14 @@ class Lesson(Built):
         )
         self.start.on_click(lambda _: later(lambda: self._go(1)))
         self.choices.param.watch(self._chosen, "value")
+        # presentation mode: the question and its choices fill the main area while the class
+        # predicts (:meth:`stage`), and the reveal puts a large one-line answer above the scene
+        self.question = pn.pane.Markdown(sizing_mode="stretch_width", styles=PROJECTED)
+        self.answer_line = pn.pane.Markdown(
+            visible=False, sizing_mode="stretch_width", styles=PROJECTED
+        )
+        if self.state.presentation:
+            self.choices.stylesheets = [*self.choices.stylesheets, PROJECTED_CHOICES]
         self._show()
 
     def _go(self, step: int) -> None:
@@ -184,16 +195,32 @@ class Lesson(Built):
             self.state.param.update(step=0, revealed=False)
 
     def _chosen(self, event: param.parameterized.Event) -> None:
-        self.reveal.disabled = event.new is None or self.answer.visible
+        self.reveal.disabled = self._waits_for_a_choice() or self.answer.visible
+
+    def _waits_for_a_choice(self) -> bool:
+        """A student alone predicts first (the answer waits for a choice); in front of a class
+        (presentation mode) the prediction is the room's, said aloud, and the teacher reveals
+        when ready (a clicker's key does)."""
+        return not self.state.presentation and self.choices.value is None
 
     def _reveal(self) -> None:
         shown = STEPS[self.state.step - 1]
-        right = self.choices.value == shown.choices[shown.answer]
-        verdict = "Right." if right else f"Not quite: {shown.choices[shown.answer].lower()}."
+        correct = shown.choices[shown.answer]
+        if self.choices.value is None:
+            verdict = f"The answer: {correct.lower()}."
+        elif self.choices.value == correct:
+            verdict = "Right."
+        else:
+            verdict = f"Not quite: {correct.lower()}."
         self.answer.param.update(
             object=f"**{verdict}** {shown.explanation}",
-            alert_type="success" if right else "warning",
+            alert_type="success" if self.choices.value == correct else "warning",
             visible=True,
+        )
+        self.answer_line.param.update(
+            # (one line: a choice's gloss after its colon is left to the card's explanation)
+            object=f"**Answer: {correct.split(':')[0]}**",
+            visible=self.state.presentation,
         )
         self.reveal.disabled = True
         self.choices.disabled = True
@@ -206,28 +233,37 @@ class Lesson(Built):
         for widget in (self.choices, self.reveal, self.previous, self.next):
             widget.visible = lesson_on
         self.start.visible = not lesson_on
-        self.answer.visible = False
+        self.answer.visible = self.answer_line.visible = False
         if not lesson_on:
             self.heading.object = (
                 "A guided path through the demonstration in six steps: predict, then see."
             )
             return
         shown = STEPS[step - 1]
-        self.heading.object = (
-            f"**Step {step} of {len(STEPS)}: {shown.title}**\n\n{shown.look_for}\n\n"
-            f"*{shown.question}*"
-        )
+        title = f"**Step {step} of {len(STEPS)}: {shown.title}**"
+        if self.state.presentation:  # the rest is large in the main area (stage)
+            self.heading.object = title
+            self.question.object = f"{shown.look_for}\n\n**{shown.question}**"
+        else:
+            self.heading.object = f"{title}\n\n{shown.look_for}\n\n*{shown.question}*"
         self.choices.param.update(options=list(shown.choices), value=None, disabled=False)
-        self.reveal.disabled = True
+        self.reveal.disabled = self._waits_for_a_choice()
         self.previous.disabled = step == 1
         self.next.label = "Next >" if step < len(STEPS) else "End the lesson"
 
+    def stage(self) -> pn.Column:
+        """The step's question and choices, large, for the main area of a projected page
+        (presentation mode; the card then keeps the title, the answer and the buttons)."""
+        return pn.Column(
+            self.question, self.choices, self.reveal, sizing_mode="stretch_width", visible=False
+        )
+
     def layout(self) -> pn.viewable.Viewable:
+        asks = [] if self.state.presentation else [self.choices, self.reveal]
         return pn.Card(
             self.heading,
             self.start,
-            self.choices,
-            self.reveal,
+            *asks,
             self.answer,
             pn.Row(self.previous, self.next),
             title="Lesson",
