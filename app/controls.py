@@ -174,6 +174,7 @@ class Controls(Built):
             mu=preset.mu,
             tau_ratio=preset.tau_ratio,
             height=presets.height_from_metres(presets.DEFAULT_DROP_METRES),
+            units="SI",  # real balls: shown in metres and seconds
         )
 
     def _height_typed(self, event: param.parameterized.Event) -> None:

@@ -46,12 +46,12 @@ STEPS = (
         scene="drop",
         drop={"eps": 1.0, "eps12": None, "mu": 0.01, "tau_ratio": 1.0, "height": HEIGHT},
         look_for="Two perfectly bouncy balls, the top one a hundred times lighter, dropped "
-        "together with a small gap between them. The orange curve is the small ball's "
+        "together from 1 m with a small gap between them. The orange curve is the small ball's "
         "height, the blue one the big ball's, the dotted green line what the textbook predicts.",
         question="How high does the small ball go, compared with the height it was dropped from?",
         choices=("Back to the same height", "Twice as high", "About 4 times", "About 8 to 9 times"),
         answer=3,
-        explanation="About 8.5 times. The textbook argument (the independent contact model): "
+        explanation="About 8.5 times: dropped from 1.04 m, it rises to 8.8 m. The textbook argument (the independent contact model): "
         "the big ball bounces off the floor first and meets the small ball still falling; "
         "seen from the big ball, the small ball comes in at twice the fall speed and leaves at "
         "twice it, so it goes up at three times the fall speed: 3 x 3 = 9 times the height for "
@@ -78,7 +78,8 @@ STEPS = (
             "About 9 times as high",
         ),
         answer=2,
-        explanation="About 3.7 times, still far above the drop height, and just what the "
+        explanation="About 3.7 times (3.8 m from 1.04 m), still far above the drop height, and "
+        "just what the "
         "textbook prediction says for these balls (the green line): the two collisions are "
         "separate, the floor's first, then the balls'.",
     ),
@@ -92,9 +93,9 @@ STEPS = (
         question="Which bounce of the small ball is higher?",
         choices=("The first", "The second", "Both the same"),
         answer=1,
-        explanation="The second, about 5 times higher than the first: a delayed rebound. The "
-        "first bounce does not even reach the drop height, far below the textbook's "
-        "prediction (the green line, 6.6 times).",
+        explanation="The second, about 5 times higher than the first (5.0 m against 0.92 m): a "
+        "delayed rebound. The first bounce does not even reach the 1 m it was dropped from, far "
+        "below the textbook's prediction (the green line, 6.6 m).",
     ),
     Step(
         title="Why: several contacts in one collision",
@@ -173,7 +174,7 @@ class Lesson(Built):
         self.next.on_click(
             lambda _: later(lambda: self._go((self.state.step + 1) % (len(STEPS) + 1)))
         )
-        self.start.on_click(lambda _: later(lambda: self._go(1)))
+        self.start.on_click(lambda _: later(self._begin))
         self.choices.param.watch(self._chosen, "value")
         # presentation mode: the question and its choices fill the main area while the class
         # predicts (:meth:`stage`), and the reveal puts a large one-line answer above the scene
@@ -184,6 +185,12 @@ class Lesson(Built):
         if self.state.presentation:
             self.choices.stylesheets = [*self.choices.stylesheets, PROJECTED_CHOICES]
         self._show()
+
+    def _begin(self) -> None:
+        """The lesson's first step, in metres and seconds: a class thinks in them (the
+        dimensionless view stays one click away, in the controls)."""
+        self.state.units = "SI"
+        self._go(1)
 
     def _go(self, step: int) -> None:
         """Go to ``step`` (1..len(STEPS)), setting its drop and scene; 0 leaves the lesson."""

@@ -13,6 +13,7 @@ from playwright.sync_api import expect
 import twoball
 from app.lesson import STEPS
 from app.state import ExplorerState, read_query
+from twoball import presets
 
 SIZES = {"projector": (1366, 768), "desktop": (1920, 1080), "phone": (390, 844)}
 
@@ -32,9 +33,15 @@ def test_the_answers_quote_the_solver():
     assert abs(tennis.summary()["h1_over_icm"] - 1) < 0.05  # "just what the textbook says"
     assert ping_pong.delayed_rebound and round(ping_pong.h2_over_h1) == 5
     assert ping_pong.h1_over_drop < 1  # "does not even reach the drop height"
-    icm_ratio = ping_pong.h_icm / ping_pong.drop.x2_0
-    assert round(icm_ratio, 1) == 6.6 and "6.6 times" in STEPS[2].explanation
     assert close_up.contacts_first == 4 and STEPS[3].choices[STEPS[3].answer] == "4 times"
+    metres = presets.length_scale()  # the lesson is shown in metres
+    assert f"from {textbook.x2_0 * metres:.2f} m, it rises to {textbook.h1 * metres:.1f} m" in (
+        STEPS[0].explanation
+    )
+    assert f"{tennis.h1 * metres:.1f} m from {tennis.x2_0 * metres:.2f} m" in STEPS[1].explanation
+    pair = f"{ping_pong.h2 * metres:.1f} m against {ping_pong.h1 * metres:.2f} m"
+    assert pair in STEPS[2].explanation and round(ping_pong.x2_0 * metres) == 1
+    assert f"{ping_pong.h_icm * metres:.1f} m" in STEPS[2].explanation
     map_drop = _result(STEPS[4])
     assert map_drop.delayed_rebound and STEPS[4].drop["height"] == 1e4  # on the shipped map
 
@@ -43,6 +50,7 @@ def test_a_step_in_the_url_sets_its_drop_and_scene():
     for number, step in enumerate(STEPS, 1):
         values, messages = read_query({"step": str(number)}, ExplorerState())
         assert messages == [] and values["step"] == number and values["scene"] == step.scene
+        assert values["units"] == "SI"  # a lesson speaks metres
         assert all(values[name] == value for name, value in step.drop.items())
     for bad in ("0", str(len(STEPS) + 1), "two", "9" * 500):
         values, messages = read_query({"step": bad}, ExplorerState())
