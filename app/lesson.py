@@ -51,8 +51,9 @@ STEPS = (
         question="How high does the small ball go, compared with the height it was dropped from?",
         choices=("Back to the same height", "Twice as high", "About 4 times", "About 8 to 9 times"),
         answer=3,
-        explanation="About 8.5 times: dropped from 1.04 m, it rises to 8.8 m. The textbook argument (the independent contact model): "
-        "the big ball bounces off the floor first and meets the small ball still falling; "
+        explanation="About 8.5 times: dropped from 1.04 m, it rises to 8.8 m. The textbook "
+        "argument (the independent contact model): the big ball bounces off the floor first "
+        "and meets the small ball still falling; "
         "seen from the big ball, the small ball comes in at twice the fall speed and leaves at "
         "twice it, so it goes up at three times the fall speed: 3 x 3 = 9 times the height for "
         "a very light ball.",
