@@ -14,13 +14,15 @@ import math
 import holoviews as hv
 import panel as pn
 import param
-from bokeh.palettes import Category10
 
 from twoball.studies.precision import work_precision
 
 from .scene import PROJECTOR_LINE_WIDTH, AnsweringMarkdown, Scene, font_sizes
 
 ERROR_FLOOR = 1e-17  # a relative error of 0 (the exact solver against itself) is drawn here
+# Okabe and Ito's eight colours, told apart with every common colour-vision deficiency (black
+# first: the exact solver, pale yellow last); Category10's red and green were not
+OKABE_ITO = ("#000000", "#E69F00", "#56B4E9", "#009E73", "#0072B2", "#D55E00", "#CC79A7", "#F0E442")
 PROJECTOR_PLOT_HEIGHT = 280  # presentation mode (scene.py): under the explanation, in 720 px
 FAILED_ERROR = 10.0  # where failed runs and missed bounces are drawn
 
@@ -111,7 +113,7 @@ class AccuracyScene(Scene):
         error_dim = hv.Dimension("error", label="relative error of h1, h2 (larger)")
         layers = []
         methods = dict.fromkeys(r["method"] for r in self.rows or [])
-        for method, color in zip(methods, Category10[10], strict=False):
+        for method, color in zip(methods, OKABE_ITO, strict=False):
             mine = [r for r in self.rows if r["method"] == method and math.isfinite(r["seconds"])]
             points = [(r["seconds"], shown_error(r)) for r in mine]
             line, size = (PROJECTOR_LINE_WIDTH, 14) if self.state.presentation else (2, 8)

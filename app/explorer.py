@@ -17,7 +17,7 @@ from .controls import Controls
 from .delayed_map import MapScene
 from .drop import DropScene
 from .lesson import Lesson
-from .scene import MODEL_PARAMETERS, Built, Scene
+from .scene import MODEL_PARAMETERS, Built, Scene, alert
 from .stack import StackScene
 from .state import SCENES, ExplorerState, read_query, url_query
 
@@ -122,7 +122,7 @@ class Explorer(Built):
             stylesheets=[":host(.bk-above) .bk-headers-wrapper { flex-wrap: wrap; }"],
         )
         self.tabs.param.watch(self._tab_chosen, "active")
-        self.cover = pn.pane.Alert(alert_type="info", sizing_mode="stretch_width")
+        self.cover = alert(alert_type="info", sizing_mode="stretch_width")
         self.stage = self.lesson.stage()  # on a projector the question covers the scene
         self._cover()
         self.scene(self.state.scene).active = True
@@ -204,7 +204,7 @@ class Explorer(Built):
             "First start on this machine: the solver is still being compiled (up to a minute). "
             "Until then drops are computed in plain Python: the same results, a little slower."
         )
-        return [pn.pane.Alert(text, alert_type="info", sizing_mode="stretch_width")]
+        return [alert(text, alert_type="info", sizing_mode="stretch_width")]
 
     def sidebar(self) -> pn.Column:
         """The controls (and a note while the solver compiles), for the page's sidebar.

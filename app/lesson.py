@@ -16,7 +16,7 @@ import param
 
 from twoball import presets
 
-from .scene import Built, later
+from .scene import Built, alert, later
 from .state import ExplorerState
 
 HEIGHT = 1e4  # about a 1 m drop (twoball.presets), and the height of the shipped map
@@ -164,7 +164,7 @@ class Lesson(Built):
             stylesheets=[":host label { white-space: normal; }"],  # long answers wrap, not cut
         )
         self.reveal = pn.widgets.Button(label="Reveal the answer", color="primary")
-        self.answer = pn.pane.Alert("", visible=False, sizing_mode="stretch_width")
+        self.answer = alert("", visible=False, sizing_mode="stretch_width")
         self.previous = pn.widgets.Button(label="< Previous", width=110)
         self.next = pn.widgets.Button(label="Next >", color="primary", width=110)
         self.start = pn.widgets.Button(label="Start the lesson", color="primary")

@@ -17,6 +17,8 @@ MODEL_PARAMETERS = ("eps", "eps12", "mu", "tau_ratio", "height")
 # (1366 x 768 then fits too): about 560 px are left under the header and the tabs, so each
 # scene's plots get a height of their own there, and lines and markers are drawn bolder.
 PROJECTOR_LINE_WIDTH = 4
+# Bootstrap's pale alert text (cyan on pale cyan) fails WCAG contrast (axe-core): darker text
+ALERT_CSS = ":host, :host * { color: #1b1e21 !important; }"
 PROJECTOR_MARKER_SIZE = 14
 
 
@@ -191,3 +193,8 @@ def font_sizes(presentation: bool) -> dict[str, int]:
     if presentation:
         return {"ticks": "16pt", "labels": "18pt", "title": "18pt", "legend": "16pt"}
     return {"ticks": "10pt", "labels": "11pt", "title": "12pt", "legend": "10pt"}
+
+
+def alert(text: str = "", **params) -> pn.pane.Alert:
+    """A Panel alert with text dark enough to read (:data:`ALERT_CSS`)."""
+    return pn.pane.Alert(text, stylesheets=[ALERT_CSS], **params)

@@ -158,6 +158,7 @@ def test_a_presentation_clicker_drives_the_lesson(browser, app_server, artifacts
         page.get_by_text(title.format(1)).wait_for()
         # back on step 1, asked again: with no choice made, forward reveals (a projected
         # lesson's prediction is the room's, said aloud), then goes on
+        expect(page.get_by_role("button", name="Reveal the answer")).to_be_enabled()
         page.keyboard.press("ArrowRight")
         page.get_by_text(f"Answer: {STEPS[0].choices[STEPS[0].answer]}", exact=True).wait_for()
         page.keyboard.press("ArrowRight")
@@ -166,7 +167,7 @@ def test_a_presentation_clicker_drives_the_lesson(browser, app_server, artifacts
         page.get_by_text(title.format(1)).wait_for()
         # the drop height's text field keeps its keys
         page.get_by_text("advanced", exact=True).click()
-        field = page.get_by_label("H (dimensionless drop height)")
+        field = page.get_by_label("drop height [m]")  # (a lesson speaks metres)
         field.click()
         page.keyboard.press("PageDown")
         page.keyboard.press("ArrowRight")
