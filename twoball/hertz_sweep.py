@@ -23,9 +23,10 @@ which releases the GIL so that a sweep's threads compute in parallel.
 **Domain.** Before any work the grid's corners are checked with
 :func:`twoball.stack.check_stack` (``force="hertz"``): eps >= 0.05, mu <= 1e4, the
 Hunt-Crossley damping at the impact speed (a smallest H for each eps) and the rounding of the
-heights. Each limit is monotone along every axis (the damping lam = Lambda(eps) / ((1 + eps)
-sqrt(2H)) falls with eps and does not depend on mu or the gap; the rounding grows with mu and
-with the gap), so the corners decide. A cell that still fails keeps NaN in h1 or h2 and says
+heights. Each limit is monotone along every axis (the damping, lam = Lambda(eps) / sqrt(2H) at
+the floor and Lambda(eps12) / ((1 + eps) sqrt(2H)) between the balls, falls with eps and does
+not depend on mu or the gap; the rounding grows with mu and with the gap), so the corners
+decide. A cell that still fails keeps NaN in h1 or h2 and says
 why in ``status`` (:data:`STATUS_FLAGS`).
 """
 
