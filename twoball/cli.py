@@ -441,13 +441,24 @@ def _add_report(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--contacts-cube", type=_path, default="contacts", help="cube name or .zarr path (contacts)"
     )
+    parser.add_argument(
+        "--hertz-cubes",
+        type=_path,
+        default=None,
+        help="Hertz cubes, comma-separated names or .zarr paths, or none (default: the shipped "
+        "hertz-h1e2,hertz-h1e4)",
+    )
     parser.set_defaults(func=_report)
 
 
 def _report(args: argparse.Namespace) -> int:
     from twoball.studies.report import markdown, paper_table
 
-    print(markdown(paper_table(args.paper_cube, args.contacts_cube)))
+    hertz = None  # the shipped Hertz cubes
+    if args.hertz_cubes is not None:
+        names = [part.strip() for part in args.hertz_cubes.split(",")]
+        hertz = () if names == ["none"] else tuple(names)
+    print(markdown(paper_table(args.paper_cube, args.contacts_cube, hertz)))
     return 0
 
 

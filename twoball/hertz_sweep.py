@@ -25,7 +25,7 @@ which releases the GIL so that a sweep's threads compute in parallel.
 Hunt-Crossley damping at the impact speed (a smallest H for each eps) and the rounding of the
 heights. Each limit is monotone along every axis (the damping, lam = Lambda(eps) / sqrt(2H) at
 the floor and Lambda(eps12) / ((1 + eps) sqrt(2H)) between the balls, falls with eps and does
-not depend on mu or the gap; the rounding grows with mu and with the gap), so the corners
+not depend on mu or the gap; the rounding is monotone in mu and grows with the gap), so the corners
 decide. A cell that still fails keeps NaN in h1 or h2 and says
 why in ``status`` (:data:`STATUS_FLAGS`).
 """
