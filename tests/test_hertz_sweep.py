@@ -142,10 +142,10 @@ def test_the_command_line_runs_a_hertz_sweep_and_says_what_it_undertakes(tmp_pat
     assert "--force hertz" in cube.attrs["sweep_command"]
     run = simulate_stack([0.05], 0.9, 0.3, height=100, force="hertz")
     assert float(cube.h2.isel(eps=0, mu=0, tau_ratio=0)) == run.h2
-    # the estimate is the Hertz one: ~600 cells/s a worker, not the linear 11 000
+    # the estimate is the Hertz one: 400 cells/s a worker, not the linear 11 000
     grid = Grid(Axis("eps", 0.5, 1, 50), Axis("mu", 0.01, 1 / 3, 50),
                 Axis("tau_ratio", 0.01, 1, 50), force="hertz")  # fmt: skip
-    assert "about 1.7 min on 2 workers" in plan(grid, 2)
+    assert "about 2.6 min on 2 workers" in plan(grid, 2)
     # a bare --force is still the old override of the size limit
     huge = ["sweep", str(tmp_path / "x.zarr"), "--eps", "0.5:1:2001", "--mu", "0.01:0.3:2000",
             "--tau-ratio", "0.3", "--force", "hertz", "--quiet"]  # fmt: skip

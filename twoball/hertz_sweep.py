@@ -55,9 +55,10 @@ STATUS_FLAGS = {
     int(Status.PHASE_LIMIT): "step_limit_reached",
     int(Status.FAILED): "integrator_failed",
 }
-# Cells per second one local thread computes, for the plan's estimate: measured 1.0-1.4 ms per
-# cell over the paper's ranges at H = 1e2 and 1e4 (docs/performance.md), on a loaded machine.
-DROPS_PER_WORKER_SECOND = 600
+# Cells per second one local thread computes, for the plan's estimate, cautious as the linear
+# one: 1.0-1.5 ms a cell over the paper's ranges at H = 1e2 and 1e4, 2.6-2.8 ms while other jobs
+# shared the cores (the shipped cubes; docs/performance.md).
+DROPS_PER_WORKER_SECOND = 400
 # Cells in a default chunk: a few seconds of compute (one chunk of the linear sweep's size would
 # take half a minute), so that a stopped sweep loses little.
 CHUNK_DROPS = 2_500

@@ -46,24 +46,39 @@ def counts(cube) -> Counts:
 
 
 def where(cube) -> str:
-    """Where a cube's delayed rebounds lie: the range of each axis they span, the largest
-    h2/h1 and where it is, and their share at the smallest and the largest mu."""
+    """Where a cube's delayed rebounds lie: the median (and 90 % quantile) of each axis over them
+    (for eps the 10 % quantile, they lean to high eps), their share at each end of each axis,
+    and the largest h2/h1 and where it is."""
     data = cube[["delayed_rebound", "h2_over_h1"]].load()
     delayed = data.delayed_rebound.values
     if not delayed.any():
         return "none"
-    spans = []
-    for axis, dim in enumerate(("eps", "mu", "tau_ratio")):
-        values = cube[dim].values[np.any(delayed, axis=tuple(k for k in range(3) if k != axis))]
-        spans.append(f"{dim} {values.min():.3g} to {values.max():.3g}")
+    at_eps, at_mu, at_tau = np.nonzero(delayed)
+    eps, mu, tau = (cube[d].values for d in ("eps", "mu", "tau_ratio"))
+    q = {
+        "mu": np.quantile(mu[at_mu], [0.5, 0.9]),
+        "tau_ratio": np.quantile(tau[at_tau], [0.5, 0.9]),
+        "eps": np.quantile(eps[at_eps], [0.5, 0.1]),
+    }
+    ends = {
+        "eps": (delayed[0].mean(), delayed[-1].mean(), eps),
+        "mu": (delayed[:, 0].mean(), delayed[:, -1].mean(), mu),
+        "tau_ratio": (delayed[:, :, 0].mean(), delayed[:, :, -1].mean(), tau),
+    }
     ratio = np.where(delayed, data.h2_over_h1.values, -np.inf)
-    at = np.unravel_index(int(np.argmax(ratio)), ratio.shape)
-    top = ", ".join(f"{d} {cube[d].values[i]:.3g}" for d, i in zip(cube.h1.dims, at, strict=True))
-    light, heavy = delayed[:, 0, :].mean(), delayed[:, -1, :].mean()
-    mu = cube.mu.values
+    top = np.unravel_index(int(np.argmax(ratio)), ratio.shape)
+    shown = ", ".join(
+        f"{d} {cube[d].values[i]:.3g}" for d, i in zip(cube.h1.dims, top, strict=True)
+    )
     return (
-        f"{'; '.join(spans)}; largest h2/h1 {ratio[at]:.3g} at {top}; share "
-        f"{100 * light:.1f} % at mu = {mu[0]:.3g}, {100 * heavy:.1f} % at mu = {mu[-1]:.3g}"
+        f"half at mu <= {q['mu'][0]:.3g} (90 % <= {q['mu'][1]:.3g}), half at tau_ratio <= "
+        f"{q['tau_ratio'][0]:.3g} (90 % <= {q['tau_ratio'][1]:.3g}), half at eps >= "
+        f"{q['eps'][0]:.3g} (90 % >= {q['eps'][1]:.3g}); share of the cases "
+        + ", ".join(
+            f"{100 * low:.1f} % at {d} = {v[0]:.3g} and {100 * high:.1f} % at {v[-1]:.3g}"
+            for d, (low, high, v) in ends.items()
+        )
+        + f"; largest h2/h1 {ratio[top]:.3g} at {shown}"
     )
 
 
@@ -105,6 +120,7 @@ def hertz_rows(cube, linear=None) -> list[Row]:
             f"{label}: where the delayed rebounds are",
             "(not studied)",
             where(cube),
-            "ranges spanned by the cases with h2 > h1",
+            "over the cases with h2 > h1"
+            + ("" if linear is None else f"; linear force (paper cube): {where(linear)}"),
         ),
     ]
