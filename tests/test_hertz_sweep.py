@@ -239,3 +239,43 @@ def test_report_gives_the_hertz_statistics_of_the_shipped_cubes(capsys):
         assert abs(found["of those"][0] - int((delayed & below).sum())) <= 5
         assert abs(found["of cases with h1 below"][1] - int(below.sum())) <= 5
         assert re.search(rf"\| Hertz force, H = {height}: where the delayed rebounds are \|", out)
+
+
+@pytest.mark.slow
+def test_a_hertz_sweep_killed_with_sigkill_resumes_to_the_same_cube(tmp_path):
+    """As the linear sweep's test (tests/test_sweep.py), from the command line: killed part way
+    with SIGKILL, run again, finished chunks untouched, the cube equal to one computed whole."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    grid = Grid(Axis("eps", 0.5, 1.0, 10), Axis("mu", 0.01, 1 / 3, 10),
+                Axis("tau_ratio", 0.01, 1.0, 10), height=1e2, chunks=(1, 10, 10),
+                force="hertz")  # fmt: skip
+    store = tmp_path / "cube.zarr"
+    command = [sys.executable, "-m", "twoball", "sweep", *grid.command(store).split()[2:],
+               "--workers", "1", "--quiet"]  # fmt: skip
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    progress = store / "_progress"
+    try:
+        deadline = time.monotonic() + 300
+        while time.monotonic() < deadline:
+            if progress.is_dir() and len(list(progress.glob("*.*.*"))) >= 2:
+                break
+            time.sleep(0.005)
+        os.kill(process.pid, signal.SIGKILL)
+    finally:
+        process.wait(timeout=60)
+    finished = sorted(path.name for path in progress.glob("*.*.*"))
+    assert 2 <= len(finished) < 10, "the run must be killed part way"
+    written = {key: (store / "h1" / f"c.{key}").stat().st_mtime_ns for key in finished}
+    again = subprocess.run(command, capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0, again.stderr
+    for key, mtime in written.items():
+        assert (store / "h1" / f"c.{key}").stat().st_mtime_ns == mtime
+    cube = xr.open_zarr(store, consolidated=False).load()
+    whole = compute_block(*(a.values() for a in grid.axes), height=grid.height)
+    for name in VARIABLES:
+        np.testing.assert_array_equal(cube[name].values, whole[name], name)
