@@ -279,3 +279,17 @@ def test_a_hertz_sweep_killed_with_sigkill_resumes_to_the_same_cube(tmp_path):
     whole = compute_block(*(a.values() for a in grid.axes), height=grid.height)
     for name in VARIABLES:
         np.testing.assert_array_equal(cube[name].values, whole[name], name)
+
+
+@pytest.mark.slow
+def test_a_hertz_sweep_on_a_dask_cluster(tmp_path):
+    from distributed import LocalCluster
+
+    grid = _small(chunks=(1, 2, 3))
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster:  # fmt: skip
+        cube = sweep(grid, tmp_path / "h.zarr", scheduler=cluster.scheduler_address,
+                     progress=False).load()  # fmt: skip
+    whole = compute_block(*(a.values() for a in grid.axes), height=grid.height)
+    for name in VARIABLES:
+        np.testing.assert_array_equal(cube[name].values, whole[name], name)
