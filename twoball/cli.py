@@ -22,12 +22,11 @@ import sys
 from collections.abc import Callable
 
 from twoball.errors import ParameterError, SolverError, Status
-from twoball.hertz_sweep import MAX_DROPS as MAX_HERTZ_DROPS
 from twoball.model import DEFAULT_HEIGHT, Parameters, allowed_range
 from twoball.sweep import DIMS as SWEEP_AXES
 from twoball.sweep import FORCES as SWEEP_FORCES
 from twoball.sweep import MAX_DROPS as MAX_SWEEP_DROPS
-from twoball.sweep import parse_number
+from twoball.sweep import MAX_HERTZ_DROPS, parse_number
 
 # The optional dependencies, by the extra that installs them (pyproject.toml).
 EXTRAS = {

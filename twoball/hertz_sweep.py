@@ -62,8 +62,6 @@ DROPS_PER_WORKER_SECOND = 400
 # Cells in a default chunk: a few seconds of compute (one chunk of the linear sweep's size would
 # take half a minute), so that a stopped sweep loses little.
 CHUNK_DROPS = 2_500
-# Cells a sweep undertakes without being told --large: about an hour on 2 cores.
-MAX_DROPS = 4_000_000
 VARIABLE_UNITS = {"h1": HEIGHT_UNITS, "h2": HEIGHT_UNITS, "h_icm": HEIGHT_UNITS,
                   "x2_0": HEIGHT_UNITS, "t1": TIME_UNITS, "t2": TIME_UNITS}  # fmt: skip
 
