@@ -293,3 +293,24 @@ def test_a_hertz_sweep_on_a_dask_cluster(tmp_path):
     whole = compute_block(*(a.values() for a in grid.axes), height=grid.height)
     for name in VARIABLES:
         np.testing.assert_array_equal(cube[name].values, whole[name], name)
+
+
+def test_where_names_the_corner_of_the_delayed_rebounds():
+    from twoball.studies.hertz_report import where
+
+    delayed = np.zeros((2, 2, 2), dtype=bool)
+    delayed[1, 0, 0] = True  # eps 1, mu 0.01, tau_ratio 0.01 only
+    ratio = np.full((2, 2, 2), 0.5)
+    ratio[1, 0, 0] = 3.0
+    dims = ("eps", "mu", "tau_ratio")
+    cube = xr.Dataset(
+        {"delayed_rebound": (dims, delayed), "h2_over_h1": (dims, ratio),
+         "h1": (dims, np.ones((2, 2, 2)))},
+        coords={"eps": [0.5, 1.0], "mu": [0.01, 0.3], "tau_ratio": [0.01, 1.0]},
+    )  # fmt: skip
+    text = where(cube)
+    assert text.startswith("half at mu <= 0.01 (90 % <= 0.01), half at tau_ratio <= 0.01")
+    assert "0.0 % at eps = 0.5 and 25.0 % at 1" in text
+    assert "25.0 % at mu = 0.01 and 0.0 % at 0.3" in text
+    assert text.endswith("largest h2/h1 3 at eps 1, mu 0.01, tau_ratio 0.01")
+    assert where(cube.assign(delayed_rebound=(dims, np.zeros((2, 2, 2), bool)))) == "none"
