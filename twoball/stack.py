@@ -1293,7 +1293,8 @@ def simulate_stack(
         so (``success``, ``status``).
     method : "compiled" or "DOP853"
         With the Hertz force: the compiled integrator, or scipy's DOP853, kept as a reference
-        (:func:`twoball.hertz.simulate`).
+        (:func:`twoball.hertz.simulate`). The linear force has only "compiled" (its exact
+        solver): any other is refused with ParameterError.
 
     Returns
     -------
@@ -1311,6 +1312,11 @@ def simulate_stack(
     (True, 4)
     """
     stack = check_stack(mass_ratios, eps, tau_ratios, height=height, force=force)
+    if force == "linear" and method != "compiled":  # it was ignored, silently
+        raise ParameterError(
+            f"method {method!r} applies to the hertz force only (compiled or DOP853); the linear "
+            "force has one method, the exact solver (method='compiled')"
+        )
     apexes_wanted, t_end = stop_rule(until)
     times = None
     if t_eval is not None:

@@ -142,16 +142,20 @@ def close_up_row() -> Row:
     )
 
 
-def paper_table(paper: str = "paper", contacts: str = "contacts") -> list[Row]:
+def paper_table(
+    paper: str = "paper", contacts: str = "contacts", hertz: tuple[str, ...] | None = None
+) -> list[Row]:
     """All rows of the table in docs/model.md, "The paper's sweep and its headline numbers", from
-    the named (or given) cubes."""
+    the named (or given) cubes, then the paper's three statistics on each Hertz cube (default:
+    the shipped ones, :mod:`twoball.studies.hertz_report`)."""
     from twoball.cubes import load_cube
+    from twoball.studies.hertz_report import HERTZ_CUBES, hertz_rows
 
-    return [
-        *sweep_rows(load_cube(paper)),
-        contact_row(load_cube(contacts)),
-        close_up_row(),
-    ]
+    linear = load_cube(paper)
+    rows = [*sweep_rows(linear), contact_row(load_cube(contacts)), close_up_row()]
+    for name in HERTZ_CUBES if hertz is None else hertz:
+        rows += hertz_rows(load_cube(name), linear)
+    return rows
 
 
 def markdown(rows: list[Row]) -> str:
