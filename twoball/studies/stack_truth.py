@@ -91,7 +91,9 @@ class _Phase:
                 continue
             # f_c = -(eta_c + 2 zeta_c eta_c'): +f_c / m_c on ball c, -f_c / m_(c-1) below
             row = self._eta_row(c, n)
-            force = [-row[i] - 2 * zeta[c] * (row[i - n] if n <= i < 2 * n else 0) for i in range(d)]
+            force = [
+                -row[i] - 2 * zeta[c] * (row[i - n] if n <= i < 2 * n else 0) for i in range(d)
+            ]
             for i in range(d):
                 a[n + c][i] += force[i] / masses[c]
                 if c >= 1:
@@ -99,9 +101,7 @@ class _Phase:
         self.a = a
         self.sparse = [[(j, v) for j, v in enumerate(r) if v != 0] for r in a]
         norm = max(mpmath.fsum(abs(v) for v in r) for r in a)
-        self.dt = (
-            mpmath.mpf(FREE_FLIGHT_STEP) if not any(active) else 1 / (STEP_FRACTION * norm)
-        )
+        self.dt = mpmath.mpf(FREE_FLIGHT_STEP) if not any(active) else 1 / (STEP_FRACTION * norm)
         self.step = mpmath.expm(mpmath.matrix(a) * self.dt)
         self.step_rows = [[self.step[i, j] for j in range(d)] for i in range(d)]
         self.rows = []
@@ -204,7 +204,9 @@ class _Phase:
         for rate, r0 in extrema:
             rate_s = self.scalar(rate, coefficients)
             candidates.append(
-                self._bisect(lambda h, s=rate_s, r0=r0: (self.horner(s, h) > 0) == (r0 < 0), self.dt)
+                self._bisect(
+                    lambda h, s=rate_s, r0=r0: (self.horner(s, h) > 0) == (r0 < 0), self.dt
+                )
             )
         for t_candidate in [*sorted(candidates), self.dt]:
             if changed(t_candidate) if t_candidate < self.dt else self.happened(event, y_next):
@@ -384,6 +386,4 @@ def within(row: dict) -> bool:
     conditioning."""
     if row["contacts_first"] != row["contacts_first_truth"]:
         return False
-    return all(
-        row[f"rel_err_{h}"] <= CONDITIONING_FACTOR * row[f"cond_{h}"] for h in ("h1", "h2")
-    )
+    return all(row[f"rel_err_{h}"] <= CONDITIONING_FACTOR * row[f"cond_{h}"] for h in ("h1", "h2"))
