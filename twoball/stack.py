@@ -879,9 +879,6 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
     status = STATUS_PHASES
     entered_by = -1
     carried = 0.0
-    # the top ball's speed is not snapped to zero at its apex, so its next apex is looked for
-    # only after its contact below has pushed again (as twoball.exact.run does)
-    top_armed = True
     # the two-ball solver's rest proof, for N = 2 (for more balls a placeholder of the same type)
     pair = exact.prepare(masses[1] if n == 2 else 1.0, zeta[0], zeta[1] if n == 2 else 0.1)
     for _ in range(MAX_PHASES):
@@ -895,32 +892,14 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
             phases[n_phases, 2 : 2 + n] = x
             phases[n_phases, 2 + n :] = v
             n_phases += 1
-        # Only the top ball's apex ends a phase: a lower free ball's apex is v away on its
-        # parabola, recorded below if the phase lasts that long (a phase ended at every apex
-        # was 28 % of an eight-ball drop's phases, and snapped the ball's speed to zero)
         horizon, horizon_ball = t_end - t, -1
-        if top_armed and not active[n - 1] and 0.0 < v[n - 1] < horizon:
-            horizon, horizon_ball = v[n - 1], n - 1
-        x_start_phase, v_start_phase = x, v
+        for ball in range(n):
+            free = not active[ball] and (ball == n - 1 or not active[ball + 1])
+            if free and 0.0 < v[ball] < horizon:
+                horizon, horizon_ball = v[ball], ball  # a free ball's apex is v away
         event, index, tau, x, v = advance_phase(
             t, x, v, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried, pair
         )
-        last_when, last_ball = 0.0, -1
-        while True:  # the lower free balls' apexes inside the phase, in order of time
-            ball, when = -1, tau
-            for b in range(n - 1):
-                if not active[b] and not active[b + 1]:
-                    up = v_start_phase[b]
-                    later = up > last_when or (up == last_when and b > last_ball)
-                    if later and 0.0 < up < when:
-                        ball, when = b, up
-            if ball < 0:
-                break
-            apexes = exact._room_for_one(apexes, n_apex)
-            apexes[n_apex, 0], apexes[n_apex, 1] = ball, t + when
-            apexes[n_apex, 2] = x_start_phase[ball] + when * (when - 0.5 * when)
-            n_apex += 1
-            last_when, last_ball = when, ball
         # A state that leaves a grounded cluster of several contacts carries the rounding of its
         # closed form about the static rest (see twoball.exact.run).
         grounded_top = 0
@@ -928,9 +907,7 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
             grounded_top += 1
         if grounded_top > 0:
             cid = _cluster_id(0, grounded_top, True, n)
-            offset = 0.0
-            for c in range(grounded_top + 1):  # a loop, not a temporary array per phase
-                offset += abs(store.eta_rest[cid, c])
+            offset = np.abs(store.eta_rest[cid, : grounded_top + 1]).sum()
             carried = max(carried, ROUNDING * store.noise[cid] * offset)
         entered_by = index if event == EV_SWITCH else -1
         t += tau
@@ -944,11 +921,9 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
                 opened[index] = t
                 if top_apexes == 0:
                     first[index] += 1
-                if index == n - 1:
-                    top_armed = True
             active[index] = not active[index]
         elif event == EV_APEX:
-            top_armed = False
+            v[index] = 0.0
             apexes = exact._room_for_one(apexes, n_apex)
             apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, x[index]
             n_apex += 1
