@@ -58,12 +58,15 @@ def main() -> None:
         cond = stack_truth.conditioning(case)
         row["cond_h1"], row["cond_h2"] = float(cond[0]), float(cond[1])
         row["ratio"] = max(row["rel_err_h1"] / row["cond_h1"], row["rel_err_h2"] / row["cond_h2"])
+        spread = stack_truth.ulp_spread(case)
+        row["ulp_spread_h1"], row["ulp_spread_h2"] = float(spread[0]), float(spread[1])
         row["within"] = stack_truth.within(row)
         rows.append(row)
         print(
             f"{i:2d} N={row['balls']} eps={case['eps']:.3f} H={case['height']:.3g}: "
             f"h1 {row['rel_err_h1']:.1e} h2 {row['rel_err_h2']:.1e} "
-            f"(cond {row['cond_h1']:.1e}, {row['cond_h2']:.1e}; ratio {row['ratio']:.2f}) "
+            f"(cond {row['cond_h1']:.1e}, {row['cond_h2']:.1e}; ratio {row['ratio']:.2f}; "
+            f"1-2 ulps move h2 by {row['ulp_spread_h2']:.1e}) "
             f"contacts {row['contacts_first']} / {row['contacts_first_truth']} {row['within']}"
             + ("" if old is not None else f" (reference {seconds:.0f} s)"),
             flush=True,
@@ -98,9 +101,9 @@ def summary(rows: list[dict]) -> str:
 def table(rows: list[dict]) -> str:
     lines = [
         "| N | mass ratios | eps | gap | H | h2 (40-digit reference) | rel. error h1 | h2 "
-        "| cond_h1 | cond_h2 | error / cond | contacts before h1 (kernel / reference) "
-        "| within the rule |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| cond_h1 | cond_h2 | error / cond | h2 moves by (1-2 ulps of an input) "
+        "| contacts before h1 (kernel / reference) | within the rule |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         ratios = ", ".join(f"{float(x):.3g}" for x in r["mass_ratios"].split())
@@ -108,7 +111,8 @@ def table(rows: list[dict]) -> str:
             f"| {r['balls']} | {ratios} | {float(r['eps']):.3g} | {float(r['tau_ratios']):.3g} "
             f"| {float(r['height']):.3g} | {r['h2_truth'][:16]} | {r['rel_err_h1']:.1e} "
             f"| {r['rel_err_h2']:.1e} | {r['cond_h1']:.1e} | {r['cond_h2']:.1e} "
-            f"| {r['ratio']:.2f} | {r['contacts_first']} / {r['contacts_first_truth']} "
+            f"| {r['ratio']:.2f} | {r['ulp_spread_h2']:.1e} "
+            f"| {r['contacts_first']} / {r['contacts_first_truth']} "
             f"| {'yes' if r['within'] else '**no**'} |"
         )
     return summary(rows) + "\n\n" + "\n".join(lines)

@@ -361,6 +361,31 @@ def conditioning(case: dict) -> np.ndarray:
     return total
 
 
+def ulp_spread(case: dict, ulps: tuple[int, ...] = (-2, -1, 1, 2)) -> np.ndarray:
+    """(h1, h2): the largest relative move when one input moves by a few ulps, over every input.
+    Where h2 is chaotic (a long sequence of contacts before it) this is far above
+    :func:`conditioning`: a difference quotient over 2^16 ulps then measures a secant of a
+    function that jumps at every ulp, not its sensitivity."""
+    base = _heights(case)
+    spread = np.zeros(2)
+    names = [("eps", None), ("tau_ratios", None), ("height", None)]
+    names += [("mass_ratios", i) for i in range(len(case["mass_ratios"]))]
+    for name, index in names:
+        value = case[name] if index is None else case[name][index]
+        for k in ulps:
+            new = value + k * math.ulp(value)
+            if name == "eps" and new > 1.0:
+                continue
+            if index is None:
+                moved = _heights(case, **{name: new})
+            else:
+                ratios = list(case[name])
+                ratios[index] = new
+                moved = _heights(case, mass_ratios=ratios)
+            spread = np.maximum(spread, np.abs(moved - base) / np.abs(base))
+    return spread
+
+
 def against(case: dict, stored: dict) -> dict:
     """The compiled kernel against stored reference values on one drop."""
     from twoball.stack import simulate_stack
