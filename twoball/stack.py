@@ -918,21 +918,6 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
                 contacts[n_contacts, 2] = t
                 n_contacts += 1
             else:
-                # A contact closing meets its overlap at zero. Found as a root, the overlap there
-                # is zero only to the rounding of the heights (a ball falling from thousands
-                # above: ~1e-12, where a stiff contact's whole compression is ~0.1): so the
-                # root is taken as exact, as twoball.exact.run takes it, by moving the ball
-                # above and the balls its active contacts carry by that rounding.
-                below_x = x[index - 1] if index >= 1 else 0.0
-                below_v = v[index - 1] if index >= 1 else 0.0
-                if v[index] - below_v < 0.0:
-                    shift = x[index] - below_x
-                    top = index
-                    while top + 1 < n and active[top + 1]:
-                        top += 1
-                    for ball in range(index, top + 1):
-                        x[ball] -= shift
-                    x[index] = below_x
                 opened[index] = t
                 if top_apexes == 0:
                     first[index] += 1
