@@ -14,11 +14,15 @@ import math
 import holoviews as hv
 import panel as pn
 import param
-from bokeh.palettes import Category10
 
 from twoball.studies.precision import ERROR_FLOOR, FAILED_ERROR, PrecisionRow, work_precision
 
-from .scene import AnsweringMarkdown, Scene, font_sizes
+from .scene import PROJECTOR_LINE_WIDTH, AnsweringMarkdown, Scene, font_sizes
+
+# Okabe and Ito's eight colours, told apart with every common colour-vision deficiency (black
+# first: the exact solver, pale yellow last); Category10's red and green were not
+OKABE_ITO = ("#000000", "#E69F00", "#56B4E9", "#009E73", "#0072B2", "#D55E00", "#CC79A7", "#F0E442")
+PROJECTOR_PLOT_HEIGHT = 280  # presentation mode (scene.py): under the explanation, in 720 px
 
 
 class AccuracyScene(Scene):
@@ -100,12 +104,17 @@ class AccuracyScene(Scene):
         error_dim = hv.Dimension("error", label="relative error of h1, h2 (larger)")
         layers = []
         methods = dict.fromkeys(r.method for r in self.rows or [])
-        for method, color in zip(methods, Category10[10], strict=False):
+        for method, color in zip(methods, OKABE_ITO, strict=False):
             mine = [r for r in self.rows if r.method == method and math.isfinite(r.seconds)]
             points = [(r.seconds, r.shown_error) for r in mine]
-            layers.append(hv.Curve(points, time_dim, error_dim, label=method).opts(color=color))
+            line, size = (PROJECTOR_LINE_WIDTH, 14) if self.state.presentation else (2, 8)
             layers.append(
-                hv.Scatter(points, time_dim, error_dim, label=method).opts(color=color, size=8)
+                hv.Curve(points, time_dim, error_dim, label=method).opts(
+                    color=color, line_width=line
+                )
+            )
+            layers.append(
+                hv.Scatter(points, time_dim, error_dim, label=method).opts(color=color, size=size)
             )
         if not layers:
             layers = [hv.Curve([], time_dim, error_dim)]
@@ -114,7 +123,7 @@ class AccuracyScene(Scene):
                 logx=True,
                 logy=True,
                 responsive=True,
-                height=420,
+                height=PROJECTOR_PLOT_HEIGHT if self.state.presentation else 420,
                 framewise=True,
                 padding=0.1,  # points at the ends of the axes are not cut in half
                 fontsize=font_sizes(self.state.presentation),

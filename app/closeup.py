@@ -36,6 +36,9 @@ def collision_window(contacts: list[twoball.ContactInterval], end: float) -> tup
     return max(start - pad, 0.0), min(stop + pad, end)
 
 
+PROJECTOR_PLOT_HEIGHT = 470  # presentation mode (scene.py): positions; each force half of it
+
+
 class CloseUpScene(Scene):
     """X1, X2, f01 and f12 through the first collision, contacts listed."""
 
@@ -64,6 +67,10 @@ class CloseUpScene(Scene):
         self.ball_force.line("t", "f12", source=self.samples, color=UPPER, line_width=2)
         for fig in (self.positions, self.floor_force, self.ball_force):
             readable(fig, self.state.presentation)
+        if self.state.presentation:  # side by side within 720 px (layout), a shorter title
+            self.positions.title.text = "Positions (< 0: compressed)"
+            self.positions.height = PROJECTOR_PLOT_HEIGHT
+            self.floor_force.height = self.ball_force.height = PROJECTOR_PLOT_HEIGHT // 2
 
     def _figure(self, title: str, height: int, **shared):
         """A figure of the scene; ``x_range`` shares the time axis with the first one."""
@@ -134,10 +141,11 @@ class CloseUpScene(Scene):
 
     def layout(self) -> pn.viewable.Viewable:
         self._draw()
-        return pn.Column(
-            pn.pane.Bokeh(self.positions, sizing_mode="stretch_width"),
-            pn.pane.Bokeh(self.floor_force, sizing_mode="stretch_width"),
-            pn.pane.Bokeh(self.ball_force, sizing_mode="stretch_width"),
-            self.table,
-            sizing_mode="stretch_width",
-        )
+        panes = [
+            pn.pane.Bokeh(fig, sizing_mode="stretch_width")
+            for fig in (self.positions, self.floor_force, self.ball_force)
+        ]
+        if self.state.presentation:  # 1280x720 (scene.py): positions beside the two forces
+            plots = pn.Row(panes[0], pn.Column(*panes[1:]), sizing_mode="stretch_width")
+            return pn.Column(plots, self.table, sizing_mode="stretch_width")
+        return pn.Column(*panes, self.table, sizing_mode="stretch_width")

@@ -16,7 +16,7 @@ from bokeh.models import CustomJS, CustomJSTickFormatter
 
 from twoball import presets
 
-from .scene import PENDING_JS, Built, later
+from .scene import PENDING_JS, Built, alert, later
 from .state import APP_RANGES, ExplorerState, validate
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
@@ -84,7 +84,7 @@ class Controls(Built):
 
     def __init__(self, messages: list[str] | None = None, **params):
         super().__init__(**params)
-        self.message = pn.pane.Alert(
+        self.message = alert(
             "",
             alert_type="warning",
             visible=False,
@@ -174,6 +174,7 @@ class Controls(Built):
             mu=preset.mu,
             tau_ratio=preset.tau_ratio,
             height=presets.height_from_metres(presets.DEFAULT_DROP_METRES),
+            units="SI",  # real balls: shown in metres and seconds
         )
 
     def _height_typed(self, event: param.parameterized.Event) -> None:

@@ -27,16 +27,27 @@ import param
 import xarray as xr
 from bokeh.models import BasicTickFormatter, ColumnDataSource, FixedTicker
 from holoviews.operation import contours
+from scipy import ndimage
 
 import twoball
 from twoball import jit
 from twoball.batch.sweep import compute_block
 
-from .scene import AnsweringMarkdown, Scene, answers_pending, font_sizes, later, on_screen
+from .scene import (
+    PROJECTOR_LINE_WIDTH,
+    AnsweringMarkdown,
+    Scene,
+    answers_pending,
+    font_sizes,
+    later,
+    on_screen,
+)
 from .state import validate
 from .worksheet import slice_csv
 
 CUBE = "map"
+SMALLEST_OUTLINED = 4  # cells: a delayed-rebound patch smaller than this is not outlined
+PROJECTOR_MAP_HEIGHT = 490  # presentation mode (scene.py): both axes and the colour bar in 720 px
 SHOWN = ("h2_over_h1", "h1_over_icm", "h1_over_drop", "h2_over_drop", "contacts_first")
 RATIO_CENTRES = {"h2_over_h1": 1.0, "h1_over_icm": 1.0}
 # colour-bar ticks of the ratios' log scale: values below 1 get numbers too (LogTicker: powers
@@ -86,6 +97,19 @@ def nearest_eps(eps: float) -> float:
     """The cube's eps nearest to ``eps``."""
     values = map_cube()["eps"].values
     return float(values[np.abs(values - eps).argmin()])
+
+
+def outlined(delayed: np.ndarray, smallest: int = SMALLEST_OUTLINED) -> np.ndarray:
+    """The delayed-rebound flags as outlined: a patch (or a hole) of fewer than ``smallest``
+    cells takes its surroundings' value. Its colour still shows it; outlined, single cells drew
+    small diamonds that read as noise from the back of a room."""
+    kept = np.asarray(delayed, dtype=bool).copy()
+    for value in (True, False):
+        patches, count = ndimage.label(kept == value)
+        sizes = np.bincount(patches.ravel())
+        small = np.flatnonzero(sizes < smallest)
+        kept[np.isin(patches, small[small > 0])] = not value
+    return kept
 
 
 def _decade_ticks(cube: xr.Dataset) -> dict[str, list[tuple[float, str]]]:
@@ -181,7 +205,7 @@ class MapScene(Scene):
             xlabel="mu = m2/m1 (log scale)",
             ylabel="tau_d/tau_f (log scale)",
             responsive=True,
-            height=520,
+            height=PROJECTOR_MAP_HEIGHT if self.state.presentation else 520,
             framewise=False,
             fontsize=font_sizes(self.state.presentation),
         )
@@ -336,7 +360,7 @@ class MapScene(Scene):
         self.current()
         if self.slice is None:
             return hv.Contours([], dims)
-        delayed = self.slice["delayed_rebound"].transpose("tau_ratio", "mu").values
+        delayed = outlined(self.slice["delayed_rebound"].transpose("tau_ratio", "mu").values)
         flags = hv.Image(
             (
                 np.log10(self.slice["mu"].values),
@@ -345,7 +369,8 @@ class MapScene(Scene):
             ),
             dims,
         )
-        return contours(flags, levels=[0.5]).opts(color="black", line_width=1.5)
+        width = PROJECTOR_LINE_WIDTH if self.state.presentation else 1.5
+        return contours(flags, levels=[0.5]).opts(color="black", line_width=width)
 
     def _csv(self) -> io.StringIO:
         """The slice on screen for a worksheet (app/worksheet.py)."""
@@ -371,6 +396,9 @@ class MapScene(Scene):
         self.state.param.update(mu=mu, tau_ratio=tau_ratio)
 
     def layout(self) -> pn.viewable.Viewable:
+        if self.state.presentation:  # 1280x720 (scene.py): the choices beside the map
+            side = pn.Column(self.choice, self.download, self.note, width=300)
+            return pn.Row(self.figure, side, sizing_mode="stretch_width")
         return pn.Column(
             # wraps: on a phone the two side by side made the page scroll sideways
             pn.FlexBox(self.choice, self.download, flex_wrap="wrap", sizing_mode="stretch_width"),

@@ -8,6 +8,7 @@ see benchmarks/app_latency.py). The run is asked for until the second apex only.
 from __future__ import annotations
 
 import io
+from dataclasses import dataclass
 
 import numpy as np
 import panel as pn
@@ -25,10 +26,11 @@ from bokeh.models import (
 from bokeh.plotting import figure
 
 import twoball
+from twoball import presets
 from twoball.units import units_named
 
 from .collisions import collisions
-from .scene import Scene, answers_pending, on_screen, readable
+from .scene import Scene, answers_pending, later, on_screen, readable
 from .worksheet import drop_csv
 
 FLIGHT_FRAMES = 240  # evenly spread over the drop
@@ -45,6 +47,28 @@ PLAYER_HELP = (
     "and many more are spent on each collision: **slow motion through the collision**, "
     "the time is shown above the balls."
 )
+
+
+@dataclass(frozen=True)
+class PinnedDrop:
+    """A drop kept on the plot to compare the next ones with (dimensionless, shown in the
+    units on screen)."""
+
+    label: str
+    result: twoball.Result
+    plotted: twoball.Trajectory
+
+
+def drop_label(eps: float, eps12: float | None, mu: float, tau_ratio: float, height: float) -> str:
+    """A drop in words: its preset's name when it is one, else its parameters."""
+    for preset in presets.PRESETS.values():
+        same = (preset.eps, preset.eps12, preset.mu, preset.tau_ratio) == (
+            eps, eps12, mu, tau_ratio
+        )  # fmt: skip
+        if same and height == presets.height_from_metres(presets.DEFAULT_DROP_METRES):
+            return preset.label.lower()
+    label = f"eps {eps:.3g}, mu {mu:.3g}, tau_d/tau_f {tau_ratio:.3g}, H {height:.3g}"
+    return label if eps12 is None else f"{label}, eps12 {eps12:.3g}"
 
 
 def frame_times(end: float, contacts: list[twoball.ContactInterval]) -> np.ndarray:
@@ -91,6 +115,9 @@ def stage():
     return fig
 
 
+PROJECTOR_PLOT_HEIGHT = 290  # presentation mode (scene.py): plots and player within 720 px
+
+
 class DropScene(Scene):
     """Heights against time to the second apex, apexes marked, drop height and ICM as lines."""
 
@@ -120,6 +147,11 @@ class DropScene(Scene):
             callback=self._csv, filename="drop.csv", label="Download this drop (CSV)", embed=False
         )
         self.summary = pn.pane.Markdown(sizing_mode="stretch_width")
+        # compare two drops (tennis against ping-pong): one pinned, drawn dashed under the next
+        self.pinned: PinnedDrop | None = None
+        self.pin = pn.widgets.Button(label="Pin this drop to compare")
+        self.pin.on_click(lambda _: later(self._toggle_pin))
+        self.pinned_curves = ColumnDataSource({"t": [], "x1": [], "x2": []})
         self.curves = ColumnDataSource({"t": [], "x1": [], "x2": []})
         answers_pending(self.curves)
         self.apexes = ColumnDataSource({"t": [], "h": [], "text": []})
@@ -136,8 +168,8 @@ class DropScene(Scene):
         self.animation = self._animation_figure()
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)
-        if self.state.presentation:  # 1366x768: under the header, tabs, caption and summary
-            self.heights.height = self.animation.height = 400
+        if self.state.presentation:  # 1280x720: under the header, tabs and summary, the player
+            self.heights.height = self.animation.height = PROJECTOR_PLOT_HEIGHT
 
     def _heights_figure(self):
         fig = figure(
@@ -149,6 +181,11 @@ class DropScene(Scene):
         )
         fig.toolbar.autohide = True
         height_axis(fig)
+        pinned = [
+            fig.line("t", column, source=self.pinned_curves, color=color, line_width=2,
+                     line_dash="dashed", alpha=0.6)
+            for column, color in (("x1", LOWER), ("x2", UPPER))
+        ]  # fmt: skip
         lower = fig.line("t", "x1", source=self.curves, color=LOWER, line_width=2)
         upper = fig.line("t", "x2", source=self.curves, color=UPPER, line_width=2)
         fig.scatter("t", "h", source=self.apexes, color=UPPER, size=8)
@@ -172,6 +209,7 @@ class DropScene(Scene):
                 items=[
                     LegendItem(label="lower ball", renderers=[lower]),
                     LegendItem(label="upper ball", renderers=[upper]),
+                    LegendItem(label="pinned drop", renderers=pinned, visible=False),
                 ],
                 location="top_left",  # inside: a phone has no width to spare
                 background_fill_alpha=0.7,
@@ -226,6 +264,10 @@ class DropScene(Scene):
         self.drop_line.location = r.x2_0 * units.length
         self.icm_line.location = r.h_icm * units.length
         top = max(r.x2_0, *r.apex_h, r.h_icm) * units.length
+        self._draw_pinned(units)
+        if self.pinned is not None:
+            highest = float(np.max(self.pinned_curves.data["x2"]))
+            top = max(top, self.pinned.result.x2_0 * units.length, highest)
         low, high = -0.03 * top, 1.12 * top
         self.heights.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
         room = high / (1 - 4 * BALL_RADIUS)  # the balls drawn on top of their heights fit
@@ -234,6 +276,33 @@ class DropScene(Scene):
             fig.yaxis.axis_label = units.length_label
         self.heights.xaxis.axis_label = units.time_label
         self._show_frame()
+
+    def _draw_pinned(self, units) -> None:
+        pinned = self.pinned
+        self.heights.legend[0].items[-1].visible = pinned is not None
+        if pinned is None:
+            if len(self.pinned_curves.data["t"]):
+                self.pinned_curves.data = {"t": [], "x1": [], "x2": []}
+            return
+        self.pinned_curves.data = {
+            "t": on_screen(pinned.plotted.t * units.time),
+            "x1": on_screen(pinned.plotted.x1 * units.length),
+            "x2": on_screen(pinned.plotted.x2 * units.length),
+        }
+
+    def _toggle_pin(self) -> None:
+        """Pin the drop on screen (the next drops are drawn over it), or let it go."""
+        if self.pinned is None:
+            self.current()
+            s = self.state
+            label = drop_label(s.eps, s.eps12, s.mu, s.tau_ratio, s.height)
+            self.pinned = PinnedDrop(label, self.result, self.plotted)
+            self.pin.label = "Unpin the dashed drop"
+        else:
+            self.pinned = None
+            self.pin.label = "Pin this drop to compare"
+        self.summary.object = self._summary_text()
+        self.redraw_now()
 
     @param.depends("frame", watch=True)
     def _show_frame(self, *events: param.parameterized.Event) -> None:
@@ -278,7 +347,14 @@ class DropScene(Scene):
         return io.StringIO(drop_csv(self.result, self.plotted, units))
 
     def _summary_text(self) -> str:
-        r, units = self.result, units_named(self.state.units)
+        text = self._drop_text(self.result)
+        if self.pinned is not None:
+            pinned = self._drop_text(self.pinned.result).split("  \n")[0]
+            text = f"**Now:** {text}  \n**Pinned (dashed),** {self.pinned.label}: {pinned}"
+        return text
+
+    def _drop_text(self, r: twoball.Result) -> str:
+        units = units_named(self.state.units)
         if not r.success:
             return (
                 f"**The solver could not finish this drop** ({r.reason}); what it computed is "
@@ -319,6 +395,7 @@ class DropScene(Scene):
             pn.FlexBox(
                 self.player,
                 self.trails,
+                self.pin,
                 self.download,
                 flex_wrap="wrap",
                 sizing_mode="stretch_width",

@@ -17,7 +17,7 @@ from .controls import Controls
 from .delayed_map import MapScene
 from .drop import DropScene
 from .lesson import Lesson
-from .scene import MODEL_PARAMETERS, Built, Scene
+from .scene import MODEL_PARAMETERS, Built, Scene, alert
 from .stack import StackScene
 from .state import SCENES, ExplorerState, read_query, url_query
 
@@ -122,7 +122,8 @@ class Explorer(Built):
             stylesheets=[":host(.bk-above) .bk-headers-wrapper { flex-wrap: wrap; }"],
         )
         self.tabs.param.watch(self._tab_chosen, "active")
-        self.cover = pn.pane.Alert(alert_type="info", sizing_mode="stretch_width")
+        self.cover = alert(alert_type="info", sizing_mode="stretch_width")
+        self.stage = self.lesson.stage()  # on a projector the question covers the scene
         self._cover()
         self.scene(self.state.scene).active = True
 
@@ -130,7 +131,9 @@ class Explorer(Built):
         """The scene ``name``, built (and put into its tab) the first time it is asked for."""
         if name not in self.scenes:
             self.scenes[name] = SCENE_REGISTRY[name].viewer(state=self.state)
-            self._holders[name].extend([self._caption(name), self.scenes[name]])
+            # on a projector the teacher says what the scene shows: its plots get the room
+            caption = [] if self.state.presentation else [self._caption(name)]
+            self._holders[name].extend([*caption, self.scenes[name]])
         return self.scenes[name]
 
     @staticmethod
@@ -149,9 +152,11 @@ class Explorer(Built):
         """A lesson step's scene stays covered until its answer is revealed (it would give the
         answer away); it keeps computing underneath, so it shows at once."""
         covered = self.state.step > 0 and not self.state.revealed
-        if covered:  # (its text is sent only to a page that follows the lesson)
+        if self.state.presentation:
+            self.stage.visible = covered
+        elif covered:  # (its text is sent only to a page that follows the lesson)
             self.cover.object = COVER_TEXT
-        self.cover.visible = covered
+        self.cover.visible = covered and not self.state.presentation
         self.tabs.visible = not covered
 
     @param.depends("state.scene", watch=True)
@@ -199,18 +204,26 @@ class Explorer(Built):
             "First start on this machine: the solver is still being compiled (up to a minute). "
             "Until then drops are computed in plain Python: the same results, a little slower."
         )
-        return [pn.pane.Alert(text, alert_type="info", sizing_mode="stretch_width")]
+        return [alert(text, alert_type="info", sizing_mode="stretch_width")]
 
     def sidebar(self) -> pn.Column:
-        """The controls (and a note while the solver compiles), for the page's sidebar."""
-        return pn.Column(
-            *self._compiling_notice(), self.lesson, self.controls, sizing_mode="stretch_width"
-        )
+        """The controls (and a note while the solver compiles), for the page's sidebar.
+
+        On a projector the sliders come first, within the screen's 720 px (the lesson's
+        question is then shown large in the main area, and the notice matters less than the
+        sliders the class watches)."""
+        if self.state.presentation:
+            parts = [self.controls, self.lesson, *self._compiling_notice()]
+        else:
+            parts = [*self._compiling_notice(), self.lesson, self.controls]
+        return pn.Column(*parts, sizing_mode="stretch_width")
 
     def layout(self) -> pn.viewable.Viewable:
         """The scenes under their lesson cover (the controls go into the page's sidebar,
         :meth:`page`)."""
-        return pn.Column(self.cover, self.tabs, sizing_mode="stretch_width")
+        projected = self.state.presentation
+        parts = [self.stage, self.lesson.answer_line] if projected else [self.cover]
+        return pn.Column(*parts, self.tabs, sizing_mode="stretch_width")
 
     def page(self) -> pn.template.BootstrapTemplate:
         """The served page: a template gives the viewport meta tag, a sidebar that folds away

@@ -16,11 +16,14 @@ import param
 
 from twoball import presets
 
-from .scene import Built, later
+from .scene import Built, alert, later
 from .state import ExplorerState
 
 HEIGHT = 1e4  # about a 1 m drop (twoball.presets), and the height of the shipped map
 TENNIS = presets.PRESETS["tennis"]
+# presentation mode: the question, its choices and the answer read from the back of a room
+PROJECTED = {"font-size": "30px", "line-height": "1.3"}
+PROJECTED_CHOICES = ":host { font-size: 30px; } :host input { width: 26px; height: 26px; }"
 
 
 @dataclass(frozen=True)
@@ -43,13 +46,14 @@ STEPS = (
         scene="drop",
         drop={"eps": 1.0, "eps12": None, "mu": 0.01, "tau_ratio": 1.0, "height": HEIGHT},
         look_for="Two perfectly bouncy balls, the top one a hundred times lighter, dropped "
-        "together with a small gap between them. The orange curve is the small ball's "
+        "together from 1 m with a small gap between them. The orange curve is the small ball's "
         "height, the blue one the big ball's, the dotted green line what the textbook predicts.",
         question="How high does the small ball go, compared with the height it was dropped from?",
         choices=("Back to the same height", "Twice as high", "About 4 times", "About 8 to 9 times"),
         answer=3,
-        explanation="About 8.5 times. The textbook argument (the independent contact model): "
-        "the big ball bounces off the floor first and meets the small ball still falling; "
+        explanation="About 8.5 times: dropped from 1.04 m, it rises to 8.8 m. The textbook "
+        "argument (the independent contact model): the big ball bounces off the floor first "
+        "and meets the small ball still falling; "
         "seen from the big ball, the small ball comes in at twice the fall speed and leaves at "
         "twice it, so it goes up at three times the fall speed: 3 x 3 = 9 times the height for "
         "a very light ball.",
@@ -75,7 +79,8 @@ STEPS = (
             "About 9 times as high",
         ),
         answer=2,
-        explanation="About 3.7 times, still far above the drop height, and just what the "
+        explanation="About 3.7 times (3.8 m from 1.04 m), still far above the drop height, and "
+        "just what the "
         "textbook prediction says for these balls (the green line): the two collisions are "
         "separate, the floor's first, then the balls'.",
     ),
@@ -89,9 +94,9 @@ STEPS = (
         question="Which bounce of the small ball is higher?",
         choices=("The first", "The second", "Both the same"),
         answer=1,
-        explanation="The second, about 5 times higher than the first: a delayed rebound. The "
-        "first bounce does not even reach the drop height, far below the textbook's "
-        "prediction (the green line, 6.6 times).",
+        explanation="The second, about 5 times higher than the first (5.0 m against 0.92 m): a "
+        "delayed rebound. The first bounce does not even reach the 1 m it was dropped from, far "
+        "below the textbook's prediction (the green line, 6.6 m).",
     ),
     Step(
         title="Why: several contacts in one collision",
@@ -159,7 +164,7 @@ class Lesson(Built):
             stylesheets=[":host label { white-space: normal; }"],  # long answers wrap, not cut
         )
         self.reveal = pn.widgets.Button(label="Reveal the answer", color="primary")
-        self.answer = pn.pane.Alert("", visible=False, sizing_mode="stretch_width")
+        self.answer = alert("", visible=False, sizing_mode="stretch_width")
         self.previous = pn.widgets.Button(label="< Previous", width=110)
         self.next = pn.widgets.Button(label="Next >", color="primary", width=110)
         self.start = pn.widgets.Button(label="Start the lesson", color="primary")
@@ -170,9 +175,23 @@ class Lesson(Built):
         self.next.on_click(
             lambda _: later(lambda: self._go((self.state.step + 1) % (len(STEPS) + 1)))
         )
-        self.start.on_click(lambda _: later(lambda: self._go(1)))
+        self.start.on_click(lambda _: later(self._begin))
         self.choices.param.watch(self._chosen, "value")
+        # presentation mode: the question and its choices fill the main area while the class
+        # predicts (:meth:`stage`), and the reveal puts a large one-line answer above the scene
+        self.question = pn.pane.Markdown(sizing_mode="stretch_width", styles=PROJECTED)
+        self.answer_line = pn.pane.Markdown(
+            visible=False, sizing_mode="stretch_width", styles=PROJECTED
+        )
+        if self.state.presentation:
+            self.choices.stylesheets = [*self.choices.stylesheets, PROJECTED_CHOICES]
         self._show()
+
+    def _begin(self) -> None:
+        """The lesson's first step, in metres and seconds: a class thinks in them (the
+        dimensionless view stays one click away, in the controls)."""
+        self.state.units = "SI"
+        self._go(1)
 
     def _go(self, step: int) -> None:
         """Go to ``step`` (1..len(STEPS)), setting its drop and scene; 0 leaves the lesson."""
@@ -184,16 +203,32 @@ class Lesson(Built):
             self.state.param.update(step=0, revealed=False)
 
     def _chosen(self, event: param.parameterized.Event) -> None:
-        self.reveal.disabled = event.new is None or self.answer.visible
+        self.reveal.disabled = self._waits_for_a_choice() or self.answer.visible
+
+    def _waits_for_a_choice(self) -> bool:
+        """A student alone predicts first (the answer waits for a choice); in front of a class
+        (presentation mode) the prediction is the room's, said aloud, and the teacher reveals
+        when ready (a clicker's key does)."""
+        return not self.state.presentation and self.choices.value is None
 
     def _reveal(self) -> None:
         shown = STEPS[self.state.step - 1]
-        right = self.choices.value == shown.choices[shown.answer]
-        verdict = "Right." if right else f"Not quite: {shown.choices[shown.answer].lower()}."
+        correct = shown.choices[shown.answer]
+        if self.choices.value is None:
+            verdict = f"The answer: {correct.lower()}."
+        elif self.choices.value == correct:
+            verdict = "Right."
+        else:
+            verdict = f"Not quite: {correct.lower()}."
         self.answer.param.update(
             object=f"**{verdict}** {shown.explanation}",
-            alert_type="success" if right else "warning",
+            alert_type="success" if self.choices.value == correct else "warning",
             visible=True,
+        )
+        self.answer_line.param.update(
+            # (one line: a choice's gloss after its colon is left to the card's explanation)
+            object=f"**Answer: {correct.split(':')[0]}**",
+            visible=self.state.presentation,
         )
         self.reveal.disabled = True
         self.choices.disabled = True
@@ -206,28 +241,37 @@ class Lesson(Built):
         for widget in (self.choices, self.reveal, self.previous, self.next):
             widget.visible = lesson_on
         self.start.visible = not lesson_on
-        self.answer.visible = False
+        self.answer.visible = self.answer_line.visible = False
         if not lesson_on:
             self.heading.object = (
                 "A guided path through the demonstration in six steps: predict, then see."
             )
             return
         shown = STEPS[step - 1]
-        self.heading.object = (
-            f"**Step {step} of {len(STEPS)}: {shown.title}**\n\n{shown.look_for}\n\n"
-            f"*{shown.question}*"
-        )
+        title = f"**Step {step} of {len(STEPS)}: {shown.title}**"
+        if self.state.presentation:  # the rest is large in the main area (stage)
+            self.heading.object = title
+            self.question.object = f"{shown.look_for}\n\n**{shown.question}**"
+        else:
+            self.heading.object = f"{title}\n\n{shown.look_for}\n\n*{shown.question}*"
         self.choices.param.update(options=list(shown.choices), value=None, disabled=False)
-        self.reveal.disabled = True
+        self.reveal.disabled = self._waits_for_a_choice()
         self.previous.disabled = step == 1
         self.next.label = "Next >" if step < len(STEPS) else "End the lesson"
 
+    def stage(self) -> pn.Column:
+        """The step's question and choices, large, for the main area of a projected page
+        (presentation mode; the card then keeps the title, the answer and the buttons)."""
+        return pn.Column(
+            self.question, self.choices, self.reveal, sizing_mode="stretch_width", visible=False
+        )
+
     def layout(self) -> pn.viewable.Viewable:
+        asks = [] if self.state.presentation else [self.choices, self.reveal]
         return pn.Card(
             self.heading,
             self.start,
-            self.choices,
-            self.reveal,
+            *asks,
             self.answer,
             pn.Row(self.previous, self.next),
             title="Lesson",

@@ -8,10 +8,14 @@ from .scene import send_without_delay
 
 # app/static/ (Bokeh serves it): history.js, Back and Forward rebuild the page from the URL they
 # go to (the URL follows the state; nothing told the server when it went back); keys.js, a
-# presentation clicker's keys drive the lesson
+# presentation clicker's keys drive the lesson; a11y.js, names and a focus ring the widgets lack
 pn.extension(
     notifications=False,
-    js_files={"history": "app/static/history.js", "keys": "app/static/keys.js"},
+    js_files={
+        "history": "app/static/history.js",
+        "keys": "app/static/keys.js",
+        "a11y": "app/static/a11y.js",
+    },
 )
 
 # Panel's models name their style sheets on its CDN unless the document says where the server

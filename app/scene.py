@@ -6,13 +6,20 @@ import holoviews as hv
 import numpy as np
 import panel as pn
 import param
-from bokeh.models import CustomJS
+from bokeh.models import CustomJS, LabelSet, Span
 
 from .state import ExplorerState
 
 hv.renderer("bokeh")  # the plotting backend of every scene, also without ``panel serve``
 
 MODEL_PARAMETERS = ("eps", "eps12", "mu", "tau_ratio", "height")
+# Presentation mode (?present=1) lays every scene out for the smaller projector, 1280 x 720
+# (1366 x 768 then fits too): about 560 px are left under the header and the tabs, so each
+# scene's plots get a height of their own there, and lines and markers are drawn bolder.
+PROJECTOR_LINE_WIDTH = 4
+# Bootstrap's pale alert text (cyan on pale cyan) fails WCAG contrast (axe-core): darker text
+ALERT_CSS = ":host, :host * { color: #1b1e21 !important; }"
+PROJECTOR_MARKER_SIZE = 14
 
 
 def later(callback) -> None:
@@ -155,18 +162,39 @@ def on_screen(values) -> np.ndarray:
 
 
 def readable(fig, presentation: bool) -> None:
-    """Font sizes of a Bokeh figure: for a screen, or for a room (tick labels >= 16 px)."""
-    ticks, labels, title = ("16pt", "18pt", "20pt") if presentation else ("10pt", "11pt", "12pt")
+    """Font sizes of a Bokeh figure: for a screen, or for a room (tick labels >= 16 px, and
+    lines, markers and labels drawn bold enough for the back of the room)."""
+    ticks, labels, title = ("16pt", "18pt", "18pt") if presentation else ("10pt", "11pt", "12pt")
     for axis in fig.axis:
         axis.major_label_text_font_size = ticks
         axis.axis_label_text_font_size = labels
+        # (16 pt labels on a plot half a projector wide ran into each other)
+        if presentation and hasattr(axis.ticker, "desired_num_ticks"):
+            axis.ticker.desired_num_ticks = 4
     fig.title.text_font_size = title
     for legend in fig.legend:
         legend.label_text_font_size = ticks
+    if presentation:
+        # (not the balls' outlines: a thick ring would hide a small ball)
+        marks = [r.glyph for r in fig.renderers if not hasattr(r.glyph, "radius")]
+        # (not the time cursor, a vertical span: thick, it hid the curves it crossed)
+        spans = [a for a in fig.center if isinstance(a, Span) and a.dimension == "width"]
+        for mark in [*marks, *spans]:
+            if isinstance(getattr(mark, "line_width", None), int | float):
+                mark.line_width = max(mark.line_width, PROJECTOR_LINE_WIDTH)
+            if isinstance(getattr(mark, "size", None), int | float):
+                mark.size = max(mark.size, PROJECTOR_MARKER_SIZE)
+        for labels_drawn in (a for a in fig.center if isinstance(a, LabelSet)):
+            labels_drawn.text_font_size = ticks
 
 
 def font_sizes(presentation: bool) -> dict[str, int]:
     """HoloViews' ``fontsize`` option, the same sizes as :func:`readable`."""
     if presentation:
-        return {"ticks": "16pt", "labels": "18pt", "title": "20pt", "legend": "16pt"}
+        return {"ticks": "16pt", "labels": "18pt", "title": "18pt", "legend": "16pt"}
     return {"ticks": "10pt", "labels": "11pt", "title": "12pt", "legend": "10pt"}
+
+
+def alert(text: str = "", **params) -> pn.pane.Alert:
+    """A Panel alert with text dark enough to read (:data:`ALERT_CSS`)."""
+    return pn.pane.Alert(text, stylesheets=[ALERT_CSS], **params)

@@ -46,6 +46,9 @@ CAPTION_HELP = (
 )
 
 
+PROJECTOR_PLOT_HEIGHT = 340  # presentation mode (scene.py)
+
+
 class StackScene(Scene):
     """Every ball's height to the top ball's second apex, the ICM chain, an animation."""
 
@@ -57,21 +60,22 @@ class StackScene(Scene):
         self.result: StackResult | None = None
         self.times = np.zeros(1)
         state = self.state.param
+        # on a projector the sliders stand in a column beside the plots (layout), with short
+        # names: their 20 px titles do not wrap
+        ratio = "mass ratio (each ball / the one below)"
+        if self.state.presentation:
+            ratio = "mass ratio"
         self.widgets = pn.FlexBox(  # wraps: side by side on a wide screen, stacked on a phone
             # each recomputes the stack on release only (not at every step of a drag)
-            ReleasedIntSlider.from_param(state.balls, name="balls N", width=260, throttled=True),
+            ReleasedIntSlider.from_param(state.balls, name="balls N", width=240, throttled=True),
             ReleasedSlider.from_param(
-                state.stack_ratio,
-                name="mass ratio (each ball / the one below)",
-                step=0.01,
-                width=260,
-                throttled=True,
+                state.stack_ratio, name=ratio, step=0.01, width=240, throttled=True
             ),
             ReleasedSlider.from_param(
-                state.stack_eps, name="eps", step=0.01, width=260, throttled=True
+                state.stack_eps, name="eps", step=0.01, width=240, throttled=True
             ),
             ReleasedSlider.from_param(
-                state.stack_gap, name="gap td/tau_f", step=0.05, width=260, throttled=True
+                state.stack_gap, name="gap td/tau_f", step=0.05, width=240, throttled=True
             ),
             pn.widgets.RadioButtonGroup.from_param(state.force, name="force", width=200),
             flex_wrap="wrap",
@@ -102,6 +106,8 @@ class StackScene(Scene):
         self.animation = self._animation_figure()
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)
+        if self.state.presentation:  # plots and player within 720 px (scene.py)
+            self.heights.height = self.animation.height = PROJECTOR_PLOT_HEIGHT
 
     def _heights_figure(self):
         fig = figure(
@@ -255,14 +261,21 @@ class StackScene(Scene):
         heights = pn.pane.Bokeh(
             self.heights, sizing_mode="stretch_width", styles={"flex": "1 1 340px"}
         )
-        plots = pn.FlexBox(
-            heights, pn.pane.Bokeh(self.animation), sizing_mode="stretch_width", flex_wrap="wrap"
-        )
+        animation = pn.pane.Bokeh(self.animation)
+        caption = pn.pane.Markdown(CAPTION_HELP, sizing_mode="stretch_width")
+        if self.state.presentation:
+            plots = pn.Row(
+                pn.Column(
+                    pn.Row(heights, animation, sizing_mode="stretch_width"),
+                    self.player,
+                    sizing_mode="stretch_width",
+                ),
+                pn.Column(self.widgets, width=250),
+                sizing_mode="stretch_width",
+            )
+            return pn.Column(self.summary, plots, caption, sizing_mode="stretch_width")
+        # side by side on a wide screen, stacked on a phone
+        plots = pn.FlexBox(heights, animation, sizing_mode="stretch_width", flex_wrap="wrap")
         return pn.Column(
-            self.widgets,
-            self.summary,
-            plots,
-            self.player,
-            pn.pane.Markdown(CAPTION_HELP, sizing_mode="stretch_width"),
-            sizing_mode="stretch_width",
+            self.widgets, self.summary, plots, self.player, caption, sizing_mode="stretch_width"
         )

@@ -149,7 +149,9 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
         text = query["step"]
         if text.isdigit() and 1 <= int(text) <= len(STEPS):
             shown = STEPS[int(text) - 1]
+            # a lesson speaks metres unless the URL asks otherwise
             values |= {**shown.drop, "scene": shown.scene, "step": int(text)}
+            values.setdefault("units", "SI")
         else:
             messages.append(
                 f"URL step: must be a lesson step from 1 to {len(STEPS)}; got {text[:40]!r}."

@@ -88,7 +88,7 @@ def test_report_command_prints_the_table(capsys):
     assert main(["report"]) == 0
     out = capsys.readouterr().out
     lines = [line for line in out.splitlines() if line.startswith("| ")]
-    assert len(lines) == 2 + 8
+    assert len(lines) == 2 + 8 + 4 * 2  # and the Hertz rows of the two shipped Hertz cubes
     for value in PAPER_VALUES:
         assert f"| {value} |" in out
     share = re.search(r"\| 12\.3 % \| ([\d.]+) % \((\d+) of (\d+)\)", out)

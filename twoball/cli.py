@@ -22,8 +22,9 @@ import sys
 from collections.abc import Callable
 
 from twoball.batch.sweep import DIMS as SWEEP_AXES
+from twoball.batch.sweep import FORCES as SWEEP_FORCES
 from twoball.batch.sweep import MAX_DROPS as MAX_SWEEP_DROPS
-from twoball.batch.sweep import parse_number
+from twoball.batch.sweep import MAX_HERTZ_DROPS, parse_number
 from twoball.errors import ParameterError, SolverError, Status
 from twoball.model import DEFAULT_HEIGHT, Parameters, allowed_range
 
@@ -242,7 +243,8 @@ def _add_stack(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--method",
         default="compiled",
-        help="with --force hertz: compiled (default) or DOP853 (scipy's, the reference)",
+        help="with --force hertz: compiled (default) or DOP853 (scipy's, the reference); the "
+        "linear force has one method, the exact solver, and refuses any other",
     )
     parser.add_argument("--until", type=_until, default="second", help="first, second or a time")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
@@ -362,13 +364,34 @@ def _add_sweep(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--scheduler", default=None, help="Dask distributed scheduler address")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.add_argument(
-        "--force", action="store_true", help=f"undertake more than {MAX_SWEEP_DROPS:,} drops"
+        "--force",
+        nargs="?",
+        const="",
+        default="linear",
+        type=_sweep_force,
+        metavar="linear|hertz",
+        help="the contact force: linear (default, the exact solver) or hertz (two balls, the "
+        "compiled Hertz path; --height is then in Hertz units, docs/model.md). Given with no "
+        "value, as before: the same as --large",
+    )
+    parser.add_argument(
+        "--large",
+        action="store_true",
+        help=f"undertake more than {MAX_SWEEP_DROPS:,} drops (hertz: more than "
+        f"{MAX_HERTZ_DROPS:,}), about an hour's work",
     )
     parser.set_defaults(func=_sweep)
 
 
+def _sweep_force(text: str) -> str:
+    """``sweep --force``: linear or hertz (argparse reports anything else)."""
+    if text not in SWEEP_FORCES:
+        raise argparse.ArgumentTypeError(f"must be linear or hertz; got {text!r}")
+    return text
+
+
 def _sweep(args: argparse.Namespace) -> int:
-    from twoball.batch.sweep import Grid, parse_axis, plan, sweep
+    from twoball.batch.sweep import Grid, max_drops, parse_axis, plan, sweep
 
     axes = [parse_axis(name, getattr(args, name)) for name in SWEEP_AXES]
     chunks = None
@@ -379,11 +402,15 @@ def _sweep(args: argparse.Namespace) -> int:
             raise ParameterError(
                 f"chunks must be three integers E,M,T; got {args.chunks!r}"
             ) from None
-    grid = Grid(*axes, height=args.height, eps12=args.eps12, chunks=chunks, dtype=args.dtype)
+    force = args.force or "linear"  # "": --force given bare, the old --large
+    grid = Grid(
+        *axes, height=args.height, eps12=args.eps12, chunks=chunks, dtype=args.dtype, force=force
+    )
     undertaking = plan(grid, args.workers or os.cpu_count() or 1)
-    if grid.size > MAX_SWEEP_DROPS and not args.force:
+    if grid.size > max_drops(grid) and not (args.large or args.force == ""):
         raise ParameterError(
-            f"refusing {undertaking}: more than {MAX_SWEEP_DROPS:,} drops needs --force"
+            f"refusing {undertaking}: more than {max_drops(grid):,} drops needs --large "
+            "(or --force with no value)"
         )
     print(f"sweep {args.store}: {undertaking}", flush=True)  # on stdout: --quiet keeps it
     try:
@@ -416,13 +443,24 @@ def _add_report(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--contacts-cube", type=_path, default="contacts", help="cube name or .zarr path (contacts)"
     )
+    parser.add_argument(
+        "--hertz-cubes",
+        type=_path,
+        default=None,
+        help="Hertz cubes, comma-separated names or .zarr paths, or none (default: the shipped "
+        "hertz-h1e2,hertz-h1e4)",
+    )
     parser.set_defaults(func=_report)
 
 
 def _report(args: argparse.Namespace) -> int:
     from twoball.studies.report import markdown, paper_table
 
-    print(markdown(paper_table(args.paper_cube, args.contacts_cube)))
+    hertz = None  # the shipped Hertz cubes
+    if args.hertz_cubes is not None:
+        names = [part.strip() for part in args.hertz_cubes.split(",")]
+        hertz = () if names == ["none"] else tuple(names)
+    print(markdown(paper_table(args.paper_cube, args.contacts_cube, hertz)))
     return 0
 
 

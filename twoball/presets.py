@@ -33,6 +33,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from twoball.model import damping_ratios, floor_contact_time
+
 GRAVITY = 9.81  # m/s^2
 BASKETBALL_MASS = 0.6085  # kg, FIBA mid-range
 STIFFNESS = 6.0e4  # N/m, order of magnitude (see the module docstring)
@@ -104,3 +106,33 @@ def height_from_metres(metres: float) -> float:
 def metres_from_height(height: float) -> float:
     """The drop height in metres of a dimensionless H."""
     return height * length_scale()
+
+
+@dataclass(frozen=True)
+class BallPair:
+    """A preset in SI units: the bodies and contacts behind its dimensionless parameters."""
+
+    m1: float  # kg, the basketball
+    m2: float  # kg, the ball on top
+    stiffness: float  # N/m, both contacts
+    damping_floor: float  # N s/m, c01
+    damping_balls: float  # N s/m, c12
+    floor_contact_ms: float  # one floor contact of the basketball
+    drop_height: float  # dimensionless H of a drop from DEFAULT_DROP_METRES
+
+
+def ball_pair(preset: Preset) -> BallPair:
+    """The masses, stiffness and dashpots of ``preset`` (docs/model.md, "Bodies, coordinates,
+    forces" and "Restitution and damping"): the contact force is k eta + c eta' in newtons,
+    f = eta + 2 zeta eta' in units of m1 g, so c = 2 zeta sqrt(k m1) for either contact."""
+    zeta01, zeta12 = damping_ratios(preset.eps, preset.eps12, preset.mu)
+    scale = 2.0 * math.sqrt(STIFFNESS * BASKETBALL_MASS)
+    return BallPair(
+        m1=BASKETBALL_MASS,
+        m2=preset.mu * BASKETBALL_MASS,
+        stiffness=STIFFNESS,
+        damping_floor=scale * zeta01,
+        damping_balls=scale * zeta12,
+        floor_contact_ms=1e3 * floor_contact_time(zeta01) * time_scale(),
+        drop_height=height_from_metres(DEFAULT_DROP_METRES),
+    )

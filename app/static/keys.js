@@ -1,6 +1,7 @@
 // A presentation clicker drives the lesson without a mouse. Clickers send PageDown and PageUp
-// (some the right and left arrows): forward reveals the answer once a prediction is chosen,
-// else goes to the next step (or ends the lesson); back goes to the previous step. Only while
+// (some the right and left arrows): forward reveals the answer while it can be revealed (in
+// presentation mode at once, elsewhere once a prediction is chosen), else goes to the next
+// step (or ends the lesson); back goes to the previous step. Only while
 // the lesson runs (its buttons are on the page), and never where the key belongs to the field
 // that has the focus: any key in a text field, an arrow on a slider, a radio choice or a list.
 (() => {

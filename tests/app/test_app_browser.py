@@ -206,6 +206,34 @@ def test_metres_and_seconds_and_a_preset(browser, app_server, artifacts):
         context.close()
 
 
+def test_a_pinned_drop_and_the_next_one_are_compared(browser, app_server, artifacts):
+    """Tennis pinned, then ping-pong: the plot holds both (the pinned one dashed, in the
+    legend) and the summary both drops, in metres."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app", viewport=(1366, 768))
+    try:
+        before = fingerprint(page)
+        page.locator("select").first.select_option(label="Tennis ball on a basketball")
+        before = wait_for_change(page, before)
+        page.get_by_role("button", name="Pin this drop to compare").click()
+        page.get_by_role("button", name="Unpin the dashed drop").wait_for()
+        pinned = page.get_by_text("Pinned (dashed), tennis ball on a basketball:")
+        pinned.wait_for()
+        before = wait_for_change(page, before)  # the pinned drop drawn
+        page.locator("select").first.select_option(label="Ping-pong ball on a basketball")
+        wait_for_change(page, before)
+        pinned.scroll_into_view_if_needed()
+        summary = page.get_by_text(re.compile("Now: h1")).locator("..").inner_text()
+        firsts = re.findall(r"h1 = ([\d.]+) m", summary)
+        assert len(firsts) == 2 and firsts[0] != firsts[1], summary  # ping-pong, tennis
+        dashed = sources_with(page, "x1", "x2")
+        assert len([s for s in dashed if len(s["x2"]) > 100]) == 2  # both drops drawn
+        page.screenshot(path=artifacts / "compare_two_drops.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
 def test_the_server_logged_no_error(app_server, browser):
     """No error in the server's log, apart from Tornado reporting that a page closed by a test
     went away while a message to it was in flight (a client leaving, not a server error)."""

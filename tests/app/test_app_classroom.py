@@ -240,6 +240,39 @@ def test_presentation_mode_fits_a_projector(browser, app_server, artifacts):
         context.close()
 
 
+@pytest.mark.parametrize("size", [(1280, 720), (1366, 768)], ids=["1280x720", "1366x768"])
+@pytest.mark.parametrize("scene", list(SCENE_REGISTRY))
+def test_presentation_mode_shows_each_scene_on_one_screen(
+    browser, app_server, artifacts, scene, size
+):
+    """On a projector, every plot of the scene and the sliders that drive it lie inside the
+    window: the teacher never scrolls while the class watches. Text is >= 18 px."""
+    base, _ = app_server
+    width, height = size
+    url = f"{base}/app?present=1&scene={scene}"
+    context, page, errors = open_page(browser, url, viewport=size)
+    try:
+        if scene == "accuracy":  # its figure comes with the results (a few seconds)
+            page.get_by_text("Computing:").wait_for(state="hidden", timeout=120_000)
+        page.wait_for_timeout(800)
+        plots = [
+            c for c in deep_query(page, "canvas")
+            if c["visible"] and c["width"] > 100 and c["height"] > 100
+        ]  # fmt: skip
+        sliders = [s for s in deep_query(page, ".noUi-target") if s["visible"]]
+        expected = 4 if scene == "stack" else 3  # the two-ball sliders, or the stack's
+        assert plots and len(sliders) >= expected, (plots, sliders)
+        shown = [(round(c["right"]), round(c["bottom"])) for c in plots + sliders]
+        assert all(r <= width and b <= height for r, b in shown), shown
+        assert page.evaluate("parseFloat(getComputedStyle(document.body).fontSize)") >= 18
+        shots = artifacts / "projector"
+        shots.mkdir(exist_ok=True)
+        page.screenshot(path=shots / f"{scene}-{width}x{height}.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
 def test_a_long_query_string_gets_the_page_and_a_short_message(browser, app_server, artifacts):
     """Defect 12: 40 kB of query (a bad eps of 10 000 digits and an unknown key) opens the page
     with one message that quotes the bad value cut short, and the URL kept in step. (Panel's

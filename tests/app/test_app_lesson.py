@@ -13,6 +13,7 @@ from playwright.sync_api import expect
 import twoball
 from app.lesson import STEPS
 from app.state import ExplorerState, read_query
+from twoball import presets
 
 SIZES = {"projector": (1366, 768), "desktop": (1920, 1080), "phone": (390, 844)}
 
@@ -32,9 +33,15 @@ def test_the_answers_quote_the_solver():
     assert abs(tennis.summary()["h1_over_icm"] - 1) < 0.05  # "just what the textbook says"
     assert ping_pong.delayed_rebound and round(ping_pong.h2_over_h1) == 5
     assert ping_pong.h1_over_drop < 1  # "does not even reach the drop height"
-    icm_ratio = ping_pong.h_icm / ping_pong.drop.x2_0
-    assert round(icm_ratio, 1) == 6.6 and "6.6 times" in STEPS[2].explanation
     assert close_up.contacts_first == 4 and STEPS[3].choices[STEPS[3].answer] == "4 times"
+    metres = presets.length_scale()  # the lesson is shown in metres
+    assert f"from {textbook.x2_0 * metres:.2f} m, it rises to {textbook.h1 * metres:.1f} m" in (
+        STEPS[0].explanation
+    )
+    assert f"{tennis.h1 * metres:.1f} m from {tennis.x2_0 * metres:.2f} m" in STEPS[1].explanation
+    pair = f"{ping_pong.h2 * metres:.1f} m against {ping_pong.h1 * metres:.2f} m"
+    assert pair in STEPS[2].explanation and round(ping_pong.x2_0 * metres) == 1
+    assert f"{ping_pong.h_icm * metres:.1f} m" in STEPS[2].explanation
     map_drop = _result(STEPS[4])
     assert map_drop.delayed_rebound and STEPS[4].drop["height"] == 1e4  # on the shipped map
 
@@ -43,6 +50,7 @@ def test_a_step_in_the_url_sets_its_drop_and_scene():
     for number, step in enumerate(STEPS, 1):
         values, messages = read_query({"step": str(number)}, ExplorerState())
         assert messages == [] and values["step"] == number and values["scene"] == step.scene
+        assert values["units"] == "SI"  # a lesson speaks metres
         assert all(values[name] == value for name, value in step.drop.items())
     for bad in ("0", str(len(STEPS) + 1), "two", "9" * 500):
         values, messages = read_query({"step": bad}, ExplorerState())
@@ -130,7 +138,8 @@ def test_every_step_opens_from_its_url(browser, app_server, artifacts, size):
 
 @pytest.mark.browser
 def test_a_presentation_clicker_drives_the_lesson(browser, app_server, artifacts):
-    """PageDown reveals the answer once a prediction is chosen, then goes on; PageUp goes back;
+    """PageDown reveals the answer (chosen or not, in presentation mode), then goes on; PageUp
+    goes back;
     the right and left arrows do the same; a key that belongs to the focused field (typing in
     the drop height, an arrow on a slider) is left to it."""
     base, _ = app_server
@@ -147,18 +156,73 @@ def test_a_presentation_clicker_drives_the_lesson(browser, app_server, artifacts
         page.get_by_text(title.format(2)).wait_for()
         page.keyboard.press("PageUp")
         page.get_by_text(title.format(1)).wait_for()
-        page.keyboard.press("ArrowRight")  # (step 1 was revealed: the answer is kept)
+        # back on step 1, asked again: with no choice made, forward reveals (a projected
+        # lesson's prediction is the room's, said aloud), then goes on
+        expect(page.get_by_role("button", name="Reveal the answer")).to_be_enabled()
+        page.keyboard.press("ArrowRight")
+        page.get_by_text(f"Answer: {STEPS[0].choices[STEPS[0].answer]}", exact=True).wait_for()
+        page.keyboard.press("ArrowRight")
         page.get_by_text(title.format(2)).wait_for()
         page.keyboard.press("ArrowLeft")
         page.get_by_text(title.format(1)).wait_for()
         # the drop height's text field keeps its keys
         page.get_by_text("advanced", exact=True).click()
-        field = page.get_by_label("H (dimensionless drop height)")
+        field = page.get_by_label("drop height [m]")  # (a lesson speaks metres)
         field.click()
         page.keyboard.press("PageDown")
         page.keyboard.press("ArrowRight")
         page.wait_for_timeout(1000)
         expect(page.get_by_text(title.format(1))).to_be_visible()
+        assert errors == []
+    finally:
+        context.close()
+
+
+def _font_px(page, text: str) -> float:
+    return page.get_by_text(text, exact=True).first.evaluate(
+        "(el) => parseFloat(getComputedStyle(el).fontSize)"
+    )
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize("number", range(1, len(STEPS) + 1))
+def test_a_projected_step_asks_large_and_answers_in_one_large_line(
+    browser, app_server, artifacts, number
+):
+    """Presentation mode at 1280x720: while the class predicts, the question and its choices
+    are large in the main area (the scene hidden); a clicker's PageDown reveals with no choice
+    made (the room answered aloud): a large one-line answer above the scene, whose plots all
+    lie inside the window."""
+    base, _ = app_server
+    step = STEPS[number - 1]
+    shots = artifacts / "lesson"
+    shots.mkdir(exist_ok=True)
+    context, page, errors = open_page(
+        browser, f"{base}/app?step={number}&present=1", viewport=(1280, 720)
+    )
+    try:
+        question = page.get_by_text(step.question, exact=True)
+        question.wait_for()
+        box = question.bounding_box()
+        assert box["x"] > 330 and box["y"] + box["height"] <= 720  # the main area, on screen
+        assert _font_px(page, step.question) >= 28
+        for choice in step.choices:
+            choice_box = page.get_by_text(choice, exact=True).bounding_box()
+            assert choice_box["x"] > 330 and choice_box["y"] + choice_box["height"] <= 720
+            assert _font_px(page, choice) >= 28
+        assert _scene_canvases(page) == []  # covered
+        page.screenshot(path=shots / f"step{number}-projected-asked.png")
+        page.keyboard.press("PageDown")
+        answer = f"Answer: {step.choices[step.answer].split(':')[0]}"
+        page.get_by_text(answer, exact=True).wait_for()
+        assert _font_px(page, answer) >= 28
+        assert page.get_by_text(answer, exact=True).bounding_box()["height"] < 60  # one line
+        if step.scene == "accuracy":
+            page.get_by_text("Computing:").wait_for(state="hidden", timeout=120_000)
+        page.wait_for_timeout(1500)
+        plots = [c for c in _scene_canvases(page) if c["width"] > 100 and c["height"] > 100]
+        assert plots and all(c["bottom"] <= 720 and c["right"] <= 1280 for c in plots), plots
+        page.screenshot(path=shots / f"step{number}-projected-revealed.png")
         assert errors == []
     finally:
         context.close()

@@ -312,3 +312,33 @@ def test_accuracy_explains_a_drop_without_a_bounce():
     assert twoball.simulate(0.01, 1.0, 1.0).h1 is None  # the premise, from the library
     table = rendered(query).scenes["accuracy"].table.object
     assert "no bounce to measure" in table and "nan" not in table
+
+
+def test_a_pinned_drop_stays_under_the_next_one_in_the_units_on_screen():
+    """Tennis pinned, then ping-pong: both drawn (the pinned one dashed) and both summarised,
+    each as simulate gives it, in metres; unpinned, only the current drop is left."""
+    explorer = rendered()
+    explorer.controls.preset.value = "tennis"
+    scene = explorer.scenes["drop"]
+    scene.pin.clicks += 1
+    explorer.controls.preset.value = "ping-pong"
+    scene.current()
+    scene._draw()
+    metres = presets.length_scale()
+    runs = {}
+    for key in ("tennis", "ping-pong"):
+        p = presets.PRESETS[key]
+        height = presets.height_from_metres(1.0)
+        runs[key] = twoball.simulate(p.eps, p.mu, p.tau_ratio, eps12=p.eps12, height=height)
+    assert explorer.state.units == "SI"
+    pinned, now = scene.pinned_curves.data, scene.curves.data
+    assert np.max(pinned["x2"]) == pytest.approx(runs["tennis"].h2 * metres, rel=1e-6)
+    assert np.max(now["x2"]) == pytest.approx(runs["ping-pong"].h2 * metres, rel=1e-6)
+    text = scene.summary.object
+    assert "tennis ball on a basketball" in text.lower()
+    for key in ("tennis", "ping-pong"):
+        assert explorer.scenes["drop"]._drop_text(runs[key]).split("  \n")[0] in text
+    assert scene.heights.legend[0].items[-1].visible
+    scene.pin.clicks += 1
+    assert len(scene.pinned_curves.data["t"]) == 0 and "Pinned" not in scene.summary.object
+    assert not scene.heights.legend[0].items[-1].visible

@@ -44,6 +44,7 @@ from twoball.model import (
 from twoball.observables import ratios
 
 DIMS = ("eps", "mu", "tau_ratio")
+FORCES = ("linear", "hertz")  # the hertz force's cells: twoball/batch/hertz_sweep.py
 SPACINGS = ("linear", "log")
 DTYPES = ("float64", "float32")
 SOLVER = "exact"
@@ -51,6 +52,10 @@ SCHEDULER_TIMEOUT = "10s"  # to connect to a Dask scheduler
 PROGRESS_DIR = "_progress"  # a Zarr group holding one empty file per finished chunk
 # Drops a sweep undertakes without --force: over an hour on 2 cores at the rate below.
 MAX_DROPS = 100_000_000
+# The same with the Hertz force (about an hour on 2 cores at its rate,
+# twoball/batch/hertz_sweep.py); here, not there, so that the command line's help needs no Hertz
+# kernel (nor scipy) to start.
+MAX_HERTZ_DROPS = 4_000_000
 # Drops per second one local thread computes, end to end, for the plan's estimate: cautious (the
 # paper's 50^3 cube runs at 40 000-150 000/s on 2 threads depending on the machine's load,
 # docs/performance.md; heavier corners of the domain take longer per drop).
@@ -212,6 +217,10 @@ class Grid:
         as many eps values a chunk as make about CHUNK_DROPS drops (at least one).
     dtype : "float64" or "float32"
         The stored float type.
+    force : "linear" or "hertz"
+        The contact force: the linear one, solved exactly, or Hertz's (two balls, the compiled
+        Hertz path, :mod:`twoball.batch.hertz_sweep`; H then in Hertz units, and the corners are
+        checked against the Hertz domain).
 
     Examples
     --------
@@ -229,6 +238,7 @@ class Grid:
     eps12: float | None = None
     chunks: tuple[int, int, int] | None = None
     dtype: str = "float64"
+    force: str = "linear"
     axes: tuple[Axis, Axis, Axis] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -239,16 +249,23 @@ class Grid:
         check_value("height", self.height)
         if self.eps12 is not None:
             check_value("eps12", self.eps12)
+        if self.force not in FORCES:
+            raise ParameterError(f"force must be linear or hertz; got {self.force!r}")
         if self.dtype not in DTYPES:
             raise ParameterError(f"dtype must be float64 or float32; got {self.dtype!r}")
         if self.chunks is None:
             plane = self.mu.count * self.tau_ratio.count
-            slices = min(max(round(CHUNK_DROPS / plane), 1), self.eps.count)
+            drops = CHUNK_DROPS if self.force == "linear" else _hertz().CHUNK_DROPS
+            slices = min(max(round(drops / plane), 1), self.eps.count)
             object.__setattr__(self, "chunks", (slices, self.mu.count, self.tau_ratio.count))
         chunks = tuple(self.chunks)
         if len(chunks) != 3 or not all(isinstance(c, int) and c >= 1 for c in chunks):
             raise ParameterError(f"chunks must be three integers >= 1; got {self.chunks!r}")
         object.__setattr__(self, "chunks", chunks)
+        if self.force == "hertz":  # the Hertz domain, at the corners too (hertz_sweep)
+            corners = [(a.start, a.stop) for a in self.axes]
+            _hertz().check_corners(*corners, self.height, self.eps12)
+            return
         # every drop must lie in the domain double precision carries; its rounding ratio is
         # monotone along each axis, so the grid's corners decide (docs/model.md)
         for eps, mu, tau_ratio in product(*((a.start, a.stop) for a in self.axes)):
@@ -274,7 +291,7 @@ class Grid:
         """Everything that determines the stored numbers, as plain JSON values."""
         from twoball.version import __version__
 
-        return {
+        arguments = {
             "axes": {axis.name: asdict(axis) for axis in self.axes},
             "height": self.height,
             "eps12": self.eps12,
@@ -283,6 +300,9 @@ class Grid:
             "solver": SOLVER,
             "twoball_version": __version__,
         }
+        if self.force != "linear":  # only then: linear stores made before keep resuming
+            arguments.update(force=self.force, solver=_hertz().SOLVER)
+        return arguments
 
     def command(self, store: str | os.PathLike) -> str:
         """The ``twoball sweep`` command that computes this grid into ``store``."""
@@ -293,6 +313,8 @@ class Grid:
         if self.eps12 is not None:
             words += ["--eps12", repr(self.eps12)]
         words += ["--chunks", ",".join(str(c) for c in self.chunks), "--dtype", self.dtype]
+        if self.force != "linear":
+            words += ["--force", self.force]
         return " ".join(words)
 
 
@@ -345,6 +367,8 @@ def compute_block(
 def compute_chunk(grid: Grid, index: tuple[slice, slice, slice]) -> dict[str, np.ndarray]:
     """One chunk of ``grid`` (runs on a worker)."""
     values = [axis.values()[part] for axis, part in zip(grid.axes, index, strict=True)]
+    if grid.force == "hertz":
+        return _hertz().compute_block(*values, height=grid.height, eps12=grid.eps12)
     return compute_block(*values, height=grid.height, eps12=grid.eps12)
 
 
@@ -389,7 +413,10 @@ def _template(grid: Grid, command: str):
         "sweep_arguments": json.dumps(grid.arguments(), sort_keys=True),
         "conventions": "a chunk is finished when _progress/<chunk index> exists",
     }
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    dataset = xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    if grid.force == "hertz":
+        _hertz().annotate(dataset, grid.height)
+    return dataset
 
 
 def _open_or_create(grid: Grid, store: Path) -> set[str]:
@@ -630,7 +657,8 @@ def plan(grid: Grid, workers: int) -> str:
     >>> plan(grid, 2).split(", about")[0]
     '125,000 drops (50 x 50 x 50)'
     """
-    seconds = grid.size / (DROPS_PER_WORKER_SECOND * workers)
+    rate = DROPS_PER_WORKER_SECOND if grid.force == "linear" else _hertz().DROPS_PER_WORKER_SECOND
+    seconds = grid.size / (rate * workers)
     stored = 4 if grid.dtype == "float32" else 8
     megabytes = grid.size * len(VARIABLES) * stored / 1e6
     shape = " x ".join(str(n) for n in grid.shape)
@@ -639,6 +667,18 @@ def plan(grid: Grid, workers: int) -> str:
         f"worker{'s' if workers > 1 else ''}, at most {megabytes:,.0f} MB stored "
         f"(before compression)"
     )
+
+
+def max_drops(grid: Grid) -> int:
+    """The drops a sweep of ``grid`` undertakes without being told to (about an hour's work)."""
+    return MAX_DROPS if grid.force == "linear" else MAX_HERTZ_DROPS
+
+
+def _hertz():
+    """:mod:`twoball.batch.hertz_sweep`, imported when a Hertz grid needs it."""
+    from twoball.batch import hertz_sweep
+
+    return hertz_sweep
 
 
 def _duration(seconds: float) -> str:

@@ -1,5 +1,5 @@
 """The compiled Hertz stack (docs/stacks.md, "How each force is solved"; docs/model.md, "The
-Hertz force"): the method of :mod:`twoball.hertz` in numba, with a different integrator.
+Hertz force"): the method of :mod:`twoball.stacks.hertz` in numba, with a different integrator.
 
 Free flight is exact (parabolas; touches, clamps and apexes are roots of quadratics). A phase
 with a contact active is integrated by DOP853 (the coefficients of Hairer's and scipy's, seventh
@@ -14,13 +14,13 @@ scipy's was off by up to 1e-6 (docs/accuracy.md, "The Hertz stack"):
 - **The error is measured on that w against the contact's own scale** (rtol :data:`RTOL`, atol
   rtol times the largest compression and speed the energy allows), not on heights of order H.
 
-No touch or release is stepped over: the certified steps of :mod:`twoball.hertz` (the energy,
+No touch or release is stepped over: the certified steps of :mod:`twoball.stacks.hertz` (the energy,
 which never rises, bounds every force; with the contacts active in a phase that bounds eta''
 towards each switch; each step keeps eta + eta' h - M h^2 / 2 on its side), ported as they are;
 a span certified so holds for every step inside it, so :data:`AHEAD` steps are certified at once.
 The clamp (1 + lam delta' = 0) is looked for at :data:`PROBES` points of the dense output of
 each step in which a proven bound on eta'' lets it be reached, and refined by bisection on it:
-estimated, not proven (as in :mod:`twoball.hertz`).
+estimated, not proven (as in :mod:`twoball.stacks.hertz`).
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 
-from twoball.errors import SolverError, Status, phase_limit_hint
+from twoball.errors import ParameterError, SolverError, Status, phase_limit_hint
 
 # by module, not by name: jit.use_python_kernels swaps the kernels in their own modules
 from twoball.kernels import clusters
@@ -62,7 +62,8 @@ def simulate_stack(
         so (``success``, ``status``).
     method : "compiled" or "DOP853"
         With the Hertz force: the compiled integrator, or scipy's DOP853, kept as a reference
-        (:func:`twoball.stacks.hertz.simulate`).
+        (:func:`twoball.stacks.hertz.simulate`). The linear force has only "compiled" (its exact
+        solver): any other is refused with ParameterError.
 
     Returns
     -------
@@ -80,6 +81,11 @@ def simulate_stack(
     (True, 4)
     """
     stack = check_stack(mass_ratios, eps, tau_ratios, height=height, force=force)
+    if force == "linear" and method != "compiled":  # it was ignored, silently
+        raise ParameterError(
+            f"method {method!r} applies to the hertz force only (compiled or DOP853); the linear "
+            "force has one method, the exact solver (method='compiled')"
+        )
     apexes_wanted, t_end = stop_rule(until)
     times = None
     if t_eval is not None:

@@ -8,33 +8,12 @@ between the paper's number and ours (H, grid spacing, definitions).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from twoball.errors import ParameterError
+from twoball.studies.rows import Row, _grid_words, _percent
 
 CLOSE_UP = {"eps": 0.9, "mu": 0.01, "tau_ratio": 0.01}  # the paper's close-up figure
-
-
-@dataclass(frozen=True)
-class Row:
-    """One claim of the paper: its number, ours, and what differs between the two."""
-
-    claim: str
-    paper: str
-    ours: str
-    note: str
-
-
-def _percent(part: int, whole: int) -> str:
-    return f"{100.0 * part / whole:.1f} % ({part} of {whole})" if whole else "no cases"
-
-
-def _grid_words(cube) -> str:
-    spacing = {cube[d].attrs.get("spacing", "?") for d in ("eps", "mu", "tau_ratio")}
-    sizes = " x ".join(str(cube.sizes[d]) for d in ("eps", "mu", "tau_ratio"))
-    return f"{sizes} {'/'.join(sorted(spacing))} grid at H = {cube.attrs['height']:g}"
 
 
 def sweep_rows(cube) -> list[Row]:
@@ -142,16 +121,20 @@ def close_up_row() -> Row:
     )
 
 
-def paper_table(paper: str = "paper", contacts: str = "contacts") -> list[Row]:
+def paper_table(
+    paper: str = "paper", contacts: str = "contacts", hertz: tuple[str, ...] | None = None
+) -> list[Row]:
     """All rows of the table in docs/model.md, "The paper's sweep and its headline numbers", from
-    the named (or given) cubes."""
+    the named (or given) cubes, then the paper's three statistics on each Hertz cube (default:
+    the shipped ones, :mod:`twoball.studies.hertz_report`)."""
     from twoball.batch.cubes import load_cube
+    from twoball.studies.hertz_report import HERTZ_CUBES, hertz_rows
 
-    return [
-        *sweep_rows(load_cube(paper)),
-        contact_row(load_cube(contacts)),
-        close_up_row(),
-    ]
+    linear = load_cube(paper)
+    rows = [*sweep_rows(linear), contact_row(load_cube(contacts)), close_up_row()]
+    for name in HERTZ_CUBES if hertz is None else hertz:
+        rows += hertz_rows(load_cube(name), linear)
+    return rows
 
 
 def markdown(rows: list[Row]) -> str:
