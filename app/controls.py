@@ -252,9 +252,15 @@ class Controls(Built):
         self.eps12.param.update(value="" if s.eps12 is None else f"{s.eps12:.6g}")
 
     def layout(self) -> pn.viewable.Viewable:
-        advanced = pn.Card(
-            self.height, self.eps12, title="advanced", collapsed=True, sizing_mode="stretch_width"
-        )
+        # its inputs join the page when it is first opened (a folded card's Bokeh models
+        # cost every page its opening time, docs/performance.md)
+        advanced = pn.Card(title="advanced", collapsed=True, sizing_mode="stretch_width")
+
+        def opened(event: param.parameterized.Event) -> None:
+            if not event.new and not advanced.objects:
+                advanced.objects = [self.height, self.eps12]
+
+        advanced.param.watch(opened, "collapsed")
         return pn.Column(
             self.message,
             self.preset,

@@ -153,7 +153,7 @@ class Explorer(Built):
         answer away); it keeps computing underneath, so it shows at once."""
         covered = self.state.step > 0 and not self.state.revealed
         if self.state.presentation:
-            self.stage.visible = covered
+            self.lesson.ask(covered)
         elif covered:  # (its text is sent only to a page that follows the lesson)
             self.cover.object = COVER_TEXT
         self.cover.visible = covered and not self.state.presentation
@@ -222,7 +222,7 @@ class Explorer(Built):
         """The scenes under their lesson cover (the controls go into the page's sidebar,
         :meth:`page`)."""
         projected = self.state.presentation
-        parts = [self.stage, self.lesson.answer_line] if projected else [self.cover]
+        parts = [self.stage] if projected else [self.cover]
         return pn.Column(*parts, self.tabs, sizing_mode="stretch_width")
 
     def page(self) -> pn.template.BootstrapTemplate:

@@ -339,6 +339,7 @@ def test_a_pinned_drop_stays_under_the_next_one_in_the_units_on_screen():
     for key in ("tennis", "ping-pong"):
         assert explorer.scenes["drop"]._drop_text(runs[key]).split("  \n")[0] in text
     assert scene.heights.legend[0].items[-1].visible
+    assert scene.heights.legend[0].items[-1].label.value == "pinned drop"
     scene.pin.clicks += 1
     assert len(scene.pinned_curves.data["t"]) == 0 and "Pinned" not in scene.summary.object
     assert not scene.heights.legend[0].items[-1].visible
