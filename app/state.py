@@ -77,9 +77,26 @@ class ExplorerState(Parameters):
     force = param.Selector(
         default="linear", objects=["linear", "hertz"], doc="The contact force of the stack."
     )
+    # The map's force is its own, not the stack's ``force``: the map's Hertz is a lookup in the
+    # two shipped two-ball Hertz cubes (their own length unit, H 1e2 or 1e4), the stack's a
+    # live N-ball drop at the explorer's H; sharing one switch, choosing Hertz to look at the
+    # map would silently change the Stack scene (and a Stack-scene URL would reopen the map on
+    # Hertz). Each URL carries the force of its own scene (force, map_force).
+    map_force = param.Selector(
+        default="linear",
+        objects=["linear", "hertz"],
+        doc="The contact force of the delayed-rebound map (the shipped cube shown).",
+    )
 
     def __init__(self, **params):
         super().__init__(**(OPENING_DROP | params))
+
+    @param.depends("map_force", watch=True)
+    def _rewrite_the_url(self) -> None:
+        """The explorer rewrites the URL on a change of "scene" (among others) but does not
+        watch the parameters added since (app/explorer.py names its list): a re-trigger of
+        "scene" (same value, so no tab or scene changes) has it written."""
+        self.param.trigger("scene")
 
 
 def validate(name: str, value: object, fallback: float | None) -> tuple[float | None, str | None]:
@@ -124,15 +141,16 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
             values[name] = value
             if message:
                 messages.append(f"URL {key}: {message}")
-    if "force" in query:
-        forces = ExplorerState.param.force.objects
-        if query["force"] in forces:
-            values["force"] = query["force"]
-        else:
-            messages.append(
-                f"URL force: must be one of {', '.join(forces)}; got {query['force'][:40]!r}. "
-                "Using linear."
-            )
+    for name in ("force", "map_force"):
+        if name in query:
+            forces = ExplorerState.param[name].objects
+            if query[name] in forces:
+                values[name] = query[name]
+            else:
+                messages.append(
+                    f"URL {name}: must be one of {', '.join(forces)}; got "
+                    f"{query[name][:40]!r}. Using linear."
+                )
     if query.get("present") in ("1", "true", "yes"):
         values["presentation"] = True
     if "units" in query:
@@ -196,6 +214,8 @@ def url_query(state: ExplorerState) -> dict[str, str]:
     if state.scene == "stack":
         query |= {key: f"{getattr(state, name):.12g}" for name, key in STACK_URL_KEYS.items()}
         query["force"] = state.force
+    if state.scene == "map" and state.map_force != "linear":
+        query["map_force"] = state.map_force
     if state.step:
         query["step"] = str(state.step)
     if state.presentation:

@@ -342,3 +342,46 @@ def test_a_pinned_drop_stays_under_the_next_one_in_the_units_on_screen():
     scene.pin.clicks += 1
     assert len(scene.pinned_curves.data["t"]) == 0 and "Pinned" not in scene.summary.object
     assert not scene.heights.legend[0].items[-1].visible
+
+
+def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
+    """The map's Hertz force: a slice of hertz-h1e4 (or h1e2, whichever H is nearer the drop's)
+    at the eps nearest the drop's, each cell the library's Hertz two-ball drop; the note says
+    H is in the Hertz unit and tau_ratio counts the Hertz floor contact; the URL carries it."""
+    from app.delayed_map import shown_cube
+    from app.state import read_query, url_query
+
+    explorer = rendered({"eps": "0.83", "scene": "map", "map_force": "hertz"})
+    scene = explorer.scenes["map"]
+    assert scene.cube_name() == "hertz-h1e4"  # the drop's H = 1e4
+    cube = shown_cube("hertz-h1e4")
+    cube_eps = cube["eps"].values
+    assert scene.slice_eps == cube_eps[np.abs(cube_eps - 0.83).argmin()]
+    values = scene.slice["h2_over_h1"]
+    assert values.dims == ("mu", "tau_ratio") and values.shape == (50, 50)
+    for i, j in ((3, 40), (20, 10), (45, 45)):
+        mu, tau = float(values["mu"][i]), float(values["tau_ratio"][j])
+        direct = twoball.simulate_stack(
+            [mu], scene.slice_eps, tau, height=cube.attrs["height"], force="hertz"
+        )
+        assert float(values[i, j]) == pytest.approx(direct.h2 / direct.h1, rel=1e-6)
+    note = scene._note()
+    assert "Hertz force" in note and "Hertz length unit" in note and "hertz-h1e4" in note
+    assert "Hertz floor contact" in note
+    assert url_query(explorer.state)["map_force"] == "hertz"
+    assert read_query(url_query(explorer.state), explorer.state)[0]["map_force"] == "hertz"
+    # every pixel of the image is one of the slice's cells (none interpolated)
+    shown = scene._image(True, "h2_over_h1").dimension_values(2)
+    assert np.isin(shown[np.isfinite(shown)], values.values).all()
+    # a drop nearer H = 100: the other cube; a click still sets mu and tau_ratio
+    explorer.state.height = 300.0
+    scene.current()
+    assert scene.cube_name() == "hertz-h1e2" and "hertz-h1e2" in scene._note()
+    scene.tap.event(x=math.log10(0.05), y=math.log10(0.3))
+    assert explorer.state.mu == pytest.approx(0.05)
+    assert explorer.state.tau_ratio == pytest.approx(0.3)
+    # back to linear: the map cube again
+    explorer.state.map_force = "linear"
+    scene.current()
+    assert scene.cube_name() == "map" and "Hertz" not in scene._note()
+    assert "map_force" not in url_query(explorer.state)

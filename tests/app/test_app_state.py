@@ -94,3 +94,13 @@ def test_presets_follow_their_cited_drop_tests_and_masses():
             assert low <= getattr(preset, name) <= high
     # a 1 m drop of a basketball is of order H = 1e4 (model.md)
     assert 3e3 < presets.height_from_metres(1.0) < 3e4
+
+
+def test_the_map_force_round_trips_and_a_bad_one_is_reported():
+    state = ExplorerState(map_force="hertz")
+    state.scene = "map"
+    values, messages = read_query(url_query(state), ExplorerState())
+    assert messages == [] and values["map_force"] == "hertz"
+    values, messages = read_query({"map_force": "spring"}, ExplorerState())
+    assert "map_force" not in values
+    assert messages and messages[0].startswith("URL map_force: must be one of linear, hertz")
