@@ -478,9 +478,12 @@ class MapScene(Scene):
         return pn.Column(
             # wraps: on a phone the two side by side made the page scroll sideways
             pn.FlexBox(
-                self.choice, self.force, self.download, flex_wrap="wrap",
+                self.choice,
+                self.force,
+                self.download,
+                flex_wrap="wrap",
                 sizing_mode="stretch_width",
-            ),  # fmt: skip
+            ),
             self.note,
             self.figure,
             sizing_mode="stretch_width",

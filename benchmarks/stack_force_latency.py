@@ -52,9 +52,7 @@ async def measure(args) -> dict[tuple[str, int], list[float]]:
                     value = low + (high - low) * (0.3 + 0.6 * (move % 10) / 10)
                     sent = await client.move(slider, round(value, 2))
                     await asyncio.sleep(args.every)
-                    latency = last_patch_after(
-                        client, sent, time.monotonic(), not_the_move(client)
-                    )
+                    latency = last_patch_after(client, sent, time.monotonic(), not_the_move(client))
                     if move and latency == latency:  # (the first move of each: warm-up)
                         latencies[config].append(latency)
             for client in clients.values():
