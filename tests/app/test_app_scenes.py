@@ -385,3 +385,26 @@ def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
     scene.current()
     assert scene.cube_name() == "map" and "Hertz" not in scene._note()
     assert "map_force" not in url_query(explorer.state)
+
+
+def test_the_stack_scene_takes_eight_balls_and_eps_per_contact_under_advanced():
+    """Eight balls as the library computes them; eps per contact typed under "advanced" is
+    used, a bad entry shows a message and the slider's eps is used; the URL carries it."""
+    from app.state import url_query
+
+    explorer = rendered({"scene": "stack", "N": "8", "ratio": "0.3"})
+    scene = explorer.scenes["stack"]
+    expected = twoball.simulate_stack([0.3] * 7, 0.9, 0.2)
+    assert scene.result.h1 == expected.h1 and "8 balls" in scene.summary.object
+    assert scene.advanced.collapsed and not scene.eps_message.visible
+    eps = [0.9, 0.8, 0.7, 0.6, 0.5, 0.9, 0.8, 0.7]
+    scene.eps_contacts.value = ",".join(map(str, eps))
+    assert explorer.state.stack_eps_contacts == scene.eps_contacts.value
+    expected = twoball.simulate_stack([0.3] * 7, eps, 0.2)
+    assert scene.result.h1 == expected.h1 and "eps per contact 0.9, 0.8" in scene.summary.object
+    assert url_query(explorer.state)["eps_contacts"] == scene.eps_contacts.value
+    scene.eps_contacts.value = "0.9, 0.8"  # two values for eight balls
+    assert scene.eps_message.visible and "give 8 values for 8 balls" in scene.eps_message.object
+    assert scene.result.h1 == twoball.simulate_stack([0.3] * 7, 0.9, 0.2).h1  # the slider's
+    scene.eps_contacts.value = ""
+    assert not scene.eps_message.visible
