@@ -213,6 +213,7 @@ class MapScene(Scene):
         super().__init__(**params)
         self.slice: xr.Dataset | None = None
         self.slice_eps = float("nan")
+        self.slice_cube = ""  # the cube the slice is of (or computed on the axes of)
         self.computed = False  # the slice was computed for this drop (not the cube's)
         self.error: str | None = None
         self.choice = pn.widgets.Select(
@@ -317,7 +318,7 @@ class MapScene(Scene):
     def update(self) -> None:
         s = self.state
         try:
-            name = self.cube_name()
+            name = self.slice_cube = self.cube_name()
             self.slice_eps = nearest_eps(s.eps, name)
             if name != CUBE:  # a shipped Hertz cube, never computed here
                 self.computed = False
@@ -394,6 +395,10 @@ class MapScene(Scene):
         tau_dim = hv.Dimension("log_tau_ratio", label="log10 tau_d/tau_f")
         if self.slice is not None and variable not in self.slice.data_vars:
             self._stale = True  # a new variable: its slice is read now
+        if self.slice_cube != self.cube_name():
+            # a new force: the new figure's first frame (whose ranges the plot keeps) is drawn
+            # from the new cube, though the scene may hear of the change after the figure
+            self._stale = True
         if not self.active:  # rendered off screen: nothing is read until the map is opened
             # (the plot keeps its first ticker)
             blank = blank_image(mu_dim, tau_dim, variable, shown_cube(self.cube_name()))

@@ -102,7 +102,7 @@ class StackScene(Scene):
         self.advanced = pn.Card(
             self.eps_contacts,
             self.eps_message,
-            title="advanced",
+            title="advanced: eps per contact",
             collapsed=True,
             sizing_mode="stretch_width",
         )
