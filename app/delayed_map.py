@@ -464,6 +464,12 @@ class MapScene(Scene):
             "H": s.height if self.computed else shown_cube(name).attrs.get("height"),
             "eps12": (s.eps12 if self.computed else None) or "equal to eps",
             "source": "computed for this drop" if self.computed else shipped,
+            "force": "linear"
+            if name == CUBE
+            else (
+                "hertz; H in the Hertz length unit L = (m1 g / k_h)^(2/3), tau_ratio counts "
+                "the Hertz floor contact time"
+            ),
             "variable": variable_label(self.variable),
         }
         return io.StringIO(slice_csv(self.slice, self.variable, about))
