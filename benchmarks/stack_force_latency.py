@@ -1,5 +1,5 @@
 """Benchmark: the Stack scene's slider latency with the Hertz force against the linear one,
-measured in the same run (issue 23 item 4: the Hertz median within 1.3 times the linear).
+measured in the same run (the target: the Hertz median within 1.3 times the linear).
 
 One ``twoball serve`` on loopback; one protocol client (tools/bokehclient.py, as
 benchmarks/app_load.py: the page opened as a browser does, the slider moved as on release, no
