@@ -59,7 +59,7 @@ SCENE_REGISTRY = {
     ),
     "stack": SceneEntry(
         "Stack",
-        "Beyond the paper: a stack of 2 to 6 balls dropped together, each lighter than the one "
+        "Beyond the paper: a stack of 2 to 8 balls dropped together, each lighter than the one "
         "below. Compare the top ball's bounce with the textbook chain of collisions.",
         StackScene,
     ),
@@ -191,8 +191,9 @@ class Explorer(Built):
                 pending = True
                 document.add_timeout_callback(write, URL_DELAY_MS)
 
-        stack = ["balls", "stack_ratio", "stack_eps", "stack_gap", "force"]
-        self.state.param.watch(changed, [*MODEL_PARAMETERS, "scene", "units", "step", *stack])
+        stack = ["balls", "stack_ratio", "stack_eps", "stack_gap", "force", "stack_eps_contacts"]
+        watched = [*MODEL_PARAMETERS, "scene", "units", "step", "map_force", *stack]
+        self.state.param.watch(changed, watched)
         pn.state.onload(write)  # once the browser has reported its own URL
 
     @staticmethod

@@ -96,13 +96,6 @@ class ExplorerState(Parameters):
     def __init__(self, **params):
         super().__init__(**(OPENING_DROP | params))
 
-    @param.depends("map_force", "stack_eps_contacts", watch=True)
-    def _rewrite_the_url(self) -> None:
-        """The explorer rewrites the URL on a change of "scene" (among others) but does not
-        watch the parameters added since (app/explorer.py names its list): a re-trigger of
-        "scene" (same value, so no tab or scene changes) has it written."""
-        self.param.trigger("scene")
-
 
 def validate(name: str, value: object, fallback: float | None) -> tuple[float | None, str | None]:
     """(value to use, message or None) for a parameter typed or read from the URL.
