@@ -262,7 +262,8 @@ class DropScene(Scene):
         if self.pinned is not None:
             highest = float(np.max(self.pinned_curves.data["x2"]))
             top = max(top, self.pinned.result.x2_0 * units.length, highest)
-        low, high = -0.03 * top, 1.12 * top
+        # room above the highest apex for its label (larger on a projector)
+        low, high = -0.03 * top, (1.2 if self.state.presentation else 1.12) * top
         self.heights.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
         room = high / (1 - 4 * BALL_RADIUS)  # the balls drawn on top of their heights fit
         self.animation.y_range.update(start=low, end=room, reset_start=low, reset_end=room)

@@ -210,11 +210,12 @@ class Explorer(Built):
     def sidebar(self) -> pn.Column:
         """The controls (and a note while the solver compiles), for the page's sidebar.
 
-        On a projector the sliders come first, within the screen's 720 px (the lesson's
-        question is then shown large in the main area, and the notice matters less than the
-        sliders the class watches)."""
+        On a projector the lesson card (its title, the answer's explanation, its buttons)
+        comes first, then the sliders, within the screen's 720 px until the lesson starts; the
+        lesson's question is shown large in the main area, and the notice, which matters less
+        than the sliders the class watches, comes last."""
         if self.state.presentation:
-            parts = [self.controls, self.lesson, *self._compiling_notice()]
+            parts = [self.lesson, self.controls, *self._compiling_notice()]
         else:
             parts = [*self._compiling_notice(), self.lesson, self.controls]
         return pn.Column(*parts, sizing_mode="stretch_width")

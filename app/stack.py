@@ -48,7 +48,7 @@ CAPTION_HELP = (
 )
 
 
-PROJECTOR_PLOT_HEIGHT = 340  # presentation mode (scene.py)
+PROJECTOR_PLOT_HEIGHT = 300  # presentation mode (scene.py): plots and player in 720 px
 
 
 class StackScene(Scene):

@@ -409,3 +409,11 @@ def test_the_stack_scene_takes_eight_balls_and_eps_per_contact_under_advanced():
     assert scene.result.h1 == twoball.simulate_stack([0.3] * 7, 0.9, 0.2).h1  # the slider's
     scene.eps_contacts.value = ""
     assert not scene.eps_message.visible
+
+
+def test_a_page_opened_on_a_lesson_step_shows_its_units_on_the_switch():
+    """A lesson's URL opens in metres: the units switch says so (it once showed dimensionless
+    over plots drawn in metres)."""
+    explorer = rendered({"step": "3", "present": "1"})
+    assert explorer.state.units == "SI" and explorer.controls.units.value == "SI"
+    assert "m" in explorer.scenes["drop"].heights.yaxis[0].axis_label
