@@ -70,7 +70,7 @@ STEPS = (
         },
         look_for="Real balls from the rule books: a basketball (it keeps 85 % of its speed in "
         "a bounce), a tennis ball (75 %, ten times lighter), held a little apart and dropped "
-        "from 1 m.",
+        "from 1 m. (The tennis preset holds them touching: that is the next step's story.)",
         question="Real balls lose energy. How high does the tennis ball go now?",
         choices=(
             "Lower than it was dropped from",
