@@ -48,7 +48,7 @@ CAPTION_HELP = (
 )
 
 
-PROJECTOR_PLOT_HEIGHT = 300  # presentation mode (scene.py): plots and player in 720 px
+PROJECTOR_PLOT_HEIGHT = 350  # presentation mode (scene.py): plots and player in 720 px
 
 
 class StackScene(Scene):
@@ -133,6 +133,7 @@ class StackScene(Scene):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # plots and player within 720 px (scene.py)
             self.heights.height = self.animation.height = PROJECTOR_PLOT_HEIGHT
+            self.heights.xaxis.axis_label, self.heights.yaxis.axis_label = "time tau", "height X"
 
     def _heights_figure(self):
         fig = figure(
@@ -160,8 +161,10 @@ class StackScene(Scene):
         )  # fmt: skip
         fig.add_layout(self.icm_line)
         fig.add_layout(self.cursor)
-        self.legend = Legend(items=items, location="top_left", background_fill_alpha=0.7)
-        fig.add_layout(self.legend)
+        # below the plot, four a row: inside it, eight balls' legend hid the curves and the
+        # apex labels
+        self.legend = Legend(items=items, orientation="horizontal", ncols=4)
+        fig.add_layout(self.legend, "below")
         return fig
 
     def _animation_figure(self):
