@@ -22,7 +22,7 @@ from .scene import PROJECTOR_LINE_WIDTH, AnsweringMarkdown, Scene, font_sizes
 # Okabe and Ito's eight colours, told apart with every common colour-vision deficiency (black
 # first: the exact solver, pale yellow last); Category10's red and green were not
 OKABE_ITO = ("#000000", "#E69F00", "#56B4E9", "#009E73", "#0072B2", "#D55E00", "#CC79A7", "#F0E442")
-PROJECTOR_PLOT_HEIGHT = 280  # presentation mode (scene.py): under the explanation, in 720 px
+PROJECTOR_PLOT_HEIGHT = 400  # presentation mode (scene.py): first under the tabs, in 720 px
 
 
 class AccuracyScene(Scene):
@@ -45,19 +45,16 @@ class AccuracyScene(Scene):
         # computation's callback, sometimes stayed on in the browser though the plots arrived)
         # ("Computing..." answers a move)
         self.status = AnsweringMarkdown("", sizing_mode="stretch_width")
-        self.view = pn.Column(
-            self.status,
-            pn.pane.Markdown(
-                "Relative error of h1 and h2 (the larger) against the exact solver, and the "
-                "run time to the second apex, for each scipy integrator at rtol = atol = "
-                "1e-3, 1e-6, 1e-9. The exact solver is the reference: its error is drawn at "
-                f"{ERROR_FLOOR:.0e}. An error of {FAILED_ERROR:g}: the method failed or missed a "
-                "bounce."
-            ),
-            self.plot,
-            self.table,
-            sizing_mode="stretch_width",
+        about = pn.pane.Markdown(
+            "Relative error of h1 and h2 (the larger) against the exact solver, and the "
+            "run time to the second apex, for each scipy integrator at rtol = atol = "
+            "1e-3, 1e-6, 1e-9. The exact solver is the reference: its error is drawn at "
+            f"{ERROR_FLOOR:.0e}. An error of {FAILED_ERROR:g}: the method failed or missed a "
+            "bounce."
         )
+        # on a projector the plot comes first, under the tabs (the teacher says what it shows)
+        parts = [self.plot, about] if self.state.presentation else [about, self.plot]
+        self.view = pn.Column(self.status, *parts, self.table, sizing_mode="stretch_width")
 
     def _state_changed(self, *events: param.parameterized.Event) -> None:
         self._stale = True
@@ -101,7 +98,10 @@ class AccuracyScene(Scene):
 
     def _plot(self, revision: bool) -> hv.Overlay:
         time_dim = hv.Dimension("seconds", label="run time per drop [s]")
-        error_dim = hv.Dimension("error", label="relative error of h1, h2 (larger)")
+        label = (
+            "error of h1, h2" if self.state.presentation else "relative error of h1, h2 (larger)"
+        )
+        error_dim = hv.Dimension("error", label=label)
         layers = []
         methods = dict.fromkeys(r.method for r in self.rows or [])
         for method, color in zip(methods, OKABE_ITO, strict=False):

@@ -91,16 +91,21 @@ class Controls(Built):
             sizing_mode="stretch_width",
             styles={"overflow-wrap": "anywhere"},
         )
+        # on a projector the titles are short: at 20 px a long one pushed its value out of
+        # the sidebar ("mu = m2/m1 (log scale): 0.09...")
+        short = self.state.presentation
         self.sliders = {
             "eps": ReleasedSlider(
-                label="eps (restitution)",
+                label="eps" if short else "eps (restitution)",
                 start=APP_RANGES["eps"][0],
                 end=1.0,
                 step=0.001,
                 format="0.000",
             ),
-            "mu": self._log_slider("mu = m2/m1 (log scale)", "mu"),
-            "tau_ratio": self._log_slider("tau_d/tau_f (log scale)", "tau_ratio"),
+            "mu": self._log_slider("mu = m2/m1" if short else "mu = m2/m1 (log scale)", "mu"),
+            "tau_ratio": self._log_slider(
+                "tau_d/tau_f" if short else "tau_d/tau_f (log scale)", "tau_ratio"
+            ),
         }
         for name, slider in self.sliders.items():
             slider.param.watch(
@@ -114,7 +119,9 @@ class Controls(Built):
         self._applying_preset = False
         self.preset_source = pn.pane.Markdown("", styles={"font-size": "0.8em"})
         self.units = pn.widgets.RadioButtonGroup(
-            label="Units", options={"dimensionless": "dimensionless", "metres, seconds": "SI"}
+            label="Units",
+            options={"dimensionless": "dimensionless", "metres, seconds": "SI"},
+            value=self.state.units,  # (a link syncs changes only: a lesson's URL opens in SI)
         )
         self.units.link(self.state, value="units", bidirectional=True)
         self.height = pn.widgets.TextInput(label="", width=140)
@@ -252,9 +259,15 @@ class Controls(Built):
         self.eps12.param.update(value="" if s.eps12 is None else f"{s.eps12:.6g}")
 
     def layout(self) -> pn.viewable.Viewable:
-        advanced = pn.Card(
-            self.height, self.eps12, title="advanced", collapsed=True, sizing_mode="stretch_width"
-        )
+        # its inputs join the page when it is first opened (a folded card's Bokeh models
+        # cost every page its opening time, docs/performance.md)
+        advanced = pn.Card(title="advanced", collapsed=True, sizing_mode="stretch_width")
+
+        def opened(event: param.parameterized.Event) -> None:
+            if not event.new and not advanced.objects:
+                advanced.objects = [self.height, self.eps12]
+
+        advanced.param.watch(opened, "collapsed")
         return pn.Column(
             self.message,
             self.preset,

@@ -7,6 +7,14 @@ for all sessions. For a drop whose H or eps12 differ from the cube's, the slice 
 the cube's axes with the sweep's batch path (:func:`computed_slice`, ~6000 drops in a fraction
 of a second) once the solver is compiled, and the note says which one is shown.
 
+With the Hertz force (state ``map_force``) the map shows a slice of one of the two shipped
+two-ball Hertz cubes (``hertz-h1e2``, ``hertz-h1e4``: the paper's linear grid, 50 values per
+axis), the one whose H is nearer the drop's; nothing is computed (a Hertz drop costs about a
+millisecond, a slice seconds). Their H is in the Hertz length unit and their tau_ratio counts
+the Hertz floor contact (twoball/precomputed/README.md), which the note says. Their axes are
+evenly spaced in mu and tau_ratio, not in log10: the image on the map's log axes repeats each
+cell over the pixels nearest it (:func:`log_grid`), no value interpolated.
+
 The map is one image on log10 coordinates (the cube's mu and tau_ratio are evenly spaced in
 log10), not a mesh of ~6000 cells: the browser repaints the whole plot whenever the marker
 moves, and one image repaints in a fraction of the time (a slider move took ~320 ms with the
@@ -46,6 +54,9 @@ from .state import validate
 from .worksheet import slice_csv
 
 CUBE = "map"
+# the shipped two-ball Hertz cubes by their drop height H (in the Hertz length unit)
+HERTZ_CUBES = {1e2: "hertz-h1e2", 1e4: "hertz-h1e4"}
+MOST_PIXELS = 400  # per axis, of a cube not evenly spaced in log10 (log_grid)
 SMALLEST_OUTLINED = 4  # cells: a delayed-rebound patch smaller than this is not outlined
 PROJECTOR_MAP_HEIGHT = 490  # presentation mode (scene.py): both axes and the colour bar in 720 px
 SHOWN = ("h2_over_h1", "h1_over_icm", "h1_over_drop", "h2_over_drop", "contacts_first")
@@ -67,15 +78,49 @@ def variable_label(variable: str) -> str:
 
 
 @functools.cache
+def shown_cube(name: str) -> xr.Dataset:
+    """A shipped cube the map shows ("map" or a Hertz one), opened lazily once per server."""
+    return twoball.load_cube(name)
+
+
 def map_cube() -> xr.Dataset:
-    """The shipped map cube, opened lazily once per server."""
-    return twoball.load_cube(CUBE)
+    """The shipped (linear) map cube, opened lazily once per server."""
+    return shown_cube(CUBE)
+
+
+def hertz_cube_name(height: float) -> str:
+    """The shipped Hertz cube whose drop height is nearest ``height`` (on a log scale)."""
+    nearest = min(HERTZ_CUBES, key=lambda h: abs(math.log10(h) - math.log10(height)))
+    return HERTZ_CUBES[nearest]
 
 
 @pn.cache(max_items=128)  # shared by every session of the server, as the cube is
-def eps_slice(eps: float, variable: str) -> xr.Dataset:
+def eps_slice(eps: float, variable: str, name: str = CUBE) -> xr.Dataset:
     """One variable and the delayed-rebound flags at one of the cube's eps values."""
-    return map_cube()[[variable, "delayed_rebound"]].sel(eps=eps).load()
+    return shown_cube(name)[[variable, "delayed_rebound"]].sel(eps=eps).load()
+
+
+def log_grid(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Evenly spaced log10 pixel centres over an axis, and the index of the axis value each
+    pixel shows (the nearest in log10).
+
+    An axis evenly spaced in log10 (the map cube's) is its own grid. Another (the Hertz cubes',
+    evenly spaced in the value) gets enough pixels for its narrowest cell to have one, at most
+    :data:`MOST_PIXELS`: each pixel shows a computed cell, none is interpolated."""
+    logs = np.log10(np.asarray(values, dtype=float))
+    steps = np.diff(logs)
+    if steps.size == 0 or np.allclose(steps, steps[0], rtol=1e-6, atol=0.0):
+        return logs, np.arange(logs.size)
+    count = min(MOST_PIXELS, int(math.ceil((logs[-1] - logs[0]) / steps.min())) + 1)
+    grid = np.linspace(logs[0], logs[-1], count)
+    return grid, np.searchsorted((logs[1:] + logs[:-1]) / 2, grid)
+
+
+def on_log_grid(slice_: xr.Dataset, values: np.ndarray) -> tuple:
+    """(log10 mu, log10 tau_ratio, values as (tau_ratio, mu)) to draw as one image."""
+    log_mu, mu_index = log_grid(slice_["mu"].values)
+    log_tau, tau_index = log_grid(slice_["tau_ratio"].values)
+    return log_mu, log_tau, np.asarray(values)[np.ix_(tau_index, mu_index)]
 
 
 @pn.cache(max_items=32)
@@ -93,9 +138,9 @@ def computed_slice(eps: float, height: float, eps12: float | None) -> xr.Dataset
     return xr.Dataset(variables, coords={"mu": mu, "tau_ratio": tau_ratio, "eps": eps})
 
 
-def nearest_eps(eps: float) -> float:
-    """The cube's eps nearest to ``eps``."""
-    values = map_cube()["eps"].values
+def nearest_eps(eps: float, name: str = CUBE) -> float:
+    """The eps of the cube ``name`` nearest to ``eps``."""
+    values = shown_cube(name)["eps"].values
     return float(values[np.abs(values - eps).argmin()])
 
 
@@ -140,13 +185,15 @@ def weak_hook(method):
     return hook
 
 
-def blank_image(mu_dim: hv.Dimension, tau_dim: hv.Dimension, variable: str) -> hv.Image:
+def blank_image(
+    mu_dim: hv.Dimension, tau_dim: hv.Dimension, variable: str, cube: xr.Dataset | None = None
+) -> hv.Image:
     """An empty image on the cube's grid, with the variable's name: the plot keeps the first
     frame's ranges and colour bar title. (A 2 x 2 image with its centres at the cube's corners
     stretched the axes by half the cube on every side, and its value was called "z".)"""
-    cube = map_cube()
-    log_mu = np.log10(cube["mu"].values)
-    log_tau = np.log10(cube["tau_ratio"].values)
+    cube = map_cube() if cube is None else cube
+    log_mu = log_grid(cube["mu"].values)[0]
+    log_tau = log_grid(cube["tau_ratio"].values)[0]
     neutral = np.ones((log_tau.size, log_mu.size))  # (NaN made HoloViews warn of an empty slice)
     value = hv.Dimension(variable, label=variable_label(variable))
     return hv.Image((log_mu, log_tau, neutral), [mu_dim, tau_dim], value)
@@ -160,16 +207,22 @@ class MapScene(Scene):
     )
     moved = param.Event(doc="mu or tau_ratio changed while the map is on screen: the star moves.")
 
+    watched = (*Scene.watched, "map_force")
+
     def __init__(self, **params):
         super().__init__(**params)
         self.slice: xr.Dataset | None = None
         self.slice_eps = float("nan")
+        self.slice_cube = ""  # the cube the slice is of (or computed on the axes of)
         self.computed = False  # the slice was computed for this drop (not the cube's)
         self.error: str | None = None
         self.choice = pn.widgets.Select(
             label="Colour by", options={variable_label(v): v for v in SHOWN}, value=self.variable
         )
         self.choice.link(self, value="variable")
+        self.force = pn.widgets.RadioButtonGroup.from_param(
+            self.state.param.map_force, name="force", width=160
+        )
         self.download = pn.widgets.FileDownload(  # written when clicked
             callback=self._csv, filename="map.csv", label="Download this map (CSV)", embed=False
         )
@@ -186,12 +239,20 @@ class MapScene(Scene):
         self.star: ColumnDataSource | None = None
         # a new figure per variable (its colour scale and label change); within one, the
         # figure's DynamicMaps follow the state
+        # (and per force: the Hertz cubes' axes are not the map cube's)
         self.figure = pn.pane.HoloViews(
-            pn.bind(self._figure, self.param.variable), sizing_mode="stretch_width"
+            pn.bind(self._figure, self.param.variable, self.state.param.map_force),
+            sizing_mode="stretch_width",
         )
 
-    def _figure(self, variable: str) -> hv.DynamicMap:
-        ticks = _decade_ticks(map_cube())
+    def cube_name(self) -> str:
+        """The shipped cube shown: the map cube, or the Hertz cube nearest the drop's H."""
+        if self.state.map_force == "hertz":
+            return hertz_cube_name(self.state.height)
+        return CUBE
+
+    def _figure(self, variable: str, force: str = "linear") -> hv.DynamicMap:
+        ticks = _decade_ticks(shown_cube(self.cube_name()))
         image = hv.DynamicMap(pn.bind(self._image, self.param.revision, variable))
         outline = hv.DynamicMap(pn.bind(self._outline, self.param.revision))
         # the stream before the overlay that shows the image: HoloViews links it at creation,
@@ -257,7 +318,13 @@ class MapScene(Scene):
     def update(self) -> None:
         s = self.state
         try:
-            self.slice_eps = nearest_eps(s.eps)
+            name = self.slice_cube = self.cube_name()
+            self.slice_eps = nearest_eps(s.eps, name)
+            if name != CUBE:  # a shipped Hertz cube, never computed here
+                self.computed = False
+                self.slice = eps_slice(self.slice_eps, self.variable, name)
+                self.error = None
+                return
             self.computed = not self._is_cube_drop() and jit.state == "compiled"
             if self.computed:
                 whole = computed_slice(self.slice_eps, s.height, s.eps12)
@@ -275,10 +342,21 @@ class MapScene(Scene):
         self.current()
         if self.error:
             return f"**{self.error}**"
-        attrs = map_cube().attrs
+        name = self.cube_name()
+        cube = shown_cube(name)
+        attrs = cube.attrs
         s = self.state
         eps12 = "eps" if s.eps12 is None else f"{s.eps12:g}"
-        if self.computed:
+        if name != CUBE:
+            heights = " and ".join(f"{h:g}" for h in HERTZ_CUBES)
+            source = (
+                f"**Hertz force**: slice of the shipped cube {name} at **eps = "
+                f"{self.slice_eps:g}** (nearest to {s.eps:g}), **H = {attrs.get('height'):g} in "
+                "the Hertz length unit** L = (m1 g / k_h)^(2/3) (of the shipped H = "
+                f"{heights}, the nearest to this drop's H = {s.height:g}), eps12 = eps; "
+                "**tau_d/tau_f counts the Hertz floor contact time** at that H"
+            )
+        elif self.computed:
             source = (
                 f"Computed for this drop at **eps = {self.slice_eps:g}** (the map's eps "
                 f"nearest to {s.eps:g}), **H = {s.height:g}, eps12 = {eps12}**"
@@ -292,7 +370,6 @@ class MapScene(Scene):
             f"{source}. Black outlines: delayed rebound (h2 > h1); star: current parameters. "
             "Click the map to set mu and tau_d/tau_f."
         ]
-        cube = map_cube()
         for name, what in (("mu", "mu"), ("tau_ratio", "tau_d/tau_f")):
             low, high = float(cube[name].min()), float(cube[name].max())
             if not low <= getattr(s, name) <= high:
@@ -300,7 +377,12 @@ class MapScene(Scene):
                     f"**The current {what} = {getattr(s, name):g} lies outside the map** "
                     f"({low:g} to {high:g}): the star is off the map."
                 )
-        if not self.computed and not self._is_cube_drop():
+        if cube is not map_cube():
+            if s.eps12 is not None:
+                lines.append(
+                    f"The Hertz cubes have eps12 = eps: the drop's eps12 = {eps12} is not shown."
+                )
+        elif not self.computed and not self._is_cube_drop():
             lines.append(
                 f"The current drop (H = {s.height:g}, eps12 = {eps12}) differs from the "
                 "cube's, and the solver is still being compiled: the map shows the cube's "
@@ -313,8 +395,13 @@ class MapScene(Scene):
         tau_dim = hv.Dimension("log_tau_ratio", label="log10 tau_d/tau_f")
         if self.slice is not None and variable not in self.slice.data_vars:
             self._stale = True  # a new variable: its slice is read now
+        if self.slice_cube != self.cube_name():
+            # a new force: the new figure's first frame (whose ranges the plot keeps) is drawn
+            # from the new cube, though the scene may hear of the change after the figure
+            self._stale = True
         if not self.active:  # rendered off screen: nothing is read until the map is opened
-            blank = blank_image(mu_dim, tau_dim, variable)  # (the plot keeps its first ticker)
+            # (the plot keeps its first ticker)
+            blank = blank_image(mu_dim, tau_dim, variable, shown_cube(self.cube_name()))
             if variable in RATIO_CENTRES:  # (a log scale needs limits: the blank has no data)
                 return blank.opts(
                     colorbar=True, logz=True, clim=(0.5, 2.0), colorbar_opts=ratio_colorbar()
@@ -323,12 +410,11 @@ class MapScene(Scene):
         self.current()
         label = variable_label(variable)
         if self.slice is None:
-            return blank_image(mu_dim, tau_dim, variable)
+            return blank_image(mu_dim, tau_dim, variable, shown_cube(self.cube_name()))
         values = self.slice[variable].transpose("tau_ratio", "mu")
-        log_mu = np.log10(self.slice["mu"].values)
-        log_tau = np.log10(self.slice["tau_ratio"].values)
+        log_mu, log_tau, shown = on_log_grid(self.slice, values.values)
         mesh = hv.Image(
-            (log_mu, log_tau, on_screen(values.values)),
+            (log_mu, log_tau, on_screen(shown)),
             [mu_dim, tau_dim],
             hv.Dimension(variable, label=label),
         )
@@ -361,14 +447,7 @@ class MapScene(Scene):
         if self.slice is None:
             return hv.Contours([], dims)
         delayed = outlined(self.slice["delayed_rebound"].transpose("tau_ratio", "mu").values)
-        flags = hv.Image(
-            (
-                np.log10(self.slice["mu"].values),
-                np.log10(self.slice["tau_ratio"].values),
-                delayed.astype(float),
-            ),
-            dims,
-        )
+        flags = hv.Image(on_log_grid(self.slice, delayed.astype(float)), dims)
         width = PROJECTOR_LINE_WIDTH if self.state.presentation else 1.5
         return contours(flags, levels=[0.5]).opts(color="black", line_width=width)
 
@@ -378,11 +457,19 @@ class MapScene(Scene):
         if self.slice is None:  # (the note says why)
             return io.StringIO(f"# {self.error}\n")
         s = self.state
+        name = self.cube_name()
+        shipped = "the shipped map cube" if name == CUBE else f"the shipped Hertz cube {name}"
         about = {
             "eps": self.slice_eps,
-            "H": s.height if self.computed else map_cube().attrs.get("height"),
+            "H": s.height if self.computed else shown_cube(name).attrs.get("height"),
             "eps12": (s.eps12 if self.computed else None) or "equal to eps",
-            "source": "computed for this drop" if self.computed else "the shipped map cube",
+            "source": "computed for this drop" if self.computed else shipped,
+            "force": "linear"
+            if name == CUBE
+            else (
+                "hertz; H in the Hertz length unit L = (m1 g / k_h)^(2/3), tau_ratio counts "
+                "the Hertz floor contact time"
+            ),
             "variable": variable_label(self.variable),
         }
         return io.StringIO(slice_csv(self.slice, self.variable, about))
@@ -397,11 +484,17 @@ class MapScene(Scene):
 
     def layout(self) -> pn.viewable.Viewable:
         if self.state.presentation:  # 1280x720 (scene.py): the choices beside the map
-            side = pn.Column(self.choice, self.download, self.note, width=300)
+            side = pn.Column(self.choice, self.force, self.download, self.note, width=300)
             return pn.Row(self.figure, side, sizing_mode="stretch_width")
         return pn.Column(
             # wraps: on a phone the two side by side made the page scroll sideways
-            pn.FlexBox(self.choice, self.download, flex_wrap="wrap", sizing_mode="stretch_width"),
+            pn.FlexBox(
+                self.choice,
+                self.force,
+                self.download,
+                flex_wrap="wrap",
+                sizing_mode="stretch_width",
+            ),
             self.note,
             self.figure,
             sizing_mode="stretch_width",

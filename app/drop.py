@@ -152,6 +152,8 @@ class DropScene(Scene):
         self.pin = pn.widgets.Button(label="Pin this drop to compare")
         self.pin.on_click(lambda _: later(self._toggle_pin))
         self.pinned_curves = ColumnDataSource({"t": [], "x1": [], "x2": []})
+        self._pinned_item: LegendItem | None = None  # (its lines are added at the first pin)
+        self._trail_drawn = False
         self.curves = ColumnDataSource({"t": [], "x1": [], "x2": []})
         answers_pending(self.curves)
         self.apexes = ColumnDataSource({"t": [], "h": [], "text": []})
@@ -181,11 +183,6 @@ class DropScene(Scene):
         )
         fig.toolbar.autohide = True
         height_axis(fig)
-        pinned = [
-            fig.line("t", column, source=self.pinned_curves, color=color, line_width=2,
-                     line_dash="dashed", alpha=0.6)
-            for column, color in (("x1", LOWER), ("x2", UPPER))
-        ]  # fmt: skip
         lower = fig.line("t", "x1", source=self.curves, color=LOWER, line_width=2)
         upper = fig.line("t", "x2", source=self.curves, color=UPPER, line_width=2)
         fig.scatter("t", "h", source=self.apexes, color=UPPER, size=8)
@@ -209,7 +206,6 @@ class DropScene(Scene):
                 items=[
                     LegendItem(label="lower ball", renderers=[lower]),
                     LegendItem(label="upper ball", renderers=[upper]),
-                    LegendItem(label="pinned drop", renderers=pinned, visible=False),
                 ],
                 location="top_left",  # inside: a phone has no width to spare
                 background_fill_alpha=0.7,
@@ -220,8 +216,6 @@ class DropScene(Scene):
     def _animation_figure(self):
         """The two balls, one on the other, above the floor (a grey band below height 0)."""
         fig = stage()
-        fig.line(x=-0.6, y="x1", source=self.trail, color=LOWER, line_dash="dotted")
-        fig.line(x=0.6, y="x2", source=self.trail, color=UPPER, line_dash="dotted")
         fig.circle(
             "x", "y", radius="r", radius_dimension="y", source=self.balls, color="color",
             line_color="black",
@@ -268,7 +262,8 @@ class DropScene(Scene):
         if self.pinned is not None:
             highest = float(np.max(self.pinned_curves.data["x2"]))
             top = max(top, self.pinned.result.x2_0 * units.length, highest)
-        low, high = -0.03 * top, 1.12 * top
+        # room above the highest apex for its label (larger on a projector)
+        low, high = -0.03 * top, (1.2 if self.state.presentation else 1.12) * top
         self.heights.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
         room = high / (1 - 4 * BALL_RADIUS)  # the balls drawn on top of their heights fit
         self.animation.y_range.update(start=low, end=room, reset_start=low, reset_end=room)
@@ -279,7 +274,10 @@ class DropScene(Scene):
 
     def _draw_pinned(self, units) -> None:
         pinned = self.pinned
-        self.heights.legend[0].items[-1].visible = pinned is not None
+        if pinned is not None:
+            self._add_pinned_lines()
+        if self._pinned_item is not None:
+            self._pinned_item.visible = pinned is not None
         if pinned is None:
             if len(self.pinned_curves.data["t"]):
                 self.pinned_curves.data = {"t": [], "x1": [], "x2": []}
@@ -289,6 +287,35 @@ class DropScene(Scene):
             "x1": on_screen(pinned.plotted.x1 * units.length),
             "x2": on_screen(pinned.plotted.x2 * units.length),
         }
+
+    def _add_pinned_lines(self) -> None:
+        """The pinned drop's dashed lines, under the current drop's, added at the first pin
+        (a page that never pins does not pay for their Bokeh models)."""
+        if self._pinned_item is not None:
+            return
+        fig = self.heights
+        lines = [
+            fig.line("t", column, source=self.pinned_curves, color=color, line_width=2,
+                     line_dash="dashed", alpha=0.6)
+            for column, color in (("x1", LOWER), ("x2", UPPER))
+        ]  # fmt: skip
+        fig.renderers = [*lines, *fig.renderers[:-2]]
+        readable(fig, self.state.presentation)
+        self._pinned_item = LegendItem(label="pinned drop", renderers=lines)
+        legend = fig.legend[0]
+        legend.items = [*legend.items, self._pinned_item]
+
+    def _add_trail_lines(self) -> None:
+        """The dotted trails of the animation, added when first asked for."""
+        if self._trail_drawn:
+            return
+        self._trail_drawn = True
+        fig = self.animation
+        trails = [
+            fig.line(x=x, y=column, source=self.trail, color=color, line_dash="dotted")
+            for x, column, color in ((-0.6, "x1", LOWER), (0.6, "x2", UPPER))
+        ]
+        fig.renderers = [*trails, *fig.renderers[:-2]]
 
     def _toggle_pin(self) -> None:
         """Pin the drop on screen (the next drops are drawn over it), or let it go."""
@@ -325,6 +352,7 @@ class DropScene(Scene):
             "color": [LOWER, UPPER],
         }
         if self.trails.value:
+            self._add_trail_lines()
             past = tr.t <= at
             self.trail.data = {
                 "t": on_screen(tr.t[past]),

@@ -59,7 +59,7 @@ SCENE_REGISTRY = {
     ),
     "stack": SceneEntry(
         "Stack",
-        "Beyond the paper: a stack of 2 to 6 balls dropped together, each lighter than the one "
+        "Beyond the paper: a stack of 2 to 8 balls dropped together, each lighter than the one "
         "below. Compare the top ball's bounce with the textbook chain of collisions.",
         StackScene,
     ),
@@ -153,7 +153,7 @@ class Explorer(Built):
         answer away); it keeps computing underneath, so it shows at once."""
         covered = self.state.step > 0 and not self.state.revealed
         if self.state.presentation:
-            self.stage.visible = covered
+            self.lesson.ask(covered)
         elif covered:  # (its text is sent only to a page that follows the lesson)
             self.cover.object = COVER_TEXT
         self.cover.visible = covered and not self.state.presentation
@@ -191,8 +191,9 @@ class Explorer(Built):
                 pending = True
                 document.add_timeout_callback(write, URL_DELAY_MS)
 
-        stack = ["balls", "stack_ratio", "stack_eps", "stack_gap", "force"]
-        self.state.param.watch(changed, [*MODEL_PARAMETERS, "scene", "units", "step", *stack])
+        stack = ["balls", "stack_ratio", "stack_eps", "stack_gap", "force", "stack_eps_contacts"]
+        watched = [*MODEL_PARAMETERS, "scene", "units", "step", "map_force", *stack]
+        self.state.param.watch(changed, watched)
         pn.state.onload(write)  # once the browser has reported its own URL
 
     @staticmethod
@@ -209,11 +210,12 @@ class Explorer(Built):
     def sidebar(self) -> pn.Column:
         """The controls (and a note while the solver compiles), for the page's sidebar.
 
-        On a projector the sliders come first, within the screen's 720 px (the lesson's
-        question is then shown large in the main area, and the notice matters less than the
-        sliders the class watches)."""
+        On a projector the lesson card (its title, the answer's explanation, its buttons)
+        comes first, then the sliders, within the screen's 720 px until the lesson starts; the
+        lesson's question is shown large in the main area, and the notice, which matters less
+        than the sliders the class watches, comes last."""
         if self.state.presentation:
-            parts = [self.controls, self.lesson, *self._compiling_notice()]
+            parts = [self.lesson, self.controls, *self._compiling_notice()]
         else:
             parts = [*self._compiling_notice(), self.lesson, self.controls]
         return pn.Column(*parts, sizing_mode="stretch_width")
@@ -222,7 +224,7 @@ class Explorer(Built):
         """The scenes under their lesson cover (the controls go into the page's sidebar,
         :meth:`page`)."""
         projected = self.state.presentation
-        parts = [self.stage, self.lesson.answer_line] if projected else [self.cover]
+        parts = [self.stage] if projected else [self.cover]
         return pn.Column(*parts, self.tabs, sizing_mode="stretch_width")
 
     def page(self) -> pn.template.BootstrapTemplate:

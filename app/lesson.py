@@ -70,7 +70,7 @@ STEPS = (
         },
         look_for="Real balls from the rule books: a basketball (it keeps 85 % of its speed in "
         "a bounce), a tennis ball (75 %, ten times lighter), held a little apart and dropped "
-        "from 1 m.",
+        "from 1 m. (The tennis preset holds them touching: that is the next step's story.)",
         question="Real balls lose energy. How high does the tennis ball go now?",
         choices=(
             "Lower than it was dropped from",
@@ -185,6 +185,13 @@ class Lesson(Built):
         )
         if self.state.presentation:
             self.choices.stylesheets = [*self.choices.stylesheets, PROJECTED_CHOICES]
+        # The step's widgets join the page when the lesson starts: a page opened without it
+        # (most of a class's) does not pay for their Bokeh models (docs/performance.md)
+        self._steps = pn.Column(sizing_mode="stretch_width")  # in the card
+        self._projected = pn.Column(sizing_mode="stretch_width")  # in the main area, projected
+        self._asking = pn.Column(
+            self.question, self.choices, self.reveal, sizing_mode="stretch_width", visible=False
+        )
         self._show()
 
     def _begin(self) -> None:
@@ -242,6 +249,8 @@ class Lesson(Built):
             widget.visible = lesson_on
         self.start.visible = not lesson_on
         self.answer.visible = self.answer_line.visible = False
+        if lesson_on and not self._steps.objects:
+            self._add_step_widgets()
         if not lesson_on:
             self.heading.object = (
                 "A guided path through the demonstration in six steps: predict, then see."
@@ -259,21 +268,30 @@ class Lesson(Built):
         self.previous.disabled = step == 1
         self.next.label = "Next >" if step < len(STEPS) else "End the lesson"
 
+    def _add_step_widgets(self) -> None:
+        if self.state.presentation:  # the question large in the main area, the rest here
+            self._projected.objects = [self._asking, self.answer_line]
+            self._steps.objects = [self.answer, pn.Row(self.previous, self.next)]
+        else:
+            self._steps.objects = [
+                self.choices, self.reveal, self.answer, pn.Row(self.previous, self.next)
+            ]  # fmt: skip
+
     def stage(self) -> pn.Column:
         """The step's question and choices, large, for the main area of a projected page
-        (presentation mode; the card then keeps the title, the answer and the buttons)."""
-        return pn.Column(
-            self.question, self.choices, self.reveal, sizing_mode="stretch_width", visible=False
-        )
+        (presentation mode; the card then keeps the title, the answer and the buttons), with
+        the one-line answer shown on reveal. Empty until the lesson starts."""
+        return self._projected
+
+    def ask(self, covered: bool) -> None:
+        """Show the projected question while the scene is covered (:meth:`stage`)."""
+        self._asking.visible = covered
 
     def layout(self) -> pn.viewable.Viewable:
-        asks = [] if self.state.presentation else [self.choices, self.reveal]
         return pn.Card(
             self.heading,
             self.start,
-            *asks,
-            self.answer,
-            pn.Row(self.previous, self.next),
+            self._steps,
             title="Lesson",
             collapsed=False,
             sizing_mode="stretch_width",

@@ -1,5 +1,7 @@
 """``panel serve app``: one Explorer per browser session, its state read from the URL."""
 
+from contextlib import nullcontext
+
 import panel as pn
 from panel.io.resources import get_dist_path
 
@@ -30,4 +32,8 @@ explorer = Explorer(query)
 pn.state.onload(send_without_delay)
 if pn.state.location is not None:
     explorer.follow_location(pn.state.location)
-explorer.page().servable(title="Two-ball bounce explorer")
+# the page's roots go into the document with its model graph recomputed once, not once per
+# root (about 30 ms of a session's opening: docs/performance.md, "A class at once")
+frozen = pn.state.curdoc.models.freeze() if pn.state.curdoc is not None else nullcontext()
+with frozen:
+    explorer.page().servable(title="Two-ball bounce explorer")

@@ -29,9 +29,11 @@ from twoball.units import number_text
 from .controls import ReleasedIntSlider, ReleasedSlider, plain
 from .drop import frame_times, height_axis, stage
 from .scene import Scene, answers_pending, on_screen, readable
+from .state import contact_eps
 
-# Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first
-PALETTE = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9")
+# Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first (all
+# eight: up to eight balls)
+PALETTE = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#F0E442", "#000000")
 BALL_RADIUS = 0.05  # the bottom ball, as a fraction of the plot's height
 SAMPLES = (
     400  # plotted times over the drop (as app/drop.py's PLOTTED), plus 9 through every contact
@@ -46,13 +48,21 @@ CAPTION_HELP = (
 )
 
 
-PROJECTOR_PLOT_HEIGHT = 340  # presentation mode (scene.py)
+PROJECTOR_PLOT_HEIGHT = 350  # presentation mode (scene.py): plots and player in 720 px
 
 
 class StackScene(Scene):
     """Every ball's height to the top ball's second apex, the ICM chain, an animation."""
 
-    watched = ("height", "balls", "stack_ratio", "stack_eps", "stack_gap", "force")
+    watched = (
+        "height",
+        "balls",
+        "stack_ratio",
+        "stack_eps",
+        "stack_gap",
+        "force",
+        "stack_eps_contacts",
+    )
     frame = param.Integer(default=0, bounds=(0, None), doc="Animation frame.")
 
     def __init__(self, **params):
@@ -79,6 +89,21 @@ class StackScene(Scene):
             ),
             pn.widgets.RadioButtonGroup.from_param(state.force, name="force", width=200),
             flex_wrap="wrap",
+            sizing_mode="stretch_width",
+        )
+        # eps per contact, under "advanced" (collapsed: the one eps slider is the lesson's)
+        self.eps_contacts = pn.widgets.TextInput.from_param(
+            state.stack_eps_contacts,
+            name="eps per contact: floor, 1-2, 2-3, ... (comma-separated; empty: the eps slider)",
+            placeholder="e.g. 0.9, 0.8, 0.7",
+            sizing_mode="stretch_width",
+        )
+        self.eps_message = pn.pane.Alert(alert_type="warning", visible=False, margin=(0, 5))
+        self.advanced = pn.Card(
+            self.eps_contacts,
+            self.eps_message,
+            title="advanced: eps per contact",
+            collapsed=True,
             sizing_mode="stretch_width",
         )
         self.player = pn.widgets.Player(
@@ -108,6 +133,7 @@ class StackScene(Scene):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # plots and player within 720 px (scene.py)
             self.heights.height = self.animation.height = PROJECTOR_PLOT_HEIGHT
+            self.heights.xaxis.axis_label, self.heights.yaxis.axis_label = "time tau", "height X"
 
     def _heights_figure(self):
         fig = figure(
@@ -135,8 +161,10 @@ class StackScene(Scene):
         )  # fmt: skip
         fig.add_layout(self.icm_line)
         fig.add_layout(self.cursor)
-        self.legend = Legend(items=items, location="top_left", background_fill_alpha=0.7)
-        fig.add_layout(self.legend)
+        # below the plot, four a row: inside it, eight balls' legend hid the curves and the
+        # apex labels
+        self.legend = Legend(items=items, orientation="horizontal", ncols=4)
+        fig.add_layout(self.legend, "below")
         return fig
 
     def _animation_figure(self):
@@ -149,9 +177,20 @@ class StackScene(Scene):
         fig.xgrid.visible = False
         return fig
 
+    def contact_eps(self) -> list[float] | float:
+        """The eps of each contact typed under "advanced", else the slider's for all; a bad
+        entry shows its message and the slider's is used (the stack is still drawn)."""
+        s = self.state
+        values, message = contact_eps(s.stack_eps_contacts, s.balls)
+        self.eps_message.object = "" if message is None else (
+            f"**eps per contact:** {message}. Using eps = {s.stack_eps:g} for every contact."
+        )  # fmt: skip
+        self.eps_message.visible = message is not None
+        return s.stack_eps if values is None else values
+
     def update(self) -> None:
         s = self.state
-        arguments = ([s.stack_ratio] * (s.balls - 1), s.stack_eps, s.stack_gap)
+        arguments = ([s.stack_ratio] * (s.balls - 1), self.contact_eps(), s.stack_gap)
         options = {"height": s.height, "force": s.force, "throw": False}
         try:
             first = simulate_stack(*arguments, **options)  # apexes and contacts only
@@ -250,6 +289,9 @@ class StackScene(Scene):
             for c, k in enumerate(r.contacts_first)
         )
         ratio = "" if r.h1 is None else f" (h1/chain = {r.h1 / icm:.3f})"
+        eps = [float(e) for e in r.stack.eps]
+        if len(set(eps)) > 1:  # typed under "advanced"
+            first = f"eps per contact {', '.join(f'{e:g}' for e in eps)}; {first}"
         return (
             f"{s.balls} balls, {s.force} force: {first}{second}.  \n"
             f"Chain of independent collisions (dotted green): {number_text(icm)}{ratio}. "
@@ -270,12 +312,18 @@ class StackScene(Scene):
                     self.player,
                     sizing_mode="stretch_width",
                 ),
-                pn.Column(self.widgets, width=250),
+                pn.Column(self.widgets, self.advanced, width=250),
                 sizing_mode="stretch_width",
             )
             return pn.Column(self.summary, plots, caption, sizing_mode="stretch_width")
         # side by side on a wide screen, stacked on a phone
         plots = pn.FlexBox(heights, animation, sizing_mode="stretch_width", flex_wrap="wrap")
         return pn.Column(
-            self.widgets, self.summary, plots, self.player, caption, sizing_mode="stretch_width"
+            self.widgets,
+            self.advanced,
+            self.summary,
+            plots,
+            self.player,
+            caption,
+            sizing_mode="stretch_width",
         )

@@ -64,7 +64,7 @@ class ExplorerState(Parameters):
         default=False, doc="Large text and plots for a projector (URL: present=1)."
     )
     # the Stack scene's drop (twoball.stacks): one mass ratio, restitution and gap for every pair
-    balls = param.Integer(default=3, bounds=(2, 6), doc="Balls in the stack.")
+    balls = param.Integer(default=3, bounds=(2, 8), doc="Balls in the stack.")
     stack_ratio = param.Number(
         default=0.2, bounds=(0.01, 1.0), doc="Each ball's mass over the one below it."
     )
@@ -76,6 +76,21 @@ class ExplorerState(Parameters):
     )
     force = param.Selector(
         default="linear", objects=["linear", "hertz"], doc="The contact force of the stack."
+    )
+    stack_eps_contacts = param.String(
+        default="",
+        doc="The Stack scene's eps per contact as typed (floor, 1-2, 2-3, ...), comma-separated; "
+        "empty: stack_eps for every contact. Checked against N by the scene (contact_eps).",
+    )
+    # The map's force is its own, not the stack's ``force``: the map's Hertz is a lookup in the
+    # two shipped two-ball Hertz cubes (their own length unit, H 1e2 or 1e4), the stack's a
+    # live N-ball drop at the explorer's H; sharing one switch, choosing Hertz to look at the
+    # map would silently change the Stack scene (and a Stack-scene URL would reopen the map on
+    # Hertz). Each URL carries the force of its own scene (force, map_force).
+    map_force = param.Selector(
+        default="linear",
+        objects=["linear", "hertz"],
+        doc="The contact force of the delayed-rebound map (the shipped cube shown).",
     )
 
     def __init__(self, **params):
@@ -124,15 +139,23 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
             values[name] = value
             if message:
                 messages.append(f"URL {key}: {message}")
-    if "force" in query:
-        forces = ExplorerState.param.force.objects
-        if query["force"] in forces:
-            values["force"] = query["force"]
+    for name in ("force", "map_force"):
+        if name in query:
+            forces = ExplorerState.param[name].objects
+            if query[name] in forces:
+                values[name] = query[name]
+            else:
+                messages.append(
+                    f"URL {name}: must be one of {', '.join(forces)}; got "
+                    f"{query[name][:40]!r}. Using linear."
+                )
+    if "eps_contacts" in query:
+        text = query["eps_contacts"][:200]
+        _, message = contact_eps(text, None, ExplorerState.param.balls.bounds[1])
+        if message is None:  # (the count is checked against N by the scene)
+            values["stack_eps_contacts"] = text
         else:
-            messages.append(
-                f"URL force: must be one of {', '.join(forces)}; got {query['force'][:40]!r}. "
-                "Using linear."
-            )
+            messages.append(f"URL eps_contacts: {message}")
     if query.get("present") in ("1", "true", "yes"):
         values["presentation"] = True
     if "units" in query:
@@ -185,6 +208,33 @@ def _stack_value(name: str, text: str, fallback: float) -> tuple[float, str | No
     return (int(number) if name == "balls" else number), None
 
 
+def contact_eps(
+    text: str, balls: int | None, most: int | None = None
+) -> tuple[list[float] | None, str | None]:
+    """The Stack scene's eps per contact from comma-separated ``text`` (the floor's, then each
+    pair's, bottom up): (values, None), (None, None) when empty (one eps for all), or (None, a
+    message) on bad input. ``balls`` asks for exactly that many values; ``balls`` None accepts
+    1 to ``most`` (the URL is read before N is known). Never raises."""
+    if not text.strip():
+        return None, None
+    low, high = ExplorerState.param.stack_eps.bounds
+    values = []
+    for part in text.split(","):
+        try:
+            value = float(part)
+        except ValueError:
+            return None, f"eps per contact must be numbers separated by commas; got {part[:40]!r}"
+        if not low <= value <= high:
+            return None, f"each eps per contact must be in [{low:g}, {high:g}]; got {part.strip()}"
+        values.append(value)
+    if balls is not None and len(values) != balls:
+        names = ", ".join(["floor"] + [f"{i}-{i + 1}" for i in range(1, balls)])
+        return None, f"give {balls} values for {balls} balls ({names}); got {len(values)}"
+    if balls is None and most is not None and len(values) > most:
+        return None, f"give at most {most} values; got {len(values)}"
+    return values, None
+
+
 def url_query(state: ExplorerState) -> dict[str, str]:
     """The query string that restores ``state`` (eps12 left out when equal to eps)."""
     query = {
@@ -196,6 +246,10 @@ def url_query(state: ExplorerState) -> dict[str, str]:
     if state.scene == "stack":
         query |= {key: f"{getattr(state, name):.12g}" for name, key in STACK_URL_KEYS.items()}
         query["force"] = state.force
+        if state.stack_eps_contacts.strip():
+            query["eps_contacts"] = state.stack_eps_contacts.strip()
+    if state.scene == "map" and state.map_force != "linear":
+        query["map_force"] = state.map_force
     if state.step:
         query["step"] = str(state.step)
     if state.presentation:

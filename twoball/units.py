@@ -20,13 +20,17 @@ class Units:
 
     def height(self, value: float) -> str:
         """A height as text with its unit, without an exponent where it is a plain number
-        (211,950 rather than 2.1195e+05: read from the back of a classroom)."""
-        return f"{number_text(value * self.length)}{'' if self.length == 1.0 else ' m'}"
+        (211,950 rather than 2.1195e+05: read from the back of a classroom); in metres to
+        three significant digits (8.84 m: a centimetre on a drop from 1 m)."""
+        if self.length == 1.0:
+            return number_text(value)
+        return f"{value * self.length:.3g} m"
 
 
 def number_text(value: float) -> str:
-    """A number as text: grouped digits from 1e4 to 1e13, five significant digits otherwise."""
-    if 1e4 <= abs(value) < 1e13:
+    """A number as text: grouped digits from 1e3 to 1e13 (9,256 beside 10,004, not 9256),
+    five significant digits otherwise."""
+    if 1e3 <= abs(value) < 1e13:
         return f"{value:,.0f}"
     return f"{value:.5g}"
 

@@ -1,11 +1,13 @@
 // A presentation clicker drives the lesson without a mouse. Clickers send PageDown and PageUp
 // (some the right and left arrows): forward reveals the answer while it can be revealed (in
 // presentation mode at once, elsewhere once a prediction is chosen), else goes to the next
-// step (or ends the lesson); back goes to the previous step. Only while
+// step (the last step stays: ending the lesson takes its button); back goes to the previous
+// step. Only while
 // the lesson runs (its buttons are on the page), and never where the key belongs to the field
 // that has the focus: any key in a text field, an arrow on a slider, a radio choice or a list.
 (() => {
-  const FORWARD = ["Reveal the answer", "Next >", "End the lesson"];
+  // (not "End the lesson": one press too many on the last step lost the lesson)
+  const FORWARD = ["Reveal the answer", "Next >"];
   const BACK = ["< Previous"];
   const KEYS = {PageDown: FORWARD, ArrowRight: FORWARD, PageUp: BACK, ArrowLeft: BACK};
   const TEXT = /^(text|number|search|email|url|tel|password)$/;

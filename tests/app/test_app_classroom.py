@@ -262,7 +262,9 @@ def test_presentation_mode_shows_each_scene_on_one_screen(
         sliders = [s for s in deep_query(page, ".noUi-target") if s["visible"]]
         expected = 4 if scene == "stack" else 3  # the two-ball sliders, or the stack's
         assert plots and len(sliders) >= expected, (plots, sliders)
-        shown = [(round(c["right"]), round(c["bottom"])) for c in plots + sliders]
+        players = [b for b in deep_query(page, "button.play") if b["visible"]]
+        assert len(players) == (scene in ("drop", "stack")), players  # the animation's
+        shown = [(round(c["right"]), round(c["bottom"])) for c in plots + sliders + players]
         assert all(r <= width and b <= height for r, b in shown), shown
         assert page.evaluate("parseFloat(getComputedStyle(document.body).fontSize)") >= 18
         shots = artifacts / "projector"

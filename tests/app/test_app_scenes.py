@@ -339,6 +339,81 @@ def test_a_pinned_drop_stays_under_the_next_one_in_the_units_on_screen():
     for key in ("tennis", "ping-pong"):
         assert explorer.scenes["drop"]._drop_text(runs[key]).split("  \n")[0] in text
     assert scene.heights.legend[0].items[-1].visible
+    assert scene.heights.legend[0].items[-1].label.value == "pinned drop"
     scene.pin.clicks += 1
     assert len(scene.pinned_curves.data["t"]) == 0 and "Pinned" not in scene.summary.object
     assert not scene.heights.legend[0].items[-1].visible
+
+
+def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
+    """The map's Hertz force: a slice of hertz-h1e4 (or h1e2, whichever H is nearer the drop's)
+    at the eps nearest the drop's, each cell the library's Hertz two-ball drop; the note says
+    H is in the Hertz unit and tau_ratio counts the Hertz floor contact; the URL carries it."""
+    from app.delayed_map import shown_cube
+    from app.state import read_query, url_query
+
+    explorer = rendered({"eps": "0.83", "scene": "map", "map_force": "hertz"})
+    scene = explorer.scenes["map"]
+    assert scene.cube_name() == "hertz-h1e4"  # the drop's H = 1e4
+    cube = shown_cube("hertz-h1e4")
+    cube_eps = cube["eps"].values
+    assert scene.slice_eps == cube_eps[np.abs(cube_eps - 0.83).argmin()]
+    values = scene.slice["h2_over_h1"]
+    assert values.dims == ("mu", "tau_ratio") and values.shape == (50, 50)
+    for i, j in ((3, 40), (20, 10), (45, 45)):
+        mu, tau = float(values["mu"][i]), float(values["tau_ratio"][j])
+        direct = twoball.simulate_stack(
+            [mu], scene.slice_eps, tau, height=cube.attrs["height"], force="hertz"
+        )
+        assert float(values[i, j]) == pytest.approx(direct.h2 / direct.h1, rel=1e-6)
+    note = scene._note()
+    assert "Hertz force" in note and "Hertz length unit" in note and "hertz-h1e4" in note
+    assert "Hertz floor contact" in note
+    assert url_query(explorer.state)["map_force"] == "hertz"
+    assert read_query(url_query(explorer.state), explorer.state)[0]["map_force"] == "hertz"
+    # every pixel of the image is one of the slice's cells (none interpolated)
+    shown = scene._image(True, "h2_over_h1").dimension_values(2)
+    assert np.isin(shown[np.isfinite(shown)], values.values).all()
+    # a drop nearer H = 100: the other cube; a click still sets mu and tau_ratio
+    explorer.state.height = 300.0
+    scene.current()
+    assert scene.cube_name() == "hertz-h1e2" and "hertz-h1e2" in scene._note()
+    scene.tap.event(x=math.log10(0.05), y=math.log10(0.3))
+    assert explorer.state.mu == pytest.approx(0.05)
+    assert explorer.state.tau_ratio == pytest.approx(0.3)
+    # back to linear: the map cube again
+    explorer.state.map_force = "linear"
+    scene.current()
+    assert scene.cube_name() == "map" and "Hertz" not in scene._note()
+    assert "map_force" not in url_query(explorer.state)
+
+
+def test_the_stack_scene_takes_eight_balls_and_eps_per_contact_under_advanced():
+    """Eight balls as the library computes them; eps per contact typed under "advanced" is
+    used, a bad entry shows a message and the slider's eps is used; the URL carries it."""
+    from app.state import url_query
+
+    explorer = rendered({"scene": "stack", "N": "8", "ratio": "0.3"})
+    scene = explorer.scenes["stack"]
+    expected = twoball.simulate_stack([0.3] * 7, 0.9, 0.2)
+    assert scene.result.h1 == expected.h1 and "8 balls" in scene.summary.object
+    assert scene.advanced.collapsed and not scene.eps_message.visible
+    eps = [0.9, 0.8, 0.7, 0.6, 0.5, 0.9, 0.8, 0.7]
+    scene.eps_contacts.value = ",".join(map(str, eps))
+    assert explorer.state.stack_eps_contacts == scene.eps_contacts.value
+    expected = twoball.simulate_stack([0.3] * 7, eps, 0.2)
+    assert scene.result.h1 == expected.h1 and "eps per contact 0.9, 0.8" in scene.summary.object
+    assert url_query(explorer.state)["eps_contacts"] == scene.eps_contacts.value
+    scene.eps_contacts.value = "0.9, 0.8"  # two values for eight balls
+    assert scene.eps_message.visible and "give 8 values for 8 balls" in scene.eps_message.object
+    assert scene.result.h1 == twoball.simulate_stack([0.3] * 7, 0.9, 0.2).h1  # the slider's
+    scene.eps_contacts.value = ""
+    assert not scene.eps_message.visible
+
+
+def test_a_page_opened_on_a_lesson_step_shows_its_units_on_the_switch():
+    """A lesson's URL opens in metres: the units switch says so (it once showed dimensionless
+    over plots drawn in metres)."""
+    explorer = rendered({"step": "3", "present": "1"})
+    assert explorer.state.units == "SI" and explorer.controls.units.value == "SI"
+    assert "m" in explorer.scenes["drop"].heights.yaxis[0].axis_label

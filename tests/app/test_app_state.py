@@ -94,3 +94,39 @@ def test_presets_follow_their_cited_drop_tests_and_masses():
             assert low <= getattr(preset, name) <= high
     # a 1 m drop of a basketball is of order H = 1e4 (model.md)
     assert 3e3 < presets.height_from_metres(1.0) < 3e4
+
+
+def test_the_map_force_round_trips_and_a_bad_one_is_reported():
+    state = ExplorerState(map_force="hertz")
+    state.scene = "map"
+    values, messages = read_query(url_query(state), ExplorerState())
+    assert messages == [] and values["map_force"] == "hertz"
+    values, messages = read_query({"map_force": "spring"}, ExplorerState())
+    assert "map_force" not in values
+    assert messages and messages[0].startswith("URL map_force: must be one of linear, hertz")
+
+
+def test_the_stack_eps_per_contact_round_trips_and_bad_input_is_reported():
+    state = ExplorerState(balls=8, stack_eps_contacts="0.9, 0.8,0.7,0.6,0.5,0.9,0.8,0.7")
+    state.scene = "stack"
+    query = url_query(state)
+    assert query["N"] == "8" and query["eps_contacts"] == state.stack_eps_contacts
+    values, messages = read_query(query, ExplorerState())
+    assert messages == [] and values["balls"] == 8
+    assert values["stack_eps_contacts"] == state.stack_eps_contacts
+    assert "eps_contacts" not in url_query(ExplorerState(scene="stack"))  # empty: the slider's
+    for text in ("0.9,oops", "0.9,1.5", "nan", ",".join(["0.9"] * 9)):
+        values, messages = read_query({"scene": "stack", "eps_contacts": text}, ExplorerState())
+        assert "stack_eps_contacts" not in values
+        assert len(messages) == 1 and messages[0].startswith("URL eps_contacts:")
+    values, messages = read_query({"N": "9"}, ExplorerState())
+    assert values["balls"] == 3 and "[2, 8]" in messages[0]
+
+
+def test_contact_eps_asks_for_one_value_per_contact():
+    from app.state import contact_eps
+
+    assert contact_eps("", 3) == (None, None)
+    assert contact_eps(" 0.9, 0.8 ,0.7", 3) == ([0.9, 0.8, 0.7], None)
+    values, message = contact_eps("0.9,0.8", 3)
+    assert values is None and "give 3 values for 3 balls (floor, 1-2, 2-3); got 2" in message
