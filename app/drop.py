@@ -71,6 +71,12 @@ def drop_label(eps: float, eps12: float | None, mu: float, tau_ratio: float, hei
     return label if eps12 is None else f"{label}, eps12 {eps12:.3g}"
 
 
+def underneath(fig, added: list) -> list:
+    """``added``, renderers just drawn on ``fig``, moved under its others (drawn first)."""
+    fig.renderers = [*added, *(r for r in fig.renderers if r not in added)]
+    return added
+
+
 def frame_times(end: float, contacts: list[twoball.ContactInterval]) -> np.ndarray:
     """The times of the animation's frames: even in flight, dense through each collision."""
     times = [np.linspace(0.0, end, FLIGHT_FRAMES)]
@@ -153,7 +159,7 @@ class DropScene(Scene):
         self.pin.on_click(lambda _: later(self._toggle_pin))
         self.pinned_curves = ColumnDataSource({"t": [], "x1": [], "x2": []})
         self._pinned_item: LegendItem | None = None  # (its lines are added at the first pin)
-        self._trail_drawn = False
+        self._trail_lines: list | None = None  # (added when trails are first asked for)
         self.curves = ColumnDataSource({"t": [], "x1": [], "x2": []})
         answers_pending(self.curves)
         self.apexes = ColumnDataSource({"t": [], "h": [], "text": []})
@@ -260,8 +266,9 @@ class DropScene(Scene):
         top = max(r.x2_0, *r.apex_h, r.h_icm) * units.length
         self._draw_pinned(units)
         if self.pinned is not None:
-            highest = float(np.max(self.pinned_curves.data["x2"]))
-            top = max(top, self.pinned.result.x2_0 * units.length, highest)
+            # (the upper ball's highest point: its release or an apex)
+            pinned = self.pinned.result
+            top = max(top, max(pinned.x2_0, *pinned.apex_h) * units.length)
         # room above the highest apex for its label (larger on a projector)
         low, high = -0.03 * top, (1.2 if self.state.presentation else 1.12) * top
         self.heights.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
@@ -294,12 +301,11 @@ class DropScene(Scene):
         if self._pinned_item is not None:
             return
         fig = self.heights
-        lines = [
+        lines = underneath(fig, [
             fig.line("t", column, source=self.pinned_curves, color=color, line_width=2,
                      line_dash="dashed", alpha=0.6)
             for column, color in (("x1", LOWER), ("x2", UPPER))
-        ]  # fmt: skip
-        fig.renderers = [*lines, *fig.renderers[:-2]]
+        ])  # fmt: skip
         readable(fig, self.state.presentation)
         self._pinned_item = LegendItem(label="pinned drop", renderers=lines)
         legend = fig.legend[0]
@@ -307,15 +313,13 @@ class DropScene(Scene):
 
     def _add_trail_lines(self) -> None:
         """The dotted trails of the animation, added when first asked for."""
-        if self._trail_drawn:
+        if self._trail_lines is not None:
             return
-        self._trail_drawn = True
         fig = self.animation
-        trails = [
+        self._trail_lines = underneath(fig, [
             fig.line(x=x, y=column, source=self.trail, color=color, line_dash="dotted")
             for x, column, color in ((-0.6, "x1", LOWER), (0.6, "x2", UPPER))
-        ]
-        fig.renderers = [*trails, *fig.renderers[:-2]]
+        ])  # fmt: skip
 
     def _toggle_pin(self) -> None:
         """Pin the drop on screen (the next drops are drawn over it), or let it go."""

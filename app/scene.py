@@ -17,9 +17,9 @@ MODEL_PARAMETERS = ("eps", "eps12", "mu", "tau_ratio", "height")
 # (1366 x 768 then fits too): about 560 px are left under the header and the tabs, so each
 # scene's plots get a height of their own there, and lines and markers are drawn bolder.
 PROJECTOR_LINE_WIDTH = 4
+PROJECTOR_MARKER_SIZE = 14
 # Bootstrap's pale alert text (cyan on pale cyan) fails WCAG contrast (axe-core): darker text
 ALERT_CSS = ":host, :host * { color: #1b1e21 !important; }"
-PROJECTOR_MARKER_SIZE = 14
 
 
 def later(callback) -> None:

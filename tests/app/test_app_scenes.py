@@ -417,3 +417,26 @@ def test_a_page_opened_on_a_lesson_step_shows_its_units_on_the_switch():
     explorer = rendered({"step": "3", "present": "1"})
     assert explorer.state.units == "SI" and explorer.controls.units.value == "SI"
     assert "m" in explorer.scenes["drop"].heights.yaxis[0].axis_label
+
+
+def test_trails_are_drawn_under_the_balls_when_first_asked_for():
+    """The trails' lines join the animation at the first tick (a page that never asks for them
+    does not pay for them), under the balls, and hold the path up to the frame shown."""
+    explorer = rendered()
+    scene = explorer.scenes["drop"]
+    before = len(scene.animation.renderers)
+    scene.frame = len(scene.times) // 2
+    scene.trails.value = True
+    renderers = scene.animation.renderers
+    assert len(renderers) == before + 2
+    assert [r.data_source for r in renderers[:2]] == [scene.trail, scene.trail]  # underneath
+    at = scene.times[scene.frame]
+    path = np.asarray(scene.trail.data["t"])
+    assert (
+        path.size
+        and path.max() <= at
+        and path.max() == pytest.approx(scene.plotted.t[scene.plotted.t <= at].max())
+    )
+    scene.trails.value = False
+    scene.trails.value = True  # once added, never twice
+    assert len(scene.animation.renderers) == before + 2
