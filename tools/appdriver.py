@@ -253,6 +253,13 @@ SOURCES_JS = """(columns) => {
 }"""
 
 
+def page_query(page) -> dict[str, str]:
+    """The page's URL query, one value a key (the last)."""
+    from urllib.parse import parse_qs, urlparse
+
+    return {k: v[-1] for k, v in parse_qs(urlparse(page.url).query).items()}
+
+
 def deep_query(page, selector: str) -> list[dict]:
     return page.evaluate(DEEP_QUERY_JS, selector)
 

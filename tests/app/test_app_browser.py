@@ -8,12 +8,12 @@ the repository root, as the README runs it.
 from __future__ import annotations
 
 import re
-from urllib.parse import parse_qs, urlparse
 
 import pytest
 from appdriver import (
     fingerprint,
     open_page,
+    page_query,
     press_slider,
     slider_titles,
     sources_with,
@@ -39,10 +39,6 @@ TAB_TITLES = {name: entry.title for name, entry in SCENE_REGISTRY.items()}
 
 def active_tab(page) -> str:
     return page.locator(".bk-tab.bk-active").inner_text().strip()
-
-
-def url_query(page) -> dict[str, str]:
-    return {k: v[-1] for k, v in parse_qs(urlparse(page.url).query).items()}
 
 
 @pytest.mark.parametrize("scene", list(TAB_TITLES))
@@ -106,7 +102,7 @@ def test_a_map_click_moves_the_sliders(browser, app_server, artifacts):
         after = slider_titles(page)
         assert after[0] == titles[0]  # eps stays
         assert after[1] != titles[1] and after[2] != titles[2]  # mu and tau_d/tau_f moved
-        query = url_query(page)
+        query = page_query(page)
         assert float(query["mu"]) != 0.05 and float(query["tau_ratio"]) != 0.3
         page.screenshot(path=artifacts / "map_after_click.png", full_page=True)
         assert errors == []
@@ -125,7 +121,7 @@ def test_a_url_restores_its_state(browser, app_server):
         assert titles[1].endswith(": 0.02")
         assert titles[2].endswith(": 0.5")
         page.wait_for_timeout(800)
-        restored = url_query(page)
+        restored = page_query(page)
         assert restored == {
             "eps": "0.7",
             "mu": "0.02",
@@ -150,7 +146,7 @@ def test_a_bad_url_shows_the_message_and_still_works(browser, app_server, artifa
         page.screenshot(path=artifacts / "bad_url.png", full_page=True)
         assert press_slider(page, "mu") > 0  # and the app still works
         page.wait_for_timeout(800)
-        query = url_query(page)
+        query = page_query(page)
         assert query["eps"] == "0.9" and query["scene"] == "drop"
         assert errors == []
     finally:
@@ -198,7 +194,7 @@ def test_metres_and_seconds_and_a_preset(browser, app_server, artifacts):
         wait_for_change(page, after)
         page.get_by_text("ITF Rules of Tennis").wait_for()
         page.wait_for_timeout(800)
-        query = url_query(page)
+        query = page_query(page)
         assert abs(float(query["mu"]) - 0.0577 / 0.6085) < 1e-9
         page.screenshot(path=artifacts / "si_units_tennis_preset.png", full_page=True)
         assert errors == []
@@ -263,7 +259,7 @@ def test_back_rebuilds_the_page_from_the_url_it_shows(browser, app_server):
         page.wait_for_function("() => location.search.includes('mu=0.01&')")
         wait_for_plots(page)
         assert slider_titles(page) == before
-        assert url_query(page)["mu"] == "0.01"
+        assert page_query(page)["mu"] == "0.01"
         assert errors == []
     finally:
         context.close()

@@ -7,13 +7,13 @@ guards. The server log is checked after every test (conftest.py).
 from __future__ import annotations
 
 import re
-from urllib.parse import parse_qs, urlparse
 
 import pytest
 from appdriver import (
     deep_query,
     fingerprint,
     open_page,
+    page_query,
     press_slider,
     sources_with,
     wait_for_change,
@@ -36,10 +36,6 @@ COLORBAR_TITLES_JS = """() => [...Bokeh.documents[0].all_models]
 COLORBAR_TICKS_JS = """() => [...Bokeh.documents[0].all_models]
   .filter((m) => m.constructor.__name__ === "ColorBar")
   .map((m) => m.ticker.ticks ? Array.from(m.ticker.ticks) : [])"""
-
-
-def url_query(page) -> dict[str, str]:
-    return {k: v[-1] for k, v in parse_qs(urlparse(page.url).query).items()}
 
 
 def tab(page, title: str) -> None:
@@ -83,7 +79,7 @@ def test_opening_page_typed_values_and_messages(browser, app_server, artifacts):
         metres.press("Enter")
         page.get_by_text(re.compile(r"100000 m is outside the explorer's range")).wait_for()
         page.wait_for_timeout(800)
-        assert url_query(page)["units"] == "SI"  # 12: the units are in the URL
+        assert page_query(page)["units"] == "SI"  # 12: the units are in the URL
         # 12: a preset is unselected once a slider changes its values
         page.locator("select").first.select_option(label="Tennis ball on a basketball")
         page.get_by_text("ITF Rules of Tennis").wait_for()

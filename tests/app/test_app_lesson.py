@@ -4,10 +4,8 @@ every step at a projector's, a desktop's and a phone's size go to test-artifacts
 
 from __future__ import annotations
 
-from urllib.parse import parse_qs, urlparse
-
 import pytest
-from appdriver import deep_query, open_page
+from appdriver import deep_query, open_page, page_query
 from playwright.sync_api import expect
 
 import twoball
@@ -63,10 +61,6 @@ def _scene_canvases(page) -> list[dict]:
     return [c for c in found if c["visible"] and c["width"] > 50 and c["height"] > 50]
 
 
-def _query(page) -> dict[str, str]:
-    return {k: v[-1] for k, v in parse_qs(urlparse(page.url).query).items()}
-
-
 @pytest.mark.browser
 def test_the_lesson_asks_before_it_answers_and_walks_the_scenes(browser, app_server, artifacts):
     base, _ = app_server
@@ -78,7 +72,7 @@ def test_the_lesson_asks_before_it_answers_and_walks_the_scenes(browser, app_ser
         for number, step in enumerate(STEPS, 1):
             page.get_by_text(f"Step {number} of {len(STEPS)}: {step.title}").wait_for()
             page.wait_for_function(f"() => location.search.includes('step={number}')")
-            query = _query(page)
+            query = page_query(page)
             assert query["scene"] == step.scene
             assert float(query["mu"]) == pytest.approx(step.drop["mu"], rel=1e-11)
             reveal = page.get_by_role("button", name="Reveal the answer")
@@ -121,7 +115,7 @@ def test_every_step_opens_from_its_url(browser, app_server, artifacts, size):
             page.get_by_text(f"Step {number} of {len(STEPS)}").wait_for()
             # the app writes the whole state into the URL once the page has loaded
             page.wait_for_function("() => location.search.includes('scene=')")
-            assert _query(page)["scene"] == step.scene
+            assert page_query(page)["scene"] == step.scene
             expect(page.get_by_text("Predict first.")).to_be_visible()
             page.get_by_text(step.choices[step.answer], exact=True).click()
             page.get_by_role("button", name="Reveal the answer").click()

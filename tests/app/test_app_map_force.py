@@ -4,17 +4,11 @@ the page goes on. Screenshots go to test-artifacts/map_force/."""
 
 from __future__ import annotations
 
-from urllib.parse import parse_qs, urlparse
-
 import pytest
-from appdriver import fingerprint, open_page, wait_for_change
+from appdriver import fingerprint, open_page, page_query, wait_for_change
 from playwright.sync_api import expect
 
 pytestmark = pytest.mark.browser
-
-
-def _query(page) -> dict[str, str]:
-    return {k: v[-1] for k, v in parse_qs(urlparse(page.url).query).items()}
 
 
 def test_the_map_switches_to_the_hertz_cube(browser, app_server, artifacts):
@@ -31,12 +25,12 @@ def test_the_map_switches_to_the_hertz_cube(browser, app_server, artifacts):
         expect(page.get_by_text("counts the Hertz floor contact time").first).to_be_visible()
         wait_for_change(page, before)  # the image is the Hertz cube's
         page.wait_for_timeout(800)  # the URL is written shortly after a change
-        assert _query(page)["map_force"] == "hertz"
+        assert page_query(page)["map_force"] == "hertz"
         page.screenshot(path=folder / "map_hertz.png", full_page=True)
         page.get_by_role("button", name="linear").click()
         expect(page.get_by_text("Slice of the shipped cube").first).to_be_visible(timeout=60_000)
         page.wait_for_timeout(800)
-        assert "map_force" not in _query(page)
+        assert "map_force" not in page_query(page)
         assert errors == []
     finally:
         context.close()
@@ -59,7 +53,7 @@ def test_the_stack_scene_takes_eps_per_contact_under_advanced(browser, app_serve
         expect(page.get_by_text("eps per contact 0.9, 0.8, 0.7")).to_be_visible(timeout=60_000)
         expect(page.get_by_text("give 8 values for 8 balls")).to_be_hidden()
         page.wait_for_timeout(800)
-        assert _query(page)["eps_contacts"] == "0.9,0.8,0.7,0.6,0.5,0.9,0.8,0.7"
+        assert page_query(page)["eps_contacts"] == "0.9,0.8,0.7,0.6,0.5,0.9,0.8,0.7"
         page.screenshot(path=folder / "stack_eight_advanced.png", full_page=True)
         assert errors == []
     finally:

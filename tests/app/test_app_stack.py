@@ -4,20 +4,14 @@ scroll. Screenshots go to test-artifacts/stack/."""
 
 from __future__ import annotations
 
-from urllib.parse import parse_qs, urlparse
-
 import pytest
-from appdriver import open_page, press_slider, slider_titles, sources_with
+from appdriver import open_page, page_query, press_slider, slider_titles, sources_with
 from playwright.sync_api import expect
 
 from twoball.stacks import simulate_stack
 from twoball.units import number_text
 
 pytestmark = pytest.mark.browser
-
-
-def _query(page) -> dict[str, str]:
-    return {k: v[-1] for k, v in parse_qs(urlparse(page.url).query).items()}
 
 
 def test_the_stack_scene_shows_the_library_and_follows_its_sliders(browser, app_server, artifacts):
@@ -36,14 +30,14 @@ def test_the_stack_scene_shows_the_library_and_follows_its_sliders(browser, app_
         expect(page.get_by_text("4 balls, linear force")).to_be_visible()
         expect(page.get_by_text(f"h1 = {number_text(four.h1)}").first).to_be_visible()
         page.wait_for_timeout(600)  # the URL is written shortly after a change
-        assert _query(page)["N"] == "4" and _query(page)["scene"] == "stack"
+        assert page_query(page)["N"] == "4" and page_query(page)["scene"] == "stack"
         page.screenshot(path=folder / "four.png", full_page=True)
         page.get_by_role("button", name="hertz").click()
         hertz = simulate_stack([0.2] * 3, 0.9, 0.2, force="hertz")
         expect(page.get_by_text("4 balls, hertz force")).to_be_visible(timeout=60_000)
         expect(page.get_by_text(f"h1 = {number_text(hertz.h1)}").first).to_be_visible()
         page.wait_for_timeout(600)
-        assert _query(page)["force"] == "hertz"
+        assert page_query(page)["force"] == "hertz"
         page.screenshot(path=folder / "four_hertz.png", full_page=True)
         assert errors == []
     finally:
