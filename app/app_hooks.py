@@ -25,6 +25,7 @@ from tornado.websocket import WebSocketClosedError
 from twoball import warmup
 
 from .delayed_map import map_cube
+from .scenes import SCENE_REGISTRY
 
 # under bokeh's logger, which `panel serve --log-level` shows (info by default)
 log = logging.getLogger("bokeh.twoball")
@@ -104,6 +105,8 @@ def on_server_loaded(server_context) -> None:
     warmup.compile_in_background(
         done=lambda: log.info("compiled kernels in use after %.1f s", time.monotonic() - started)
     )
+    for entry in SCENE_REGISTRY.values():  # imported now, not by the first page to visit one
+        entry.viewer_class()
     try:
         map_cube()
     except (OSError, ValueError) as error:  # the map scene shows this too

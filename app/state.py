@@ -14,7 +14,9 @@ import param
 
 from twoball.model import DEFAULT_HEIGHT, Parameters, check_value
 
-SCENES = ("drop", "closeup", "map", "accuracy", "stack")
+from .scenes import SCENES
+from .steps import STEPS
+
 UNITS = ("dimensionless", "SI")
 
 # Query-string keys of the parameters that the URL carries.
@@ -168,8 +170,6 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
                 f"Using {defaults.units}."
             )
     if "step" in query:
-        from .lesson import STEPS  # the lesson's steps set the drop and the scene
-
         text = query["step"]
         if text.isdigit() and 1 <= int(text) <= len(STEPS):
             shown = STEPS[int(text) - 1]

@@ -14,8 +14,8 @@ from bokeh.document import Document
 
 import twoball
 from app.delayed_map import map_cube
-from app.explorer import SCENE_REGISTRY, Explorer
-from app.state import SCENES
+from app.explorer import Explorer
+from app.scenes import SCENE_REGISTRY, SCENES
 from twoball import presets
 
 PAPER = {"eps": "0.9", "mu": "0.01", "tau_ratio": "0.01"}
