@@ -27,6 +27,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import os
+import signal
 import statistics
 import sys
 import tempfile
@@ -262,7 +263,10 @@ async def run(label: str, command: list[str], url: str, port: int, args, log: Pa
         for error in errors[:2]:
             print("   ", error[:1500], flush=True)
     finally:
-        process.terminate()
+        # the whole process group (serve started it in a session of its own): a plain
+        # `panel serve --num-procs 2` leaves its forked children serving when only the first
+        # process is stopped
+        os.killpg(process.pid, signal.SIGTERM)
         process.wait(timeout=30)
 
 
