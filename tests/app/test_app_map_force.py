@@ -4,6 +4,8 @@ the page goes on. Screenshots go to test-artifacts/map_force/."""
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from appdriver import fingerprint, open_page, page_query, wait_for_change
 from playwright.sync_api import expect
@@ -24,12 +26,13 @@ def test_the_map_switches_to_the_hertz_cube(browser, app_server, artifacts):
         expect(page.get_by_text("hertz-h1e4").first).to_be_visible()
         expect(page.get_by_text("counts the Hertz floor contact time").first).to_be_visible()
         wait_for_change(page, before)  # the image is the Hertz cube's
-        page.wait_for_timeout(800)  # the URL is written shortly after a change
+        # the URL is written shortly after a change (0.3 s, then the patch's way back)
+        expect(page).to_have_url(re.compile(r"[?&]map_force=hertz"), timeout=10_000)
         assert page_query(page)["map_force"] == "hertz"
         page.screenshot(path=folder / "map_hertz.png", full_page=True)
         page.get_by_role("button", name="linear").click()
         expect(page.get_by_text("Slice of the shipped cube").first).to_be_visible(timeout=60_000)
-        page.wait_for_timeout(800)
+        expect(page).not_to_have_url(re.compile("map_force"), timeout=10_000)
         assert "map_force" not in page_query(page)
         assert errors == []
     finally:
