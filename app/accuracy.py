@@ -67,17 +67,20 @@ class AccuracyScene(Scene):
         self.view = pn.Column(self.status, *parts, self.table, sizing_mode="stretch_width")
 
     def _state_changed(self, *events: param.parameterized.Event) -> None:
-        self._stale = True
         if self.active:
             self._start()
 
     @param.depends("active", watch=True)
     def _activated(self) -> None:
-        if self.active and self._stale:
+        if self.active:
             self._start()
 
     def _start(self) -> None:
-        self._stale = False
+        """Measure the drop in a thread (under a server), unless its rows are already those
+        shown or being measured."""
+        if self.inputs() == self._computed_for:
+            return
+        self._computed_for = self.inputs()
         self._request += 1
         self.status.object = (
             "*Computing: every method at every tolerance on this drop (a few seconds)...*"

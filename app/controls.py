@@ -94,13 +94,16 @@ class Controls(Built):
         # on a projector the titles are short: at 20 px a long one pushed its value out of
         # the sidebar ("mu = m2/m1 (log scale): 0.09...")
         short = self.state.presentation
+        # eps: a slider made from the state's parameter (its bounds, linked both ways, the
+        # state set on release only); mu and tau_ratio: sliders of log10 of the value, which
+        # Panel's from_param cannot make (it has no transform), linked here
         self.sliders = {
-            "eps": ReleasedSlider(
-                label="eps" if short else "eps (restitution)",
-                start=app_range("eps")[0],
-                end=app_range("eps")[1],
+            "eps": ReleasedSlider.from_param(
+                self.state.param.eps,
+                name="eps" if short else "eps (restitution)",
                 step=0.001,
                 format="0.000",
+                throttled=True,
             ),
             "mu": self._log_slider("mu = m2/m1" if short else "mu = m2/m1 (log scale)", "mu"),
             "tau_ratio": self._log_slider(
@@ -153,11 +156,14 @@ class Controls(Built):
         self.message.visible = bool(messages)
 
     def _slider_moved(self, name: str, value: float) -> None:
+        """A slider released by the user: the messages go, and a log slider sets its value
+        (eps is linked by Panel). A slider moved to follow the state (:meth:`_follow_state`)
+        changes nothing."""
         if self._syncing or value is None:
             return
-        number = 10.0**value if name in LOG_SLIDERS else value
         self.show_messages([])
-        self.state.param.update(**{name: number})
+        if name in LOG_SLIDERS:
+            self.state.param.update(**{name: 10.0**value})
 
     def _apply_preset(self, event: param.parameterized.Event) -> None:
         preset = presets.PRESETS.get(event.new)
@@ -244,10 +250,10 @@ class Controls(Built):
 
     def _follow_state(self) -> None:
         s = self.state
-        for name, slider in self.sliders.items():
+        for name in LOG_SLIDERS:  # (eps follows the state by its link)
+            slider = self.sliders[name]
             value = getattr(s, name)
-            shown = math.log10(value) if name in LOG_SLIDERS else value
-            shown = min(max(shown, slider.start), slider.end)
+            shown = min(max(math.log10(value), slider.start), slider.end)
             if abs(shown - slider.value) < 1e-9:
                 continue  # already there (a round trip through log10 is not exact)
             with param.edit_constant(slider):

@@ -311,6 +311,17 @@ class MapScene(Scene):
                 fill_color="yellow", line_color="black",
             )  # fmt: skip
 
+    def inputs(self) -> tuple:
+        """What the slice depends on: the drop's eps, H and eps12, the cube (force), the
+        variable, and whether the solver is compiled (a drop not the cube's is computed only
+        then). Not mu and tau_ratio, which only move the star; not the units.
+
+        (The variable and the cube are read here, not heard of: a new figure's first frame,
+        whose ranges the plot keeps, is drawn before the scene hears of the change.)"""
+        s = self.state
+        compiled = jit.state == "compiled"
+        return (s.eps, s.eps12, s.height, self.cube_name(), self.variable, compiled)
+
     def _is_cube_drop(self) -> bool:
         """Whether the current drop's H and eps12 are the cube's (else a slice is computed)."""
         return self.state.height == map_cube().attrs.get("height") and self.state.eps12 is None
@@ -393,12 +404,6 @@ class MapScene(Scene):
     def _image(self, revision: bool, variable: str) -> hv.Image:
         mu_dim = hv.Dimension("log_mu", label="log10 mu")
         tau_dim = hv.Dimension("log_tau_ratio", label="log10 tau_d/tau_f")
-        if self.slice is not None and variable not in self.slice.data_vars:
-            self._stale = True  # a new variable: its slice is read now
-        if self.slice_cube != self.cube_name():
-            # a new force: the new figure's first frame (whose ranges the plot keeps) is drawn
-            # from the new cube, though the scene may hear of the change after the figure
-            self._stale = True
         if not self.active:  # rendered off screen: nothing is read until the map is opened
             # (the plot keeps its first ticker)
             blank = blank_image(mu_dim, tau_dim, variable, shown_cube(self.cube_name()))

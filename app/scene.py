@@ -73,11 +73,14 @@ class Built(pn.viewable.Viewer):
 
 
 class Scene(Built):
-    """A scene of the explorer. Subclasses implement :meth:`update` and :meth:`layout`.
+    """A scene of the explorer. Subclasses implement :meth:`update` and :meth:`layout`, and name
+    in ``watched`` the state's parameters a change of which redraws them.
 
-    A change of the watched parameters marks the scene stale and, if it is ``active`` (on
-    screen), fires ``revision``, which redraws its views; each view calls :meth:`current`
-    first. A scene off screen is recomputed when it comes on screen.
+    While the scene is on screen (``active``) a change of a watched parameter fires
+    ``revision``, on which its views depend. Each view calls :meth:`current` first, which runs
+    :meth:`update` only when :meth:`inputs` differ from those of the last update: the work is
+    done once per change, and only for a scene that is drawn. A scene off screen is redrawn
+    when it comes back, recomputed only if its inputs changed meanwhile.
     """
 
     state = param.ClassSelector(class_=ExplorerState, doc="The session's shared state.")
@@ -88,13 +91,17 @@ class Scene(Built):
 
     def __init__(self, **params):
         super().__init__(**params)
-        self._stale = True
         self.computations = 0
+        self._computed_for: tuple | None = None  # the inputs of the last update
         # (a watcher, not @param.depends: each scene class names its own ``watched``)
         self.state.param.watch(self._state_changed, list(self.watched))
 
+    def inputs(self) -> tuple:
+        """What :meth:`update` reads: by default the watched parameters' values; a scene that
+        reads more (or less) says so here."""
+        return tuple(getattr(self.state, name) for name in self.watched)
+
     def _state_changed(self, *events: param.parameterized.Event) -> None:
-        self._stale = True
         if self.active:
             self.redraw_now()
 
@@ -114,10 +121,11 @@ class Scene(Built):
             self.param.trigger("revision")
 
     def current(self) -> None:
-        """Recompute what the scene shows if the state changed since; every view calls this
-        first, so the work is done once per change, and only for a scene that is drawn."""
-        if self._stale:
-            self._stale = False
+        """Recompute what the scene shows if its inputs changed since the last update; every
+        view calls this first."""
+        inputs = self.inputs()
+        if inputs != self._computed_for:
+            self._computed_for = inputs
             self.computations += 1
             self.update()
 
