@@ -14,6 +14,7 @@ import mpmath
 import pytest
 
 import twoball
+from twoball.observables import BALLS
 from twoball.studies.conditioning import against_reference, within_rule
 from twoball.studies.many_contacts import HEIGHT
 from twoball.studies.truth import solve_truth
@@ -49,7 +50,7 @@ def test_the_sample_is_reproducible_and_in_range():
     assert drops == sample_drops(3, seed=10)
     for eps, mu, tau_ratio in drops:
         assert 0.6 <= eps <= 1.0 and 1e-4 <= mu <= 1e-3 and 1e-3 <= tau_ratio <= 0.1
-        assert twoball.simulate(eps, mu, tau_ratio).contacts_first >= MIN_CONTACTS
+        assert twoball.simulate(eps, mu, tau_ratio).contacts_first[BALLS] >= MIN_CONTACTS
 
 
 def test_the_rule_rejects_an_error_far_above_the_conditioning():
@@ -74,7 +75,7 @@ def test_a_row_against_a_reference_measures_the_relative_errors():
     result = twoball.simulate(*drop, height=HEIGHT)
     with mpmath.workdps(40):
         h1_off = mpmath.nstr(mpmath.mpf(result.h1) * (1 + mpmath.mpf("1e-13")), 30)
-    row = against_reference(*drop, h1_off, result.h2, result.contacts_first, height=HEIGHT)
+    row = against_reference(*drop, h1_off, result.h2, result.contacts_first[BALLS], height=HEIGHT)
     assert row["rel_err_h1"] == pytest.approx(1e-13, rel=1e-6) and row["rel_err_h2"] == 0.0
     assert against_reference(*drop, result.h1, None, 7, height=HEIGHT)["rel_err_h2"] == float("inf")
 

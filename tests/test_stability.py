@@ -12,6 +12,7 @@ import pytest
 
 import twoball
 from twoball.cli import main
+from twoball.observables import BALLS
 from twoball.studies import stability
 
 # A fast subset of the study's grid: its extreme values, all combinations (32 cases).
@@ -99,7 +100,7 @@ def test_a_ball_passing_through_is_detected(monkeypatch):
 
 def test_an_unreported_contact_is_detected(monkeypatch):
     def forget(result):
-        kept = [c for c in result.contacts if c.contact != "ball"]
+        kept = [c for c in result.contacts if c.contact != BALLS]
         return dataclasses.replace(result, contacts=kept)
 
     row = _doctored(monkeypatch, forget)
@@ -122,7 +123,7 @@ def test_missed_contacts_of_an_adaptive_method_are_detected():
     case = (1.0, 1e-6, 0.0, 1e4)
     exact = stability.diagnose(*case, "exact", 0.0)
     tight = twoball.simulate(*case[:3], method="DOP853", rtol=1e-12, atol=1e-12)
-    assert sum(c.contact == "ball" for c in tight.contacts) == len(exact["contact_starts"]) == 64
+    assert sum(c.contact == BALLS for c in tight.contacts) == len(exact["contact_starts"]) == 64
     row = stability.judge(stability.diagnose(*case, "RK45", 1e-8), exact)
     assert row["verdict"] == "wrong"
     assert "missed ball contact" in row["problems"]

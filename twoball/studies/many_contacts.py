@@ -25,6 +25,7 @@ import numpy as np
 
 from twoball.batch.workers import Workers
 from twoball.errors import ParameterError
+from twoball.observables import BALLS
 from twoball.solve import simulate
 from twoball.studies.conditioning import against_reference, reference_text, within_rule
 
@@ -57,7 +58,7 @@ def sample_drops(count: int = SAMPLE, seed: int = SEED) -> list[tuple[float, flo
         mu = float(10.0 ** rng.uniform(-4.0, -3.0))
         tau_ratio = float(10.0 ** rng.uniform(-3.0, -1.0))
         result = simulate(eps, mu, tau_ratio, height=HEIGHT)
-        if result.reason is None and result.contacts_first >= MIN_CONTACTS:
+        if result.reason is None and result.contacts_first[BALLS] >= MIN_CONTACTS:
             drops.append((eps, mu, tau_ratio))
     return drops
 

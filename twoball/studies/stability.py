@@ -37,7 +37,7 @@ from twoball.batch.workers import Workers
 from twoball.errors import ParameterError, Status
 from twoball.kernels.codes import ROUNDING  # per phase, of the exact solver's state
 from twoball.model import check_parameters
-from twoball.observables import relative_error
+from twoball.observables import BALLS, FLOOR, relative_error
 from twoball.reference import METHODS as REFERENCE_METHODS
 from twoball.solve import simulate
 from twoball.studies import precision
@@ -155,7 +155,7 @@ def _energy_scale(mu: float, x1_0: float, x2_0: float) -> float:
 
 
 def _ball_contacts_before(result, end: float) -> int:
-    return sum(1 for c in result.contacts if c.contact == "ball" and c.start < end)
+    return sum(1 for c in result.contacts if c.contact == BALLS and c.start < end)
 
 
 def _unreported_pushes(result) -> list[str]:
@@ -166,14 +166,14 @@ def _unreported_pushes(result) -> list[str]:
     x1, x2, v1, v2 = trajectory.x1, trajectory.x2, trajectory.v1, trajectory.v2
     slack = 1e-9 * (1.0 + np.abs(x1) + np.abs(x2) + np.abs(v1) + np.abs(v2))
     missed = []
-    for name, eta, rate, zeta in (
-        ("floor", x1, v1, drop.zeta01),
-        ("ball", x2 - x1, v2 - v1, drop.zeta12),
+    for contact, name, eta, rate, zeta in (
+        (FLOOR, "floor", x1, v1, drop.zeta01),
+        (BALLS, "ball", x2 - x1, v2 - v1, drop.zeta12),
     ):
         pushing = np.maximum(eta, eta + 2.0 * zeta * rate) < -slack
         covered = np.zeros_like(pushing)
         for c in result.contacts:
-            if c.contact == name:
+            if c.contact == contact:
                 width = 1e-9 * (1.0 + abs(c.end))
                 covered |= (trajectory.t >= c.start - width) & (trajectory.t <= c.end + width)
         if np.any(pushing & ~covered):
@@ -253,7 +253,7 @@ def diagnose(
         h1=result.h1,
         h2=result.h2,
         end_time=result.end_time,
-        contact_starts=[c.start for c in result.contacts if c.contact == "ball"],
+        contact_starts=[c.start for c in result.contacts if c.contact == BALLS],
         energy_rise=rise,
         deepest_overlap=deepest,
     )
@@ -482,6 +482,7 @@ def h_convergence(
     for eps, mu, tau_ratio in points:
         for height in heights:
             summary = simulate(eps, mu, tau_ratio, height=height).summary()
+            summary["contacts_first"] = summary["contacts_first"][BALLS]  # the ball contacts
             rows.append({key: summary[key] for key in H_COLUMNS})
     return rows
 
