@@ -152,7 +152,7 @@ def simulate(
         contacts=contact_intervals(outcome.contacts),
         end_time=float(outcome.end_time),
         reason=outcome.message,
-        contacts_first=[int(count) for count in outcome.contacts_first],
+        contacts_first=outcome.contacts_first,  # Python ints from every solver
         rtol=rtol,
         atol=atol,
         trajectory=trajectory,
