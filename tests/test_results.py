@@ -166,3 +166,18 @@ def test_summaries_share_the_observables_keys_and_types(runs):
     pair = runs["linear pair"].summary()
     assert pair["h1_over_drop"] == pytest.approx(pair["h1"] / pair["x2_0"], rel=1e-15)
     assert pair["h2_over_drop"] == pytest.approx(pair["h2"] / pair["x2_0"], rel=1e-15)
+
+
+def test_both_trajectories_hold_a_column_per_ball_and_per_contact():
+    """x, v and f read alike for two balls and a stack: the pair stack's samples are simulate's
+    (the two solvers are independent code, docs/stacks.md)."""
+    times = np.linspace(0.0, 300.0, 301)
+    single = twoball.simulate(0.9, 0.01, 0.01, t_eval=times).trajectory
+    pair = twoball.simulate_stack([0.01], 0.9, 0.01, t_eval=times).trajectory
+    for name in ("x", "v", "f"):
+        mine, theirs = getattr(single, name), getattr(pair, name)
+        assert mine.shape == theirs.shape == (len(times), 2)
+        scale = np.abs(theirs).max()
+        np.testing.assert_allclose(mine, theirs, rtol=0, atol=1e-9 * scale)
+    np.testing.assert_array_equal(single.x[:, 1], single.x2)
+    np.testing.assert_array_equal(single.f[:, 0], single.f01)

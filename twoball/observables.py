@@ -74,7 +74,9 @@ class Outcome(NamedTuple):
 
 @dataclass(frozen=True)
 class Trajectory:
-    """Sampled heights, velocities and contact forces of both balls (dimensionless)."""
+    """Sampled heights, velocities and contact forces of both balls (dimensionless); ``x``,
+    ``v`` and ``f`` give them as a stack's trajectory holds them
+    (:class:`~twoball.stacks.StackTrajectory`: a column per ball, per contact floor first)."""
 
     t: np.ndarray
     x1: np.ndarray
@@ -83,6 +85,21 @@ class Trajectory:
     v2: np.ndarray
     f01: np.ndarray
     f12: np.ndarray
+
+    @property
+    def x(self) -> np.ndarray:
+        """Heights, (len(t), 2): the lower ball's, then the upper ball's."""
+        return np.column_stack([self.x1, self.x2])
+
+    @property
+    def v(self) -> np.ndarray:
+        """Velocities, (len(t), 2), as :attr:`x`."""
+        return np.column_stack([self.v1, self.v2])
+
+    @property
+    def f(self) -> np.ndarray:
+        """Contact forces, (len(t), 2), by contact number: the floor's, then the balls'."""
+        return np.column_stack([self.f01, self.f12])
 
 
 class Measured:
