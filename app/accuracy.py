@@ -25,6 +25,16 @@ OKABE_ITO = ("#000000", "#E69F00", "#56B4E9", "#009E73", "#0072B2", "#D55E00", "
 PROJECTOR_PLOT_HEIGHT = 400  # presentation mode (scene.py): first under the tabs, in 720 px
 
 
+@functools.lru_cache(maxsize=64)
+def measured(
+    eps: float, mu: float, tau_ratio: float, eps12: float | None, height: float
+) -> tuple[PrecisionRow, ...]:
+    """The work-precision rows of a drop, measured once per server process: a class opening
+    the scene at one lesson step's drop costs the server one measurement (a few seconds of
+    CPU), not one a student. The run times shown are those of that first measurement."""
+    return tuple(work_precision(eps, mu, tau_ratio, eps12=eps12, height=height))
+
+
 class AccuracyScene(Scene):
     """Work-precision diagram at the current parameters, computed only when opened."""
 
@@ -81,7 +91,7 @@ class AccuracyScene(Scene):
     def _work(self) -> list[PrecisionRow]:
         s = self.state
         self.computations += 1
-        return work_precision(s.eps, s.mu, s.tau_ratio, eps12=s.eps12, height=s.height)
+        return list(measured(s.eps, s.mu, s.tau_ratio, s.eps12, s.height))
 
     async def _compute_in_thread(self, request: int, document) -> None:
         rows = await asyncio.to_thread(self._work)

@@ -18,12 +18,14 @@ import time
 
 import panel
 import panel.io.document
+from bokeh.settings import settings as bokeh_settings
 from tornado.ioloop import IOLoop
 from tornado.websocket import WebSocketClosedError
 
 from twoball import warmup
 
 from .delayed_map import map_cube
+from .scenes import SCENE_REGISTRY
 
 # under bokeh's logger, which `panel serve --log-level` shows (info by default)
 log = logging.getLogger("bokeh.twoball")
@@ -91,6 +93,11 @@ def on_server_loaded(server_context) -> None:
     messages to pages that have closed."""
     sys.set_int_max_str_digits(QUERY_DIGITS)
     panel.config.session_key_func = page_kind
+    # Bokeh checks every new session's document for mistakes of construction (a renderer
+    # without a glyph, a layout without children), about 7 % of a page's opening cost; the
+    # pages are the same for every session, and tests/app/test_app_state.py checks each scene's
+    # document once (test_every_scene_builds_a_valid_document)
+    bokeh_settings.perform_document_validation.set_value(False)
     drop_messages_to_closed_sockets()
     loop = IOLoop.current().asyncio_loop
     loop.set_exception_handler(closed_socket_handler(loop.get_exception_handler()))
@@ -98,6 +105,8 @@ def on_server_loaded(server_context) -> None:
     warmup.compile_in_background(
         done=lambda: log.info("compiled kernels in use after %.1f s", time.monotonic() - started)
     )
+    for entry in SCENE_REGISTRY.values():  # imported now, not by the first page to visit one
+        entry.viewer_class()
     try:
         map_cube()
     except (OSError, ValueError) as error:  # the map scene shows this too

@@ -13,7 +13,7 @@ import dataclasses
 import numpy as np
 import panel as pn
 import param
-from bokeh.models import ColumnDataSource, Span
+from bokeh.models import ColumnDataSource, Legend, LegendItem, Line, Span
 from bokeh.plotting import figure
 
 import twoball
@@ -22,7 +22,7 @@ from twoball.units import units_named
 
 from .collisions import first_collision
 from .drop import LOWER, UPPER
-from .scene import Scene, answers_pending, on_screen, readable
+from .scene import Scene, answers_pending, draw, on_screen, readable
 
 SAMPLES = 600  # over the collision, with every contact's start and end: ~2 px apart at 1366 px
 MARGIN = 0.08  # of the collision's duration, shown before and after it
@@ -53,19 +53,21 @@ class CloseUpScene(Scene):
         self.samples = ColumnDataSource({"t": [], "x1": [], "x2": [], "f01": [], "f12": []})
         answers_pending(self.samples)
         self.positions = self._figure("Positions (negative: compressed)", 300)
-        self.positions.line(
-            "t", "x1", source=self.samples, color=LOWER, line_width=2, legend_label="X1 lower ball"
+        lower = draw(
+            self.positions, Line(x="t", y="x1", line_color=LOWER, line_width=2), self.samples
         )
-        self.positions.line(
-            "t", "x2", source=self.samples, color=UPPER, line_width=2, legend_label="X2 upper ball"
+        upper = draw(
+            self.positions, Line(x="t", y="x2", line_color=UPPER, line_width=2), self.samples
         )
         self.positions.add_layout(Span(dimension="width", location=0.0, line_color="gray"))
-        self.positions.legend.location = "top_left"
+        items = [LegendItem(label="X1 lower ball", renderers=[lower]),
+                 LegendItem(label="X2 upper ball", renderers=[upper])]  # fmt: skip
+        self.positions.add_layout(Legend(items=items, location="top_left"))
         # f12 is of order mu times f01: each force gets its own axis
         self.floor_force = self._figure("Floor force f01", 200, x_range=self.positions.x_range)
-        self.floor_force.line("t", "f01", source=self.samples, color="black", line_width=2)
+        draw(self.floor_force, Line(x="t", y="f01", line_color="black", line_width=2), self.samples)
         self.ball_force = self._figure("Ball-ball force f12", 200, x_range=self.positions.x_range)
-        self.ball_force.line("t", "f12", source=self.samples, color=UPPER, line_width=2)
+        draw(self.ball_force, Line(x="t", y="f12", line_color=UPPER, line_width=2), self.samples)
         for fig in (self.positions, self.floor_force, self.ball_force):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # side by side within 720 px (layout), a shorter title

@@ -17,7 +17,7 @@ from bokeh.models import CustomJS, CustomJSTickFormatter
 from twoball import presets
 
 from .scene import PENDING_JS, Built, alert, later
-from .state import APP_RANGES, ExplorerState, validate
+from .state import ExplorerState, app_range, validate
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
 POWER_OF_TEN = "return Number((10 ** tick).toPrecision(3)).toString()"
@@ -97,8 +97,8 @@ class Controls(Built):
         self.sliders = {
             "eps": ReleasedSlider(
                 label="eps" if short else "eps (restitution)",
-                start=APP_RANGES["eps"][0],
-                end=1.0,
+                start=app_range("eps")[0],
+                end=app_range("eps")[1],
                 step=0.001,
                 format="0.000",
             ),
@@ -138,7 +138,7 @@ class Controls(Built):
 
     @staticmethod
     def _log_slider(label: str, name: str) -> pn.widgets.FloatSlider:
-        low, high = APP_RANGES[name]
+        low, high = app_range(name)
         return ReleasedSlider(
             label=label,
             start=math.log10(low),
@@ -206,7 +206,7 @@ class Controls(Built):
 
     def _metres_checked(self, typed: object) -> tuple[float, str | None]:
         """(H, message) for a drop height typed in metres; the message speaks metres."""
-        low, high = (presets.metres_from_height(h) for h in APP_RANGES["height"])
+        low, high = (presets.metres_from_height(h) for h in app_range("height"))
         current = presets.metres_from_height(self.state.height)
         if not isinstance(typed, float) or not math.isfinite(typed) or typed <= 0:
             return self.state.height, (

@@ -15,12 +15,15 @@ import panel as pn
 import param
 from bokeh.models import (
     BoxAnnotation,
+    Circle,
     ColumnDataSource,
     LabelSet,
     Legend,
     LegendItem,
+    Line,
     NumeralTickFormatter,
     Range1d,
+    Scatter,
     Span,
 )
 from bokeh.plotting import figure
@@ -31,7 +34,7 @@ from twoball.observables import BALLS
 from twoball.units import units_named
 
 from .collisions import collisions
-from .scene import Scene, answers_pending, later, on_screen, readable
+from .scene import Scene, answers_pending, draw, later, on_screen, readable
 from .worksheet import drop_csv
 
 FLIGHT_FRAMES = 240  # evenly spread over the drop
@@ -106,13 +109,23 @@ def height_axis(fig) -> None:
     fig.yaxis.formatter = NumeralTickFormatter(format="0,0.[0000]")
 
 
+def balls_glyph() -> Circle:
+    """The balls of an animation: circles of the radii in column ``r`` (in heights), centred
+    at ``x``, ``y``, filled with the colours in ``color``."""
+    return Circle(
+        x="x", y="y", radius="r", radius_dimension="y", fill_color="color", line_color="black"
+    )
+
+
 def stage():
-    """The animation's stage: a narrow figure with the floor (a grey band below height 0)."""
+    """The animation's stage: a narrow figure with the floor (a grey band below height 0), a
+    height axis and no other (the balls are side by side at fixed places)."""
     fig = figure(
         width=220,
         height=400,
         x_range=(-1, 1),
         y_range=Range1d(0.0, 1.0),
+        x_axis_type=None,
         tools="",
         toolbar_location=None,
         title="t = 0",
@@ -190,9 +203,10 @@ class DropScene(Scene):
         )
         fig.toolbar.autohide = True
         height_axis(fig)
-        lower = fig.line("t", "x1", source=self.curves, color=LOWER, line_width=2)
-        upper = fig.line("t", "x2", source=self.curves, color=UPPER, line_width=2)
-        fig.scatter("t", "h", source=self.apexes, color=UPPER, size=8)
+        lower = draw(fig, Line(x="t", y="x1", line_color=LOWER, line_width=2), self.curves)
+        upper = draw(fig, Line(x="t", y="x2", line_color=UPPER, line_width=2), self.curves)
+        apexes = Scatter(x="t", y="h", size=8, fill_color=UPPER, line_color=UPPER)
+        draw(fig, apexes, self.apexes)
         fig.add_layout(
             LabelSet(
                 x="t",
@@ -223,12 +237,7 @@ class DropScene(Scene):
     def _animation_figure(self):
         """The two balls, one on the other, above the floor (a grey band below height 0)."""
         fig = stage()
-        fig.circle(
-            "x", "y", radius="r", radius_dimension="y", source=self.balls, color="color",
-            line_color="black",
-        )  # fmt: skip
-        fig.xaxis.visible = False
-        fig.xgrid.visible = False
+        draw(fig, balls_glyph(), self.balls)
         return fig
 
     def update(self) -> None:
@@ -303,8 +312,8 @@ class DropScene(Scene):
             return
         fig = self.heights
         lines = underneath(fig, [
-            fig.line("t", column, source=self.pinned_curves, color=color, line_width=2,
-                     line_dash="dashed", alpha=0.6)
+            draw(fig, Line(x="t", y=column, line_color=color, line_width=2, line_dash="dashed",
+                           line_alpha=0.6), self.pinned_curves)
             for column, color in (("x1", LOWER), ("x2", UPPER))
         ])  # fmt: skip
         readable(fig, self.state.presentation)
@@ -318,7 +327,7 @@ class DropScene(Scene):
             return
         fig = self.animation
         self._trail_lines = underneath(fig, [
-            fig.line(x=x, y=column, source=self.trail, color=color, line_dash="dotted")
+            draw(fig, Line(x=x, y=column, line_color=color, line_dash="dotted"), self.trail)
             for x, column, color in ((-0.6, "x1", LOWER), (0.6, "x2", UPPER))
         ])  # fmt: skip
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
 from urllib.parse import urlencode
 
 import panel as pn
@@ -11,60 +10,11 @@ import param
 
 from twoball import jit
 
-from .accuracy import AccuracyScene
-from .closeup import CloseUpScene
 from .controls import Controls
-from .delayed_map import MapScene
-from .drop import DropScene
 from .lesson import Lesson
 from .scene import MODEL_PARAMETERS, Built, Scene, alert
-from .stack import StackScene
-from .state import SCENES, ExplorerState, read_query, url_query
-
-
-@dataclass(frozen=True)
-class SceneEntry:
-    """A scene of the explorer: its tab's title, the caption above it, its viewer class."""
-
-    title: str
-    caption: str  # what the scene shows and what to look for
-    viewer: type[Scene]
-
-
-# The one registry of scenes, in tab order (app/state.py's SCENES names them for the URL).
-SCENE_REGISTRY = {
-    "drop": SceneEntry(
-        "Drop",
-        "The heights of both balls from release to the small ball's second highest point. "
-        "Look for the orange peaks: a second one higher than the first is a delayed rebound.",
-        DropScene,
-    ),
-    "closeup": SceneEntry(
-        "First collision",
-        "The first collision, slowed down: the floor's push on the big ball and the push "
-        "between the balls. Each separate hump of the ball force is one contact.",
-        CloseUpScene,
-    ),
-    "map": SceneEntry(
-        "Delayed-rebound map",
-        "Every mass ratio and gap at once: red where the second bounce is the higher one. "
-        "Click a point to drop those balls.",
-        MapScene,
-    ),
-    "accuracy": SceneEntry(
-        "Accuracy",
-        "General-purpose ODE solvers on the same drop at several tolerances, against the "
-        "exact solver: how far off they are, and how long they take.",
-        AccuracyScene,
-    ),
-    "stack": SceneEntry(
-        "Stack",
-        "Beyond the paper: a stack of 2 to 8 balls dropped together, each lighter than the one "
-        "below. Compare the top ball's bounce with the textbook chain of collisions.",
-        StackScene,
-    ),
-}
-assert tuple(SCENE_REGISTRY) == SCENES
+from .scenes import SCENE_REGISTRY, SCENES
+from .state import ExplorerState, read_query, url_query
 
 COVER_TEXT = (
     "**Predict first.** Answer the lesson's question (in the Lesson card, beside the scene or "
@@ -130,7 +80,7 @@ class Explorer(Built):
     def scene(self, name: str) -> Scene:
         """The scene ``name``, built (and put into its tab) the first time it is asked for."""
         if name not in self.scenes:
-            self.scenes[name] = SCENE_REGISTRY[name].viewer(state=self.state)
+            self.scenes[name] = SCENE_REGISTRY[name].viewer_class()(state=self.state)
             # on a projector the teacher says what the scene shows: its plots get the room
             caption = [] if self.state.presentation else [self._caption(name)]
             self._holders[name].extend([*caption, self.scenes[name]])

@@ -17,7 +17,9 @@ from bokeh.models import (
     LabelSet,
     Legend,
     LegendItem,
+    Line,
     Range1d,
+    Scatter,
     Span,
 )
 from bokeh.plotting import figure
@@ -27,8 +29,8 @@ from twoball.stacks import StackResult, icm_chain, simulate_stack
 from twoball.units import number_text
 
 from .controls import ReleasedIntSlider, ReleasedSlider, plain
-from .drop import frame_times, height_axis, stage
-from .scene import Scene, answers_pending, on_screen, readable
+from .drop import balls_glyph, frame_times, height_axis, stage, underneath
+from .scene import Scene, answers_pending, draw, on_screen, readable
 from .state import contact_eps
 
 # Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first (all
@@ -120,6 +122,7 @@ class StackScene(Scene):
         self.player.link(self, value="frame")
         self.summary = pn.pane.Markdown(sizing_mode="stretch_width")
         self.curves = ColumnDataSource({"t": []})
+        self._lines: list = []  # a line per ball drawn so far (:meth:`_add_lines`)
         answers_pending(self.curves)
         self.apexes = ColumnDataSource({"t": [], "h": [], "text": []})
         self.balls_drawn = ColumnDataSource({"x": [], "y": [], "r": [], "color": []})
@@ -147,12 +150,9 @@ class StackScene(Scene):
         )
         fig.toolbar.autohide = True
         height_axis(fig)
-        items = []
-        for ball, color in enumerate(PALETTE):
-            self.curves.data[f"x{ball}"] = []
-            line = fig.line("t", f"x{ball}", source=self.curves, color=color, line_width=2)
-            items.append(LegendItem(label=f"ball {ball + 1}", renderers=[line]))
-        fig.scatter("t", "h", source=self.apexes, color="black", size=8)
+        draw(
+            fig, Scatter(x="t", y="h", size=8, fill_color="black", line_color="black"), self.apexes
+        )
         fig.add_layout(
             LabelSet(
                 x="t", y="h", text="text", source=self.apexes, text_font_size="10pt",
@@ -163,18 +163,27 @@ class StackScene(Scene):
         fig.add_layout(self.cursor)
         # below the plot, four a row: inside it, eight balls' legend hid the curves and the
         # apex labels
-        self.legend = Legend(items=items, orientation="horizontal", ncols=4)
+        self.legend = Legend(items=[], orientation="horizontal", ncols=4)
         fig.add_layout(self.legend, "below")
         return fig
 
+    def _add_lines(self, balls: int) -> None:
+        """A line and a legend entry for each of the first ``balls`` balls, under the apexes
+        and labels: added when a stack of that many is first drawn (a page of three balls does
+        not pay for eight)."""
+        if balls <= len(self._lines):
+            return
+        for ball in range(len(self._lines), balls):
+            glyph = Line(x="t", y=f"x{ball}", line_color=PALETTE[ball], line_width=2)
+            self._lines.append(draw(self.heights, glyph, self.curves))
+            item = LegendItem(label=f"ball {ball + 1}", renderers=[self._lines[-1]])
+            self.legend.items = [*self.legend.items, item]
+        underneath(self.heights, self._lines)  # (ball 1's drawn first, as before)
+        readable(self.heights, self.state.presentation)
+
     def _animation_figure(self):
         fig = stage()
-        fig.circle(
-            "x", "y", radius="r", radius_dimension="y", source=self.balls_drawn, color="color",
-            line_color="black",
-        )  # fmt: skip
-        fig.xaxis.visible = False
-        fig.xgrid.visible = False
+        draw(fig, balls_glyph(), self.balls_drawn)
         return fig
 
     def contact_eps(self) -> list[float] | float:
@@ -221,14 +230,15 @@ class StackScene(Scene):
         self.current()
         r = self.result
         if r is None:  # refused (the summary says why): nothing drawn rather than the last stack
-            self.curves.data = {"t": [], **{f"x{ball}": [] for ball in range(len(PALETTE))}}
+            self.curves.data = {"t": [], **{f"x{ball}": [] for ball in range(len(self._lines))}}
             self.apexes.data = {"t": [], "h": [], "text": []}
             self.balls_drawn.data = {"x": [], "y": [], "r": [], "color": []}
             return
         tr = r.trajectory
         n = r.stack.balls
+        self._add_lines(n)
         data = {"t": on_screen(tr.t)}
-        for ball in range(len(PALETTE)):  # (every line's column, NaN for a ball not there)
+        for ball in range(len(self._lines)):  # (every line's column, NaN for a ball not there)
             data[f"x{ball}"] = on_screen(tr.x[:, ball] if ball < n else np.full(tr.t.size, np.nan))
         self.curves.data = data
         for ball, item in enumerate(self.legend.items):

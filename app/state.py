@@ -12,19 +12,13 @@ from collections.abc import Mapping
 
 import param
 
-from twoball.model import Parameters, check_value
+from twoball.model import DEFAULT_HEIGHT, Parameters, check_value
 
-SCENES = ("drop", "closeup", "map", "accuracy", "stack")
+from .scenes import SCENES
+from .steps import STEPS
+
 UNITS = ("dimensionless", "SI")
 
-# What the explorer's controls can show (inside the model's bounds): name -> (low, high).
-APP_RANGES = {
-    "eps": (0.01, 1.0),
-    "eps12": (0.01, 1.0),
-    "mu": (1e-4, 10.0),
-    "tau_ratio": (1e-4, 10.0),
-    "height": (10.0, 1e8),
-}
 # Query-string keys of the parameters that the URL carries.
 URL_KEYS = {"eps": "eps", "mu": "mu", "tau_ratio": "tau_ratio", "height": "H", "eps12": "eps12"}
 # The Stack scene's keys: checked against the bounds its parameters declare.
@@ -36,15 +30,21 @@ STACK_URL_KEYS = {
 }
 
 
-OPENING_DROP = {"eps": 0.9, "mu": 0.01, "tau_ratio": 0.01}  # the paper's: h2 = 5.4 h1
-
-
 class ExplorerState(Parameters):
     """One session's drop (the model's parameters) and what is on screen.
 
     The page opens on the paper's drop (docs/model.md, check values), a light ball dropped on
     a heavy one that rebounds higher the second time: a delayed rebound, worth seeing first.
     """
+
+    # What the explorer's controls can show, inside the model's own bounds (the docs are the
+    # model's): the sliders and the URL's checks read these bounds, nothing else. The defaults
+    # are the opening drop, the paper's (h2 = 5.4 h1).
+    eps = param.Number(0.9, bounds=(0.01, 1.0))
+    eps12 = param.Number(None, allow_None=True, bounds=(0.01, 1.0))
+    mu = param.Number(0.01, bounds=(1e-4, 10.0))
+    tau_ratio = param.Number(0.01, bounds=(1e-4, 10.0))
+    height = param.Number(DEFAULT_HEIGHT, bounds=(10.0, 1e8), inclusive_bounds=(True, True))
 
     scene = param.Selector(default="drop", objects=list(SCENES), doc="The scene on screen.")
     units = param.Selector(
@@ -93,15 +93,18 @@ class ExplorerState(Parameters):
         doc="The contact force of the delayed-rebound map (the shipped cube shown).",
     )
 
-    def __init__(self, **params):
-        super().__init__(**(OPENING_DROP | params))
+
+def app_range(name: str) -> tuple[float, float]:
+    """What the explorer shows of a model parameter: (low, high), as :class:`ExplorerState`
+    declares it."""
+    return ExplorerState.param[name].bounds
 
 
 def validate(name: str, value: object, fallback: float | None) -> tuple[float | None, str | None]:
     """(value to use, message or None) for a parameter typed or read from the URL.
 
     The model decides what is valid (:func:`twoball.model.check_value`); a valid value outside
-    what the sliders show is clamped into :data:`APP_RANGES`. ``eps12`` may be empty or "none"
+    what the sliders show is clamped into :func:`app_range`. ``eps12`` may be empty or "none"
     (equal to eps). Never raises.
     """
     if name == "eps12" and (value is None or str(value).strip().lower() in ("", "none")):
@@ -111,7 +114,7 @@ def validate(name: str, value: object, fallback: float | None) -> tuple[float | 
     except ValueError as error:
         shown = "equal to eps" if fallback is None else f"{fallback:g}"
         return fallback, f"{error}. Using {shown}."
-    low, high = APP_RANGES[name]
+    low, high = app_range(name)
     if number < low or number > high:
         clamped = min(max(number, low), high)
         message = f"{name} = {number:g} is outside the explorer's range [{low:g}, {high:g}]"
@@ -167,8 +170,6 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
                 f"Using {defaults.units}."
             )
     if "step" in query:
-        from .lesson import STEPS  # the lesson's steps set the drop and the scene
-
         text = query["step"]
         if text.isdigit() and 1 <= int(text) <= len(STEPS):
             shown = STEPS[int(text) - 1]

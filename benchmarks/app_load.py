@@ -95,6 +95,18 @@ async def open_burst(url: str, count: int) -> list[PageClient]:
     return clients
 
 
+async def settled(pid: int, quiet: float = 0.5, timeout: float = 120.0) -> None:
+    """Wait until the server spends under 4 % of a core for ``quiet`` seconds."""
+    deadline = time.monotonic() + timeout
+    last = cpu_seconds(pid)
+    while time.monotonic() < deadline:
+        await asyncio.sleep(quiet)
+        now = cpu_seconds(pid)
+        if now - last < 0.04 * quiet:
+            return
+        last = now
+
+
 async def moving(url: str, count: int, seconds: float, every: float, pid: int, slider: str) -> dict:
     """``count`` sessions, each moving the slider titled ``slider`` every ``every`` s for
     ``seconds`` s, through ten values inside its range."""
@@ -208,11 +220,15 @@ async def run(label: str, command: list[str], url: str, port: int, args, log: Pa
         started = time.monotonic()
         burst = await open_burst(url, args.burst)
         wall = time.monotonic() - started
+        await settled(process.pid)  # the scenes that follow the documents, the URLs' rewrite
         cpu = cpu_seconds(process.pid) - cpu_start
         opens = [c.opened for c in burst]
+        complete = [c.complete() for c in burst]
         print(
             f"{label}: idle {idle:.0f} MB; {args.burst} sessions opened at once: all documents "
-            f"in {max(opens):.2f} s (median {statistics.median(opens):.2f} s, wall {wall:.2f} s); "
+            f"in {max(opens):.2f} s (median {statistics.median(opens):.2f} s, wall {wall:.2f} s),"
+            f" pages complete (their last message) in {max(complete):.2f} s (median "
+            f"{statistics.median(complete):.2f} s); "
             f"server CPU {1e3 * cpu / args.burst:.0f} ms per session; first document "
             f"{burst[0].document_bytes / 1e3:.0f} kB ({len(burst[0].models)} models)",
             flush=True,

@@ -63,6 +63,7 @@ class PageClient:
 
     url: str
     opened: float = float("nan")  # seconds from the GET to the document pulled
+    started: float = float("nan")  # time.monotonic() of the GET
     document_bytes: int = 0  # the pulled document: its JSON and its binary buffers
     document_wire_bytes: int = 0  # what the page received for it on the socket (compressed)
     models: dict[str, dict] = field(default_factory=dict)
@@ -74,7 +75,7 @@ class PageClient:
 
     async def open(self, timeout: float = 60.0) -> None:
         """GET the page, connect its websocket and pull the document."""
-        start = time.monotonic()
+        start = self.started = time.monotonic()
         response = await AsyncHTTPClient().fetch(self.url, request_timeout=timeout)
         token = TOKEN.search(response.body.decode()).group(1)
         base, _, _query = self.url.partition("?")
@@ -144,6 +145,12 @@ class PageClient:
             kind, content = await asyncio.wait_for(self._replies.get(), timeout)
             if kind == msgtype:
                 return content
+
+    def complete(self) -> float:
+        """Seconds from the GET to the last message received so far (a page's scene follows its
+        document once the page is in the browser, app/main.py)."""
+        last = max((patch.arrived for patch in self.patches), default=self.started + self.opened)
+        return max(last - self.started, self.opened)
 
     def received(self) -> int:
         """Bytes received on the websocket's TCP connection so far (Linux TCP_INFO's

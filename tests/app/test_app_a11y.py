@@ -9,7 +9,7 @@ import pytest
 from appdriver import open_page
 from axe_playwright_python.sync_playwright import Axe
 
-from app.explorer import SCENE_REGISTRY
+from app.scenes import SCENE_REGISTRY
 
 pytestmark = pytest.mark.browser
 SERIOUS = ("serious", "critical")

@@ -21,7 +21,7 @@ from appdriver import (
     wait_for_plots,
 )
 
-from app.explorer import SCENE_REGISTRY
+from app.scenes import SCENE_REGISTRY
 
 pytestmark = pytest.mark.browser
 

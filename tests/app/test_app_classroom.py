@@ -19,7 +19,7 @@ from appdriver import (
     wait_for_change,
 )
 
-from app.explorer import SCENE_REGISTRY
+from app.scenes import SCENE_REGISTRY
 
 pytestmark = pytest.mark.browser
 

@@ -9,8 +9,8 @@ from appdriver import deep_query, open_page, page_query
 from playwright.sync_api import expect
 
 import twoball
-from app.lesson import STEPS
 from app.state import ExplorerState, read_query
+from app.steps import STEPS
 from twoball import presets
 from twoball.observables import BALLS
 

@@ -14,8 +14,8 @@ from bokeh.document import Document
 
 import twoball
 from app.delayed_map import map_cube
-from app.explorer import SCENE_REGISTRY, Explorer
-from app.state import SCENES
+from app.explorer import Explorer
+from app.scenes import SCENE_REGISTRY, SCENES
 from twoball import presets
 from twoball.observables import BALLS, FLOOR
 
@@ -47,6 +47,26 @@ def test_a_page_opens_on_the_scene_its_url_names(scene):
     assert not explorer.scenes[scene].active
     assert explorer.scenes[explorer.state.scene].active
     assert explorer.tabs.active == SCENES.index(explorer.state.scene)
+
+
+@pytest.mark.parametrize("present", [False, True])
+def test_every_scene_builds_a_valid_document(present):
+    """Bokeh's check of a document's construction (a renderer without data, a layout without
+    children, ...), which the served app skips for every session (app/app_hooks.py): done here,
+    once, on a page with every scene built."""
+    from bokeh.core.validation.check import check_integrity
+
+    explorer = Explorer({"present": "1"} if present else {})
+    for name in SCENES:
+        explorer.scene(name)
+    document = Document()
+    explorer.page().server_doc(document)
+    issues = check_integrity(list(document.models))
+    assert len(document.models) > 300  # (every scene is in it)
+    assert issues.error == []
+    # empty layouts are allowed: those filled when first used (the folded "advanced" card, the
+    # lesson's steps before it starts) cost a page nothing until then
+    assert {issue.name for issue in issues.warning} <= {"EMPTY_LAYOUT"}
 
 
 def test_the_stack_scene_computes_only_for_its_own_parameters():
@@ -240,6 +260,29 @@ def test_accuracy_computes_only_when_opened():
     assert lsoda[1e-9].rel_err_h1 < lsoda[1e-3].rel_err_h1
     assert "LSODA" in scene.table.object
     assert scene.view.loading is False and scene.status.object == ""  # done: nothing pending
+
+
+def test_a_class_at_one_drop_measures_the_accuracy_once(monkeypatch):
+    """Every page at the same drop shows the same rows, measured once per server; another drop
+    is measured anew."""
+    import app.accuracy
+    from twoball.studies import precision
+
+    calls = []
+
+    def counted(*args, **kwargs):
+        calls.append(args)
+        return precision.work_precision(*args, **kwargs)
+
+    monkeypatch.setattr(app.accuracy, "work_precision", counted)
+    app.accuracy.measured.cache_clear()
+    query = {"scene": "accuracy", "eps": "0.7", "mu": "0.2", "tau_ratio": "0.5"}
+    pages = [rendered(query) for _ in range(3)]
+    assert len(calls) == 1
+    assert pages[0].scenes["accuracy"].rows == pages[2].scenes["accuracy"].rows
+    pages[1].state.mu = 0.3
+    assert len(calls) == 2 and calls[-1][1] == 0.3
+    app.accuracy.measured.cache_clear()
 
 
 def test_bad_typed_values_show_a_message_and_keep_a_valid_state():

@@ -35,7 +35,7 @@ from appdriver import (
 from bokehclient import PageClient
 
 import twoball
-from app.state import SCENES
+from app.scenes import SCENES
 from twoball.units import number_text
 
 TWOBALL = Path(sys.executable).parent / "twoball"

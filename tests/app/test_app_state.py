@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from app.state import APP_RANGES, ExplorerState, read_query, url_query, validate
+from app.state import ExplorerState, app_range, read_query, url_query, validate
 from twoball import presets
 from twoball.model import Parameters
 
@@ -34,10 +34,27 @@ def test_validate_falls_back_with_a_message_naming_the_parameter(name, text, wor
 
 def test_validate_clamps_valid_values_the_sliders_cannot_show():
     value, message = validate("mu", "100", 0.05)
-    assert value == APP_RANGES["mu"][1]
+    assert value == app_range("mu")[1]
     assert "outside the explorer's range" in message
     value, message = validate("tau_ratio", "0", 0.3)  # valid for the model, not on a log slider
-    assert value == APP_RANGES["tau_ratio"][0] and message
+    assert value == app_range("tau_ratio")[0] and message
+
+
+@pytest.mark.parametrize("name", ["eps", "eps12", "mu", "tau_ratio", "height"])
+def test_the_explorer_s_range_is_declared_once_and_inside_the_model_s(name):
+    """Both ends of the explorer's range are valid drops and states; the sliders span it."""
+    from app.controls import LOG_SLIDERS, Controls
+    from twoball.model import check_value
+
+    low, high = app_range(name)
+    for edge in (low, high):
+        assert check_value(name, edge) == edge  # the model accepts it
+        assert validate(name, str(edge), None) == (edge, None)
+        ExplorerState(**{name: edge})  # so does the state
+    slider = Controls(state=ExplorerState()).sliders.get(name)
+    if slider is not None:
+        ends = (math.log10(low), math.log10(high)) if name in LOG_SLIDERS else (low, high)
+        assert (slider.start, slider.end) == pytest.approx(ends)
 
 
 def test_empty_eps12_means_equal_to_eps():
@@ -90,7 +107,7 @@ def test_presets_follow_their_cited_drop_tests_and_masses():
     assert 2.7 / 650 < ping_pong.mu < 2.7 / 567
     for preset in (tennis, ping_pong):
         for name in ("eps", "eps12", "mu", "tau_ratio"):
-            low, high = APP_RANGES[name]
+            low, high = app_range(name)
             assert low <= getattr(preset, name) <= high
     # a 1 m drop of a basketball is of order H = 1e4 (model.md)
     assert 3e3 < presets.height_from_metres(1.0) < 3e4

@@ -1,0 +1,126 @@
+"""Benchmark: the server's CPU to open a page, per scene, without a browser or a network.
+
+Builds a session's page as ``panel serve`` does (the explorer from the URL query, its template
+put into a fresh Bokeh document under one ``freeze``, as app/main.py does) and serialises the
+document as the first message to the browser would carry it. The baseline, in the same process,
+is a page with one slider and a 10-point line. Medians of ``--pages`` pages after three warm-up
+pages; CPU time of the process (``time.process_time``).
+
+    .venv/bin/python benchmarks/app_open.py [--pages 10] [--scene drop closeup] [--profile drop]
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import pstats
+import statistics
+import sys
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+import numpy as np  # noqa: E402
+import panel as pn  # noqa: E402
+from bokeh.document import Document  # noqa: E402
+from bokeh.models import ColumnDataSource  # noqa: E402
+from bokeh.plotting import figure  # noqa: E402
+from bokeh.protocol import Protocol  # noqa: E402
+from panel.io.state import set_curdoc  # noqa: E402
+
+SCENES = ("drop", "closeup", "map", "accuracy", "stack")
+
+
+def first_message_bytes(document: Document) -> int:
+    """The document as its first message to the browser (PULL-DOC-REPLY), serialised: bytes."""
+    message = Protocol().create("PULL-DOC-REPLY", "request", document)
+    return len(message.content_json) + sum(len(b.to_bytes()) for b in message._buffers)
+
+
+def explorer_page(query: dict[str, str]) -> tuple[dict[str, float], int, int]:
+    """Build one page: CPU ms of its parts, its model count, its document's JSON bytes."""
+    from app.explorer import Explorer
+
+    document = Document()
+    parts: dict[str, float] = {}
+    with set_curdoc(document):
+        start = time.process_time()
+        explorer = Explorer(query)
+        page = explorer.page()
+        parts["explorer"] = time.process_time() - start
+        start = time.process_time()
+        with document.models.freeze():
+            page.server_doc(document)
+        parts["models"] = time.process_time() - start
+    start = time.process_time()
+    size = first_message_bytes(document)
+    parts["json"] = time.process_time() - start
+    return {k: 1e3 * v for k, v in parts.items()}, len(document.models), size
+
+
+def baseline_page(query: dict[str, str]) -> tuple[dict[str, float], int, int]:
+    """The same for a minimal Panel page (one slider, one 10-point line)."""
+    document = Document()
+    with set_curdoc(document):
+        start = time.process_time()
+        source = ColumnDataSource({"x": np.arange(10.0), "y": np.zeros(10)})
+        fig = figure(height=300)
+        fig.line("x", "y", source=source)
+        slider = pn.widgets.FloatSlider(start=0, end=1, value=0)
+        page = pn.template.BootstrapTemplate(sidebar=[slider], main=[pn.pane.Bokeh(fig)])
+        built = time.process_time() - start
+        start = time.process_time()
+        with document.models.freeze():
+            page.server_doc(document)
+        models = time.process_time() - start
+    start = time.process_time()
+    size = first_message_bytes(document)
+    parts = {"explorer": built, "models": models, "json": time.process_time() - start}
+    return {k: 1e3 * v for k, v in parts.items()}, len(document.models), size
+
+
+def measure(build, query: dict[str, str], pages: int) -> tuple[dict[str, float], int, int]:
+    for _ in range(3):
+        build(query)
+    runs = [build(query) for _ in range(pages)]
+    parts = {k: statistics.median(r[0][k] for r in runs) for k in runs[0][0]}
+    parts["total"] = statistics.median(sum(r[0].values()) for r in runs)
+    return parts, runs[-1][1], runs[-1][2]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--pages", type=int, default=10)
+    parser.add_argument("--scene", nargs="*", default=list(SCENES))
+    parser.add_argument("--present", action="store_true", help="presentation mode (?present=1)")
+    parser.add_argument("--profile", help="profile the pages of this scene instead")
+    args = parser.parse_args()
+    pn.extension()
+    from twoball import warmup
+
+    warmup.warm_up()  # compiled kernels, as a running server has them
+    extra = {"present": "1"} if args.present else {}
+    if args.profile:
+        query = {"scene": args.profile, **extra}
+        measure(explorer_page, query, 1)
+        profile = cProfile.Profile()
+        profile.runcall(lambda: [explorer_page(query) for _ in range(args.pages)])
+        pstats.Stats(profile).sort_stats("cumulative").print_stats(40)
+        return
+    rows = [("baseline (slider, line)", *measure(baseline_page, {}, args.pages))]
+    for scene in args.scene:
+        rows.append((scene, *measure(explorer_page, {"scene": scene, **extra}, args.pages)))
+    print(f"server CPU to open a page, median of {args.pages} (ms); models; document (bytes)")
+    heads = ("total", "build", "models", "json")
+    print(f"{'page':26s} " + " ".join(f"{h:>7s}" for h in heads) + f" {'n':>5s} {'bytes':>8s}")
+    for label, parts, count, size in rows:
+        print(
+            f"{label:26s} {parts['total']:7.1f} {parts['explorer']:7.1f} {parts['models']:7.1f} "
+            f"{parts['json']:7.1f} {count:5d} {size:8d}"
+        )
+
+
+if __name__ == "__main__":
+    main()
