@@ -87,9 +87,10 @@ def simulate_stack(
     stack = check_stack(mass_ratios, eps, tau_ratios, height=height, force=force)
     solvers = METHODS[force]
     if method not in solvers:
+        elsewhere = [other for other, named in METHODS.items() if method in named]
         raise ParameterError(
             f"method must be one of {', '.join(solvers)} with the {force} force; got {method!r}"
-            + (" (the linear force has one method, its exact solver)" if force == "linear" else "")
+            + (f" (it applies to the {elsewhere[0]} force only)" if elsewhere else "")
         )
     apexes_wanted, t_end = stop_rule(until)
     times = None
