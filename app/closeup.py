@@ -17,6 +17,7 @@ from bokeh.models import ColumnDataSource, Legend, LegendItem, Line, Span
 from bokeh.plotting import figure
 
 import twoball
+from twoball.observables import BALLS, FLOOR
 from twoball.units import units_named
 
 from .collisions import first_collision
@@ -123,11 +124,12 @@ class CloseUpScene(Scene):
         units = units_named(self.state.units)
         r = self.result
         collision = first_collision(r.contacts)
-        ball = [c for c in collision if c.contact == "ball"]
-        floor = [c for c in collision if c.contact == "floor"]
+        ball = [c for c in collision if c.contact == BALLS]
+        floor = [c for c in collision if c.contact == FLOOR]
+        floors, balls = r.contacts_first
         lines = [
-            f"**{r.contacts_first} ball contact{'s' * (r.contacts_first != 1)}** and "
-            f"{r.floor_contacts_first} floor contact{'s' * (r.floor_contacts_first != 1)} "
+            f"**{balls} ball contact{'s' * (balls != 1)}** and "
+            f"{floors} floor contact{'s' * (floors != 1)} "
             "before the first apex (the table lists those of the first collision, shown above).",
             "",
             "| contact | starts | ends | lasts |",

@@ -30,6 +30,7 @@ from bokeh.plotting import figure
 
 import twoball
 from twoball import presets
+from twoball.observables import BALLS
 from twoball.units import units_named
 
 from .collisions import collisions
@@ -412,7 +413,7 @@ class DropScene(Scene):
             f"{first}, {second}; {verdict}  \n"
             f"ICM apex (dotted green): {units.height(r.h_icm)}; upper ball released at "
             f"(dashed): {units.height(r.x2_0)}; ball contacts in the first bounce: "
-            f"{r.contacts_first}"
+            f"{r.contacts_first[BALLS]}"
         )
 
     def layout(self) -> pn.viewable.Viewable:

@@ -14,6 +14,7 @@ import numpy as np
 import xarray as xr
 
 import twoball
+from twoball.observables import BALLS
 from twoball.units import Units
 
 
@@ -41,7 +42,7 @@ def drop_csv(result: twoball.Result, samples: twoball.Trajectory, units: Units) 
         "h2_over_h1": _number(result.h2_over_h1),
         "h_icm": _number(result.h_icm * units.length),
         "released_at": _number(result.x2_0 * units.length),
-        "ball_contacts_in_first_bounce": result.contacts_first,
+        "ball_contacts_in_first_bounce": result.contacts_first[BALLS],
         "delayed_rebound": result.delayed_rebound,
     }
     names = ("t", "x1", "x2", "v1", "v2", "f01", "f12")

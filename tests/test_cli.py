@@ -97,6 +97,8 @@ def test_stack_json_matches_the_library():
     assert (data["h1"], data["h2"]) == (result.h1, result.h2)
     assert data["contacts_first"] == result.contacts_first and data["balls"] == 3
     assert data["h1_over_icm"] == result.h1 / result.h_icm
+    # the observables' keys are simulate's (a finished run's reason null, as simulate's)
+    assert set(result.measured()) <= set(data) and data["reason"] is None
 
 
 def test_stack_bad_input_exits_2_naming_it():

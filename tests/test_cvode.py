@@ -5,6 +5,7 @@ import pytest
 from cases import BENIGN, CLOSE_UP, CLOSE_UP_CONTACTS
 
 import twoball
+from twoball.observables import BALLS
 
 pytest.importorskip("sksundae", reason="the cvode extra (scikit-sundae) is not installed")
 
@@ -17,7 +18,7 @@ def test_cvode_reproduces_the_check_values_of_the_model(case):
     assert result.h1 == pytest.approx(case.h1, rel=2e-7)
     assert result.h2 == pytest.approx(case.h2, rel=2e-7)
     if case is CLOSE_UP:
-        assert result.contacts_first == CLOSE_UP_CONTACTS
+        assert result.contacts_first[BALLS] == CLOSE_UP_CONTACTS
 
 
 def test_cvode_error_falls_with_its_tolerance():

@@ -14,6 +14,7 @@ from scipy.optimize import minimize_scalar
 import twoball
 from twoball.kernels import codes, phases
 from twoball.model import damping_ratios, decay_ratio, restitution
+from twoball.observables import BALLS, FLOOR
 
 
 def _advance(kind, state, mu, z01, z12, horizon=np.inf):
@@ -108,10 +109,10 @@ def test_close_up_case_of_model_md():
     result = twoball.simulate(0.9, 0.01, 0.01)
     assert result.h1 == pytest.approx(CLOSE_UP.h1, rel=1e-8)
     assert result.h2 == pytest.approx(CLOSE_UP.h2, rel=1e-8)
-    assert result.contacts_first == 4
+    assert result.contacts_first == [1, 4]  # one floor contact, four ball contacts
     assert result.delayed_rebound
-    floor = [c for c in result.contacts if c.contact == "floor"][0]
-    ball = [c for c in result.contacts if c.contact == "ball" and c.start < result.t1]
+    floor = [c for c in result.contacts if c.contact == FLOOR][0]
+    ball = [c for c in result.contacts if c.contact == BALLS and c.start < result.t1]
     assert len(ball) == 4
     assert all(floor.start <= c.start and c.end <= floor.end for c in ball)
 
@@ -205,7 +206,7 @@ def test_dense_trajectory_matches_the_apexes_and_forces():
     # forces push only inside the reported contact intervals
     inside = np.zeros_like(tr.t, dtype=bool)
     for c in result.contacts:
-        if c.contact == "ball":
+        if c.contact == BALLS:
             inside |= (tr.t >= c.start) & (tr.t <= c.end)
     assert np.all(tr.f12[~inside] == 0.0)
     assert np.all(tr.f12 >= 0.0) and np.all(tr.f01 >= 0.0)
@@ -229,11 +230,12 @@ def test_until_first_stops_at_the_first_apex_and_until_time_stops_there():
 
 def test_contacts_per_bounce_partition_the_contacts():
     result = twoball.simulate(0.9, 0.01, 0.01)
-    counts = result.contacts_per_bounce("ball")
-    assert counts[0] == result.contacts_first
+    counts = result.contacts_per_bounce(BALLS)
+    assert counts[0] == result.contacts_first[BALLS]
     assert sum(counts) == sum(
-        1 for c in result.contacts if c.contact == "ball" and c.start < result.t2
+        1 for c in result.contacts if c.contact == BALLS and c.start < result.t2
     )
+    assert result.contacts_per_bounce(FLOOR)[0] == result.contacts_first[FLOOR]
 
 
 @pytest.mark.parametrize(

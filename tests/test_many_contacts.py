@@ -8,13 +8,15 @@ sample drops were outside ten times their conditioning (745 times at worst)."""
 from __future__ import annotations
 
 import csv
+from dataclasses import replace
 from pathlib import Path
 
 import mpmath
 import pytest
 
 import twoball
-from twoball.studies.conditioning import against_reference, within_rule
+from twoball.observables import BALLS
+from twoball.studies.conditioning import Comparison, against_reference, within_rule
 from twoball.studies.many_contacts import HEIGHT
 from twoball.studies.truth import solve_truth
 
@@ -36,9 +38,9 @@ CASES = [
 def test_many_contact_drops_match_the_40_digit_reference(eps, mu, tau_ratio):
     truth = solve_truth(eps, mu, tau_ratio, height=HEIGHT)
     row = against_reference(
-        eps, mu, tau_ratio, truth.h1, truth.h2, truth.contacts_first, height=HEIGHT
+        eps, mu, tau_ratio, truth.h1, truth.h2, truth.contacts_first[BALLS], height=HEIGHT
     )
-    assert row["contacts_first"] >= 6
+    assert row.contacts_first >= 6
     assert within_rule(row), row
 
 
@@ -49,22 +51,22 @@ def test_the_sample_is_reproducible_and_in_range():
     assert drops == sample_drops(3, seed=10)
     for eps, mu, tau_ratio in drops:
         assert 0.6 <= eps <= 1.0 and 1e-4 <= mu <= 1e-3 and 1e-3 <= tau_ratio <= 0.1
-        assert twoball.simulate(eps, mu, tau_ratio).contacts_first >= MIN_CONTACTS
+        assert twoball.simulate(eps, mu, tau_ratio).contacts_first[BALLS] >= MIN_CONTACTS
 
 
 def test_the_rule_rejects_an_error_far_above_the_conditioning():
-    row = {
-        "contacts_first": 7,
-        "contacts_first_truth": 7,
-        "rel_err_h1": 1e-12,
-        "rel_err_h2": 1.5e-10,
-        "cond_h1": 1e-13,
-        "cond_h2": 1e-13,
-    }
+    row = Comparison(
+        contacts_first=7,
+        contacts_first_truth=7,
+        rel_err_h1=1e-12,
+        rel_err_h2=1.5e-10,
+        cond_h1=1e-13,
+        cond_h2=1e-13,
+    )
     assert not within_rule(row)
-    assert within_rule({**row, "rel_err_h2": 1e-12})
-    assert not within_rule({**row, "rel_err_h2": 1.1e-12})  # ten times the conditioning
-    assert not within_rule({**row, "rel_err_h2": 1e-12, "contacts_first_truth": 8})
+    assert within_rule(replace(row, rel_err_h2=1e-12))
+    assert not within_rule(replace(row, rel_err_h2=1.1e-12))  # ten times the conditioning
+    assert not within_rule(replace(row, rel_err_h2=1e-12, contacts_first_truth=8))
 
 
 def test_a_row_against_a_reference_measures_the_relative_errors():
@@ -74,9 +76,9 @@ def test_a_row_against_a_reference_measures_the_relative_errors():
     result = twoball.simulate(*drop, height=HEIGHT)
     with mpmath.workdps(40):
         h1_off = mpmath.nstr(mpmath.mpf(result.h1) * (1 + mpmath.mpf("1e-13")), 30)
-    row = against_reference(*drop, h1_off, result.h2, result.contacts_first, height=HEIGHT)
-    assert row["rel_err_h1"] == pytest.approx(1e-13, rel=1e-6) and row["rel_err_h2"] == 0.0
-    assert against_reference(*drop, result.h1, None, 7, height=HEIGHT)["rel_err_h2"] == float("inf")
+    row = against_reference(*drop, h1_off, result.h2, result.contacts_first[BALLS], height=HEIGHT)
+    assert row.rel_err_h1 == pytest.approx(1e-13, rel=1e-6) and row.rel_err_h2 == 0.0
+    assert against_reference(*drop, result.h1, None, 7, height=HEIGHT).rel_err_h2 == float("inf")
 
 
 def test_the_solver_meets_the_rule_on_the_documented_sample():
@@ -91,7 +93,7 @@ def test_the_solver_meets_the_rule_on_the_documented_sample():
         measured = against_reference(
             *drop, row["h1_truth"], row["h2_truth"], row["contacts_first_truth"], height=HEIGHT
         )
-        assert measured["contacts_first"] >= 6
+        assert measured.contacts_first >= 6
         if not within_rule(measured):
             outside.append((drop, measured))
     assert outside == []
@@ -106,4 +108,4 @@ def test_the_stored_reference_values_are_the_references():
     with mpmath.workdps(40):
         for stored, computed in ((row["h1_truth"], truth.h1), (row["h2_truth"], truth.h2)):
             assert abs(mpmath.mpf(stored) / computed - 1) < 1e-22
-    assert int(row["contacts_first_truth"]) == truth.contacts_first
+    assert int(row["contacts_first_truth"]) == truth.contacts_first[BALLS]

@@ -10,6 +10,7 @@ import pytest
 import twoball
 from twoball.batch.sweep import Axis, Grid, sweep
 from twoball.cli import main
+from twoball.observables import BALLS
 from twoball.studies.report import close_up_row, contact_row, sweep_rows
 
 PAPER_VALUES = ["12.3 %", "93 %", "22 %", "all", "0.87 to 1.27", "0.49 to 1.48", "1 to 12"]
@@ -60,7 +61,7 @@ def test_contact_row_counts_what_simulate_finds(tmp_path):
                 Axis("tau_ratio", 1e-4, 1e-2, 3, "log"))  # fmt: skip
     sweep(grid, tmp_path / "c.zarr", workers=1, progress=False)
     counts = {
-        (m, t): twoball.simulate(0.816, m, t, until="first").contacts_first
+        (m, t): twoball.simulate(0.816, m, t, until="first").contacts_first[BALLS]
         for m in grid.mu.values()
         for t in grid.tau_ratio.values()
     }

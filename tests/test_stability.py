@@ -12,6 +12,7 @@ import pytest
 
 import twoball
 from twoball.cli import main
+from twoball.observables import BALLS
 from twoball.studies import stability
 
 # A fast subset of the study's grid: its extreme values, all combinations (32 cases).
@@ -67,12 +68,12 @@ def test_compression_bound_holds_and_is_reached_with_equal_elastic_balls():
     "case", EXTREMES, ids=lambda c: "eps={:.6g}-mu={:g}-tau={:g}-H={:g}".format(*c)
 )
 def test_exact_solver_on_extreme_cases(case):
-    row = stability.judge(stability.diagnose(*case, "exact", 0.0), {})
-    assert row["finished"]
-    assert row["verdict"] == "right", row["problems"]
-    values = [v for v in (row["h1"], row["h2"]) if v is not None]
+    row = stability.judge(stability.diagnose(*case, "exact", 0.0), None)
+    assert row.finished
+    assert row.verdict == "right", row.problems
+    values = [v for v in (row.h1, row.h2) if v is not None]
     assert all(math.isfinite(v) for v in values)
-    assert len(values) == 2 or "rest" in row["reason"]
+    assert len(values) == 2 or "rest" in row.reason
 
 
 def _doctored(monkeypatch, change):
@@ -94,16 +95,16 @@ def test_a_ball_passing_through_is_detected(monkeypatch):
         return dataclasses.replace(result, trajectory=dataclasses.replace(t, x2=x2))
 
     row = _doctored(monkeypatch, sink)
-    assert {"passed through", "energy gained", "missed ball contact"} <= set(row["problems"])
+    assert {"passed through", "energy gained", "missed ball contact"} <= set(row.problems)
 
 
 def test_an_unreported_contact_is_detected(monkeypatch):
     def forget(result):
-        kept = [c for c in result.contacts if c.contact != "ball"]
+        kept = [c for c in result.contacts if c.contact != BALLS]
         return dataclasses.replace(result, contacts=kept)
 
     row = _doctored(monkeypatch, forget)
-    assert row["problems"] == ["missed ball contact"]
+    assert row.problems == ["missed ball contact"]
 
 
 def test_a_small_energy_gain_is_detected(monkeypatch):
@@ -113,7 +114,7 @@ def test_a_small_energy_gain_is_detected(monkeypatch):
         return dataclasses.replace(result, trajectory=dataclasses.replace(t, v2=v2))
 
     row = _doctored(monkeypatch, pump)
-    assert row["problems"] == ["energy gained"]
+    assert row.problems == ["energy gained"]
 
 
 def test_missed_contacts_of_an_adaptive_method_are_detected():
@@ -122,11 +123,11 @@ def test_missed_contacts_of_an_adaptive_method_are_detected():
     case = (1.0, 1e-6, 0.0, 1e4)
     exact = stability.diagnose(*case, "exact", 0.0)
     tight = twoball.simulate(*case[:3], method="DOP853", rtol=1e-12, atol=1e-12)
-    assert sum(c.contact == "ball" for c in tight.contacts) == len(exact["contact_starts"]) == 64
+    assert sum(c.contact == BALLS for c in tight.contacts) == len(exact.contact_starts) == 64
     row = stability.judge(stability.diagnose(*case, "RK45", 1e-8), exact)
-    assert row["verdict"] == "wrong"
-    assert "missed ball contact" in row["problems"]
-    assert row["ball_contacts"] < row["exact_ball_contacts"] == 64
+    assert row.verdict == "wrong"
+    assert "missed ball contact" in row.problems
+    assert row.ball_contacts < row.exact_ball_contacts == 64
 
 
 def _slow_diagnose(*task):
@@ -144,7 +145,7 @@ def test_a_run_over_the_cap_is_killed_and_reported_too_slow():
         diagnose_one=_slow_diagnose,  # imported by name in the spawned worker
     )
     assert time.monotonic() - started < 55  # below the 60 s the task sleeps: it was killed
-    assert rows[0]["verdict"] == "too slow" and rows[0]["method"] == "LSODA"
+    assert rows[0].verdict == "too slow" and rows[0].method == "LSODA"
 
 
 def test_study_runs_every_method_in_workers():
@@ -152,18 +153,18 @@ def test_study_runs_every_method_in_workers():
     rows = stability.study(
         [case], [case], methods=("exact", "LSODA", "DOP853"), workers=2, check=("DOP853", 1e-10)
     )
-    assert [r["method"] for r in rows] == ["exact", "LSODA", "DOP853", "DOP853 1e-10"]
-    assert all(r["verdict"] == "right" for r in rows)
-    assert rows[1]["rel_err_h1"] < 1e-5 and rows[1]["exact_ball_contacts"] == 2
-    assert rows[3]["ball_contacts"] == 2 and rows[3]["rel_err_h2"] < 1e-7
+    assert [r.method for r in rows] == ["exact", "LSODA", "DOP853", "DOP853 1e-10"]
+    assert all(r.verdict == "right" for r in rows)
+    assert rows[1].rel_err_h1 < 1e-5 and rows[1].exact_ball_contacts == 2
+    assert rows[3].ball_contacts == 2 and rows[3].rel_err_h2 < 1e-7
 
 
 def test_h_convergence_matches_model_md():
     # docs/model.md, "Initial condition", on H: eps = 0.816, mu = 0.05, tau_d/tau_f = 0.3
     rows = stability.h_convergence([(0.816, 0.05, 0.3)], (1e2, 1e3, 1e4, 1e5, 1e6))
-    ratios = [row["h2_over_h1"] for row in rows]
+    ratios = [row.h2_over_h1 for row in rows]
     assert ratios == pytest.approx([1.399, 0.868, 0.7347, 0.695, 0.683], abs=6e-4)
-    icm = [row["h1_over_icm"] for row in rows]
+    icm = [row.h1_over_icm for row in rows]
     assert icm == pytest.approx([0.567, 0.574, 0.5760, 0.5765, 0.5766], abs=6e-4)
 
 

@@ -53,8 +53,7 @@ def test_two_balls_are_simulate_on_a_sample():
         mu, tau_ratio = 10 ** rng.uniform(-2, 1), rng.uniform(0.0, 1.5)
         single = twoball.simulate(eps, mu, tau_ratio, eps12=eps12)
         pair = simulate_stack([mu], [eps, eps12], tau_ratio)
-        assert pair.contacts_first[1] == single.contacts_first
-        assert pair.contacts_first[0] == single.floor_contacts_first
+        assert pair.contacts_first == single.contacts_first
         theirs_all = list(zip(single.apex_t, single.apex_h, strict=True))
         for mine, theirs in zip(pair.apexes[-1], theirs_all, strict=True):
             assert abs(mine[1] - theirs[1]) <= 1e-12 * theirs[1], (eps, eps12, mu, tau_ratio)
@@ -195,6 +194,34 @@ def test_bad_options():
         simulate_stack([0.2], 0.9, 0.2, height=0.0)
 
 
+def test_the_methods_are_one_mapping_of_one_signature(monkeypatch):
+    """twoball.stacks.METHODS maps each force, then each name, to a solver of one signature,
+    solve(stack, apexes, t_end, times) -> StackResult, as twoball.METHODS does for two balls;
+    simulate_stack runs what the mapping holds, and refuses a name it does not hold."""
+    from twoball.stacks import METHODS, hertz
+    from twoball.stacks.model import FORCES
+
+    assert list(METHODS) == list(FORCES)
+    assert list(METHODS["hertz"]) == list(hertz.METHODS) == ["compiled", "DOP853"]
+    stack = check_stack([0.1], 0.9, 0.1, height=100.0, force="hertz")
+    runs = {name: solve(stack, 1, math.inf, None) for name, solve in METHODS["hertz"].items()}
+    for name, result in runs.items():
+        assert (result.method, result.force, result.status) == (name, "hertz", Status.DONE)
+    # two independent integrations of the same equations
+    assert runs["compiled"].h1 == pytest.approx(runs["DOP853"].h1, rel=1e-9)
+    pair = METHODS["linear"]["compiled"](check_stack([0.01], 0.9, 0.01), 2, math.inf, None)
+    assert pair.method == "compiled" and pair.h2 == pytest.approx(CLOSE_UP.h2, rel=1e-8)
+
+    def stub(stack, apexes, t_end, times):
+        return pair
+
+    monkeypatch.setitem(METHODS["linear"], "compiled", stub)
+    assert simulate_stack([0.3], 0.5, 0.5) is pair
+    for force, method in (("linear", "DOP853"), ("hertz", "RK45")):
+        with pytest.raises(ParameterError, match=f"method must be one of .* {force} force"):
+            simulate_stack([0.2], 0.9, 0.2, force=force, method=method)
+
+
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     ratios=st.lists(st.floats(0.01, 10.0), min_size=1, max_size=4),
@@ -301,7 +328,7 @@ def test_two_balls_prove_rest_as_simulate_does():
     pair = simulate_stack([1e6], 0.01, 0.2)
     assert single.status is Status.REST and pair.status is Status.REST
     assert pair.h1 is None and single.h1 is None
-    assert pair.contacts_first == [single.floor_contacts_first, single.contacts_first]
+    assert pair.contacts_first == single.contacts_first
     sampled = simulate_stack([1e6], 0.01, 0.2, t_eval=[pair.end_time]).trajectory
     there = single.evaluate([pair.end_time])  # simulate's rest holds for every later time
     assert sampled.x[0, 0] == pytest.approx(there.x1[0], rel=1e-9, abs=1e-6)

@@ -268,8 +268,8 @@ def _stack(args: argparse.Namespace) -> int:
     reason = _missing_apexes(args.until, top_apexes, "top ball")
     if reason is not None or result.status is Status.REST:
         summary["reason"] = reason or "the stack came to rest"
-    elif summary["reason"] is None:
-        del summary["reason"]  # a run that reached what was asked says nothing more
+    elif summary["reason"] is None and not args.json:
+        del summary["reason"]  # a run that reached what was asked says nothing more (JSON: null)
     return _print_summary(summary, args.json)
 
 

@@ -1,7 +1,15 @@
 """What a run measures (docs/model.md, "What is measured"): apexes, contacts, ICM and ratios.
 
 Every solver returns a :class:`Result`; the observables are derived from the apexes and the
-contact intervals it found, the same way whatever the method.
+contact intervals it found, the same way whatever the method. A stack's
+:class:`~twoball.stacks.StackResult` shares them (:class:`Measured`).
+
+**Contacts are numbered, not named** (one representation for two balls and for N): contact 0 is
+the floor's, contact i the one between ball i and ball i - 1, so for two balls 1 is the balls'
+(:data:`FLOOR`, :data:`BALLS`). ``contacts_first`` is a list by the same numbers, floor first:
+``[1, 4]`` for the paper's close-up, one floor contact and four ball contacts before the first
+apex. A number indexes the contact forces (the stack's ``trajectory.f[:, c]``) and the list
+alike, and the top ball's contact, the paper's count, is ``contacts_first[-1]`` for any N.
 """
 
 from __future__ import annotations
@@ -16,7 +24,8 @@ import numpy as np
 from twoball.errors import ParameterError, Status
 from twoball.model import Drop, icm_height, is_real_number
 
-CONTACTS = ("floor", "ball")  # the two contacts by name, by index (0: the floor, 1: the balls)
+FLOOR = 0  # the floor's contact, by number
+BALLS = 1  # the two balls' contact (a stack's contact i: ball i on ball i - 1)
 UNTIL = {"first": 1, "second": 2}
 # A run "until a time" wants no apex limit; the kernel's apex table grows with what it finds.
 NO_APEX_LIMIT = 2**62
@@ -24,9 +33,10 @@ NO_APEX_LIMIT = 2**62
 
 @dataclass(frozen=True)
 class ContactInterval:
-    """One interval during which a contact pushes: ``contact`` is "floor" or "ball"."""
+    """One interval during which contact ``contact`` pushes: 0 the floor, i ball i on ball i - 1
+    (for two balls, 1: the balls)."""
 
-    contact: str
+    contact: int
     start: float
     end: float
 
@@ -54,8 +64,7 @@ class Outcome(NamedTuple):
     end_time: float
     status: Status
     message: str | None  # None on success without remark, else what happened in words
-    contacts_first: int  # ball contacts that start before the first apex
-    floor_contacts_first: int
+    contacts_first: list[int]  # intervals of each contact (floor first) before the first apex
     # state at any times (and side) -> array (n, 6): x1, x2, v1, v2, f01, f12; None unless
     # asked for; an object holding arrays, never a closure, so that a result pickles
     evaluate: Callable[[np.ndarray, str], np.ndarray] | None
@@ -65,7 +74,9 @@ class Outcome(NamedTuple):
 
 @dataclass(frozen=True)
 class Trajectory:
-    """Sampled heights, velocities and contact forces of both balls (dimensionless)."""
+    """Sampled heights, velocities and contact forces of both balls (dimensionless); ``x``,
+    ``v`` and ``f`` give them as a stack's trajectory holds them
+    (:class:`~twoball.stacks.StackTrajectory`: a column per ball, per contact floor first)."""
 
     t: np.ndarray
     x1: np.ndarray
@@ -75,17 +86,137 @@ class Trajectory:
     f01: np.ndarray
     f12: np.ndarray
 
+    @property
+    def x(self) -> np.ndarray:
+        """Heights, (len(t), 2): the lower ball's, then the upper ball's."""
+        return np.column_stack([self.x1, self.x2])
+
+    @property
+    def v(self) -> np.ndarray:
+        """Velocities, (len(t), 2), as :attr:`x`."""
+        return np.column_stack([self.v1, self.v2])
+
+    @property
+    def f(self) -> np.ndarray:
+        """Contact forces, (len(t), 2), by contact number: the floor's, then the balls'."""
+        return np.column_stack([self.f01, self.f12])
+
+
+class Measured:
+    """What :class:`Result` and :class:`~twoball.stacks.StackResult` share, by the same names and
+    types: the top ball's apexes (``apex_t``, ``apex_h``: lists of floats) and the observables
+    derived from them, the contact intervals (:class:`ContactInterval`, numbered) and their
+    counts before the first apex (``contacts_first``, a list by contact number, floor first),
+    how the run ended (``status``, ``reason``, ``success``), what it took (``stats``) and one
+    :meth:`summary` whose observables' keys and types are the same for both.
+
+    A subclass provides ``apex_t``, ``apex_h``, ``contacts``, ``contacts_first``, ``status``,
+    ``reason``, ``method``, ``x2_0`` (the top ball's height at release) and ``h_icm``.
+    """
+
+    apex_t: list[float]
+    apex_h: list[float]
+    contacts: list[ContactInterval]
+    contacts_first: list[int]
+    status: Status
+    reason: str | None
+    method: str
+
+    @property
+    def success(self) -> bool:
+        """True when the run reached what was asked or the top ball came to rest."""
+        return self.status.success
+
+    @property
+    def h1(self) -> float | None:
+        """Height of the top ball's first apex after release, None if there was none."""
+        return self.apex_h[0] if self.apex_h else None
+
+    @property
+    def h2(self) -> float | None:
+        """Height of the top ball's second apex, None if it does not happen."""
+        return self.apex_h[1] if len(self.apex_h) > 1 else None
+
+    @property
+    def t1(self) -> float | None:
+        return self.apex_t[0] if self.apex_t else None
+
+    @property
+    def t2(self) -> float | None:
+        return self.apex_t[1] if len(self.apex_t) > 1 else None
+
+    def _ratio(self, name: str) -> float | None:
+        h1, h2 = (math.nan if h is None else h for h in (self.h1, self.h2))
+        value = float(ratios(np.float64(h1), np.float64(h2), self.x2_0, self.h_icm)[name])
+        return None if math.isnan(value) else value
+
+    @property
+    def h1_over_icm(self) -> float | None:
+        return self._ratio("h1_over_icm")
+
+    @property
+    def h1_over_drop(self) -> float | None:
+        return self._ratio("h1_over_drop")
+
+    @property
+    def h2_over_drop(self) -> float | None:
+        return self._ratio("h2_over_drop")
+
+    @property
+    def h2_over_h1(self) -> float | None:
+        return self._ratio("h2_over_h1")
+
+    @property
+    def delayed_rebound(self) -> bool | None:
+        """h2 > h1; None when either bounce is missing."""
+        return None if self.h1 is None or self.h2 is None else self.h2 > self.h1
+
+    def contacts_per_bounce(self, contact: int = BALLS) -> list[int]:
+        """Intervals of contact number ``contact`` that start before each apex of the top ball
+        and after the previous one."""
+        counts = []
+        previous = -math.inf
+        for apex in self.apex_t:
+            counts.append(
+                sum(1 for c in self.contacts if c.contact == contact and previous <= c.start < apex)
+            )
+            previous = apex
+        return counts
+
+    def measured(self) -> dict[str, float | int | str | bool | list[int] | None]:
+        """The observables of :meth:`summary` that every result has, by the same keys and types
+        (the parameters before them are each model's own)."""
+        return {
+            "method": self.method,
+            "h1": self.h1,
+            "h2": self.h2,
+            "t1": self.t1,
+            "t2": self.t2,
+            "contacts_first": list(self.contacts_first),
+            "h_icm": self.h_icm,
+            "x2_0": self.x2_0,
+            "h1_over_icm": self.h1_over_icm,
+            "h1_over_drop": self.h1_over_drop,
+            "h2_over_drop": self.h2_over_drop,
+            "h2_over_h1": self.h2_over_h1,
+            "delayed_rebound": self.delayed_rebound,
+            "status": self.status.name,
+            "reason": self.reason,
+        }
+
 
 @dataclass
-class Result:
-    """The outcome of one drop.
+class Result(Measured):
+    """The outcome of one drop (the shared names and types: :class:`Measured`).
 
     ``apex_t`` and ``apex_h`` list the upper ball's apexes in free flight (docs/model.md, "What is
     measured"), in order.
     ``status`` says how the run ended (``success`` is True for a run that reached what was asked
     or ended at rest); ``reason`` is None when the run reached what was asked, else why it
-    stopped early, in words. ``contacts`` lists every contact interval found; ``trajectory`` is
-    set only when asked (``t_eval`` or ``dense_output``); :meth:`evaluate` needs ``dense_output``.
+    stopped early, in words. ``contacts`` lists every contact interval found, numbered (0: the
+    floor, 1: the balls), and ``contacts_first`` counts each before the first apex, ``[floor,
+    balls]``; ``trajectory`` is set only when asked (``t_eval`` or ``dense_output``);
+    :meth:`evaluate` needs ``dense_output``.
     """
 
     drop: Drop
@@ -95,8 +226,7 @@ class Result:
     contacts: list[ContactInterval]
     end_time: float
     reason: str | None = None
-    contacts_first: int = 0
-    floor_contacts_first: int = 0
+    contacts_first: list[int] = field(default_factory=lambda: [0, 0])
     rtol: float | None = None
     atol: float | None = None
     trajectory: Trajectory | None = field(default=None, repr=False)
@@ -105,11 +235,6 @@ class Result:
         default=None, repr=False, compare=False
     )
     stats: RunStats = field(default=RunStats(), compare=False)
-
-    @property
-    def success(self) -> bool:
-        """True when the run reached what was asked or the upper ball came to rest."""
-        return self.status.success
 
     def evaluate(self, t: np.ndarray | float, side: str = "right") -> Trajectory:
         """The state and forces at times ``t`` (exact at every t for the exact method).
@@ -145,27 +270,6 @@ class Result:
         check_span("t", times, self.end_time, self.status is Status.REST and self.method == "exact")
         return trajectory_of(times, self.dense(times, side))
 
-    def _apex(self, values: list[float], index: int) -> float | None:
-        return values[index] if len(values) > index else None
-
-    @property
-    def h1(self) -> float | None:
-        """Height X2 of the first apex after release, None if there was none."""
-        return self._apex(self.apex_h, 0)
-
-    @property
-    def h2(self) -> float | None:
-        """Height X2 of the second apex, None if it does not happen."""
-        return self._apex(self.apex_h, 1)
-
-    @property
-    def t1(self) -> float | None:
-        return self._apex(self.apex_t, 0)
-
-    @property
-    def t2(self) -> float | None:
-        return self._apex(self.apex_t, 1)
-
     @property
     def x2_0(self) -> float:
         """Initial height X2(0) of the upper ball."""
@@ -177,45 +281,9 @@ class Result:
         d = self.drop
         return icm_height(d.x1_0, d.x2_0 - d.x1_0, d.eps, d.eps12, d.mu)
 
-    def _ratio(self, name: str) -> float | None:
-        h1, h2 = (math.nan if h is None else h for h in (self.h1, self.h2))
-        value = float(ratios(np.float64(h1), np.float64(h2), self.x2_0, self.h_icm)[name])
-        return None if math.isnan(value) else value
-
-    @property
-    def h1_over_icm(self) -> float | None:
-        return self._ratio("h1_over_icm")
-
-    @property
-    def h1_over_drop(self) -> float | None:
-        return self._ratio("h1_over_drop")
-
-    @property
-    def h2_over_drop(self) -> float | None:
-        return self._ratio("h2_over_drop")
-
-    @property
-    def h2_over_h1(self) -> float | None:
-        return self._ratio("h2_over_h1")
-
-    @property
-    def delayed_rebound(self) -> bool | None:
-        """h2 > h1; None when either bounce is missing."""
-        return None if self.h1 is None or self.h2 is None else self.h2 > self.h1
-
-    def contacts_per_bounce(self, contact: str = "ball") -> list[int]:
-        """Contact intervals of one kind that start before each apex and after the previous one."""
-        counts = []
-        previous = -math.inf
-        for apex in self.apex_t:
-            counts.append(
-                sum(1 for c in self.contacts if c.contact == contact and previous <= c.start < apex)
-            )
-            previous = apex
-        return counts
-
-    def summary(self) -> dict[str, float | int | str | bool | None]:
-        """The observables as plain values (JSON-ready: None where absent)."""
+    def summary(self) -> dict[str, float | int | str | bool | list[int] | None]:
+        """The drop's parameters and the observables as plain values (JSON-ready: None where
+        absent)."""
         d = self.drop
         return {
             "eps": d.eps,
@@ -223,22 +291,7 @@ class Result:
             "mu": d.mu,
             "tau_ratio": d.tau_ratio,
             "height": d.height,
-            "method": self.method,
-            "h1": self.h1,
-            "h2": self.h2,
-            "t1": self.t1,
-            "t2": self.t2,
-            "contacts_first": self.contacts_first,
-            "floor_contacts_first": self.floor_contacts_first,
-            "h_icm": self.h_icm,
-            "x2_0": self.x2_0,
-            "h1_over_icm": self.h1_over_icm,
-            "h1_over_drop": self.h1_over_drop,
-            "h2_over_drop": self.h2_over_drop,
-            "h2_over_h1": self.h2_over_h1,
-            "delayed_rebound": self.delayed_rebound,
-            "status": self.status.name,
-            "reason": self.reason,
+            **self.measured(),
         }
 
 
@@ -320,7 +373,7 @@ def trajectory_of(times: np.ndarray, values: np.ndarray) -> Trajectory:
 
 def contact_intervals(rows: np.ndarray) -> list[ContactInterval]:
     """Contact intervals from rows (contact, start, end), sorted by start."""
-    intervals = [ContactInterval(CONTACTS[int(c)], s, e) for c, s, e in np.asarray(rows).tolist()]
+    intervals = [ContactInterval(int(c), s, e) for c, s, e in np.asarray(rows).tolist()]
     return sorted(intervals, key=lambda interval: interval.start)
 
 

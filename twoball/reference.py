@@ -222,8 +222,7 @@ def outcome_from_events(
         end_time=end,
         status=status,
         message=reason,
-        contacts_first=counts[1],
-        floor_contacts_first=counts[0],
+        contacts_first=counts,
         evaluate=None,
         plot_times=None,
     )
@@ -368,8 +367,7 @@ def _solve_odeint(drop, apexes, horizon, t_end, rtol, atol, dense_output):
         end_time=end,
         status=status,
         message=reason,
-        contacts_first=counts[1],
-        floor_contacts_first=counts[0],
+        contacts_first=counts,
         evaluate=evaluate,
         plot_times=plot_times,
     )

@@ -94,7 +94,9 @@ def simulate(
     Returns
     -------
     Result
-        Apexes, contacts, ratios, ``status`` and ``success``.
+        Apexes, contacts (numbered: 0 the floor, 1 the balls), ``contacts_first`` (the
+        intervals of each before the first apex, ``[floor, balls]``), ratios, ``status`` and
+        ``success``.
 
     Raises
     ------
@@ -110,7 +112,7 @@ def simulate(
     >>> import twoball
     >>> r = twoball.simulate(0.9, 0.01, 0.01)
     >>> r.contacts_first, round(r.h1, 5), round(r.h2, 4), r.delayed_rebound
-    (4, 9256.04845, 50076.3922, True)
+    ([1, 4], 9256.04845, 50076.3922, True)
     >>> r.success, r.status.name
     (True, 'DONE')
     """
@@ -150,8 +152,7 @@ def simulate(
         contacts=contact_intervals(outcome.contacts),
         end_time=float(outcome.end_time),
         reason=outcome.message,
-        contacts_first=int(outcome.contacts_first),
-        floor_contacts_first=int(outcome.floor_contacts_first),
+        contacts_first=outcome.contacts_first,  # Python ints from every solver
         rtol=rtol,
         atol=atol,
         trajectory=trajectory,

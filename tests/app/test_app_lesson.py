@@ -12,6 +12,7 @@ import twoball
 from app.state import ExplorerState, read_query
 from app.steps import STEPS
 from twoball import presets
+from twoball.observables import BALLS
 
 SIZES = {"projector": (1366, 768), "desktop": (1920, 1080), "phone": (390, 844)}
 
@@ -31,7 +32,7 @@ def test_the_answers_quote_the_solver():
     assert abs(tennis.summary()["h1_over_icm"] - 1) < 0.05  # "just what the textbook says"
     assert ping_pong.delayed_rebound and round(ping_pong.h2_over_h1) == 5
     assert ping_pong.h1_over_drop < 1  # "does not even reach the drop height"
-    assert close_up.contacts_first == 4 and STEPS[3].choices[STEPS[3].answer] == "4 times"
+    assert close_up.contacts_first[BALLS] == 4 and STEPS[3].choices[STEPS[3].answer] == "4 times"
     metres = presets.length_scale()  # the lesson is shown in metres
     assert f"from {textbook.x2_0 * metres:.2f} m, it rises to {textbook.h1 * metres:.1f} m" in (
         STEPS[0].explanation

@@ -17,6 +17,7 @@ from app.delayed_map import map_cube
 from app.explorer import Explorer
 from app.scenes import SCENE_REGISTRY, SCENES
 from twoball import presets
+from twoball.observables import BALLS, FLOOR
 
 PAPER = {"eps": "0.9", "mu": "0.01", "tau_ratio": "0.01"}
 
@@ -148,7 +149,7 @@ def test_drop_scene_plots_the_check_values_of_model_md():
     apexes = scene.apexes.data["h"]
     assert apexes[0] == pytest.approx(9256.04845, rel=1e-9)
     assert apexes[1] == pytest.approx(50076.3922, rel=1e-9)
-    assert scene.result.contacts_first == 4
+    assert scene.result.contacts_first[BALLS] == 4
     # the curve reaches the apexes and runs to the second one only
     assert np.max(scene.curves.data["x2"]) == pytest.approx(50076.3922, rel=1e-6)
     assert scene.curves.data["t"][-1] == np.float32(scene.result.t2)  # (sent as float32)
@@ -178,9 +179,9 @@ def test_closeup_shows_the_four_contacts_and_forces_only_inside_them():
     explorer = rendered({**PAPER, "scene": "closeup"})
     scene = explorer.scenes["closeup"]
     result = scene.result
-    assert result.contacts_first == 4 and "**4 ball contacts**" in scene.table.object
-    ball = [c for c in result.contacts if c.contact == "ball"]
-    floor = [c for c in result.contacts if c.contact == "floor"]
+    assert result.contacts_first[BALLS] == 4 and "**4 ball contacts**" in scene.table.object
+    ball = [c for c in result.contacts if c.contact == BALLS]
+    floor = [c for c in result.contacts if c.contact == FLOOR]
     tr = result.trajectory
     # the window holds the whole collision and stops long before the first apex
     assert tr.t[0] < min(c.start for c in result.contacts)
@@ -316,7 +317,7 @@ def test_choosing_contacts_reads_their_slice_and_matches_the_solver():
     for i, j in ((5, 30), (20, 10)):
         mu, tau = float(counts["mu"][i]), float(counts["tau_ratio"][j])
         direct = twoball.simulate(scene.slice_eps, mu, tau, height=map_cube().attrs["height"])
-        assert int(counts[i, j]) == direct.contacts_first
+        assert int(counts[i, j]) == direct.contacts_first[BALLS]
 
 
 def test_a_lesson_step_covers_its_scene_until_the_answer_is_revealed():

@@ -82,7 +82,8 @@ def check_corners(eps: tuple, mu: tuple, tau_ratio: tuple, height: float, eps12)
 
 
 def cell_inputs(eps: float, eps12: float | None, mu: float, tau_ratio: float, height: float):
-    """(masses, lam, x_start) of one cell, as :func:`twoball.stacks.hertz.simulate` makes them."""
+    """(masses, lam, x_start) of one cell, as :func:`twoball.stacks.hertz.solve_compiled` makes
+    them."""
     from twoball.stacks import hertz_contact, release_heights
 
     restitutions = np.array([eps, eps if eps12 is None else eps12], dtype=float)

@@ -3,18 +3,17 @@ force (:mod:`twoball.stacks.hertz`), and what both share (:mod:`twoball.stacks.m
 
 from twoball.stacks.model import (
     Stack,
-    StackContact,
     StackResult,
     StackTrajectory,
     check_stack,
     icm_chain,
     release_heights,
 )
-from twoball.stacks.stack import simulate_stack
+from twoball.stacks.stack import METHODS, simulate_stack
 
 __all__ = [
+    "METHODS",
     "Stack",
-    "StackContact",
     "StackResult",
     "StackTrajectory",
     "check_stack",

@@ -48,7 +48,7 @@ import numpy as np
 from scipy.integrate import DOP853
 from scipy.optimize import brentq
 
-from twoball.errors import ParameterError, Status
+from twoball.errors import Status
 from twoball.kernels import hertz as hertz_kernel
 from twoball.kernels.codes import (
     EVENT_APEX,
@@ -58,8 +58,9 @@ from twoball.kernels.codes import (
     EVENT_SWITCH,
     EVENT_TIME,
 )
+from twoball.observables import ContactInterval
 from twoball.stacks.hertz_contact import calibration_speeds, damping_factor, floor_contact_time
-from twoball.stacks.model import StackContact, StackResult, StackTrajectory, release_heights
+from twoball.stacks.model import StackResult, StackTrajectory, release_heights
 
 # The work a run may take: 30 000 steps, 15-40 s. Inside the domain check_stack accepts the
 # largest measured runs take about 10 000 (masses 1e4: 9 825; six balls: 6 004; a heavy stack
@@ -475,38 +476,52 @@ def _settled(stack: _Stack, y: np.ndarray) -> bool:
     return stack.energy(y) - lowest < 0.3 * weights[-1] ** (5.0 / 3.0)
 
 
-METHODS = ("compiled", "DOP853")
+def solve_compiled(
+    stack, apexes_wanted: int, t_end: float, times: np.ndarray | None
+) -> StackResult:
+    """The compiled path, :func:`twoball.kernels.hertz.run` (the default, accurate to rounding):
+    a :class:`~twoball.stacks.model.StackResult` for a validated stack, its gaps in units of the
+    Hertz floor contact time (:func:`floor_contact_time`)."""
+    hertz_stack, eps = _in_hertz_units(stack)
+    lam = np.array([damping_factor(float(e)) for e in eps])
+    lam /= calibration_speeds(hertz_stack.masses, eps, stack.height)
+    sorted_times = np.empty(0) if times is None else np.sort(np.asarray(times, dtype=float))
+    code, end, apex_rows, contact_rows, first, samples = hertz_kernel.run(
+        hertz_stack.masses, lam, hertz_stack.x_start, apexes_wanted, t_end, sorted_times
+    )
+    apexes = [(int(b), float(w), float(h)) for b, w, h in apex_rows]
+    contacts = [(int(c), float(a), float(b)) for c, a, b in contact_rows]
+    run = (Status(code), float(end), apexes, contacts, first, samples)
+    return _result(hertz_stack, "compiled", times, *run)
 
 
-def simulate(
-    stack, apexes_wanted: int, t_end: float, times: np.ndarray | None, method: str = "compiled"
-):
-    """A :class:`twoball.stacks.model.StackResult` for a validated stack with the Hertz force: its
-    gaps in units of the Hertz floor contact time (:func:`floor_contact_time`).
+def solve_dop853(stack, apexes_wanted: int, t_end: float, times: np.ndarray | None) -> StackResult:
+    """This module's own integration (:func:`solve`, scipy's DOP853), kept as the reference; as
+    :func:`solve_compiled`."""
+    hertz_stack, eps = _in_hertz_units(stack)
+    run = solve(
+        hertz_stack.masses, eps, hertz_stack.x_start, stack.height, apexes_wanted, t_end, times
+    )
+    return _result(hertz_stack, "DOP853", times, *run)
 
-    ``method`` "compiled" runs :func:`twoball.kernels.hertz.run` (the default, accurate to
-    rounding); "DOP853" runs :func:`solve`, scipy's integrator, kept as the reference."""
-    if method not in METHODS:
-        raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
+
+# The Hertz methods by name, all of :data:`twoball.stacks.stack.METHODS`' one signature.
+METHODS = {"compiled": solve_compiled, "DOP853": solve_dop853}
+
+
+def _in_hertz_units(stack) -> tuple:
+    """(the stack with its gaps in units of the Hertz floor contact time, its eps as an array)."""
     tau_f = floor_contact_time(stack.eps[0], stack.height)
     hertz_stack = replace(
         stack, tau_f=tau_f, x_start=release_heights(stack.height, stack.tau_ratios, tau_f)
     )
-    eps = np.asarray(stack.eps, dtype=float)
-    if method == "DOP853":
-        status, end, apexes, contacts, first, samples = solve(
-            hertz_stack.masses, eps, hertz_stack.x_start, stack.height, apexes_wanted, t_end, times
-        )
-    else:
-        lam = np.array([damping_factor(float(e)) for e in eps])
-        lam /= calibration_speeds(hertz_stack.masses, eps, stack.height)
-        sorted_times = np.empty(0) if times is None else np.sort(np.asarray(times, dtype=float))
-        code, end, apex_rows, contact_rows, first, samples = hertz_kernel.run(
-            hertz_stack.masses, lam, hertz_stack.x_start, apexes_wanted, t_end, sorted_times
-        )
-        status, end = Status(code), float(end)
-        apexes = [(int(b), float(w), float(h)) for b, w, h in apex_rows]
-        contacts = [(int(c), float(a), float(b)) for c, a, b in contact_rows]
+    return hertz_stack, np.asarray(stack.eps, dtype=float)
+
+
+def _result(
+    stack, method: str, times, status, end, apexes, contacts, first, samples
+) -> StackResult:
+    """A run's rows as a :class:`~twoball.stacks.model.StackResult`."""
     per_ball: list[list[tuple[float, float]]] = [[] for _ in range(stack.balls)]
     for ball, when, where in apexes:
         per_ball[ball].append((when, where))
@@ -517,10 +532,11 @@ def simulate(
             np.sort(times), samples[:, :n], samples[:, n : 2 * n], samples[:, 2 * n :]
         )
     return StackResult(
-        stack=hertz_stack,
+        stack=stack,
         force="hertz",
+        method=method,
         apexes=per_ball,
-        contacts=[StackContact(c, s, e) for c, s, e in sorted(contacts, key=lambda r: r[1])],
+        contacts=[ContactInterval(c, s, e) for c, s, e in sorted(contacts, key=lambda r: r[1])],
         contacts_first=[int(k) for k in first],
         end_time=end,
         status=status,

@@ -19,7 +19,7 @@ from twoball.model import (
     domain_error,
     floor_contact_time,
 )
-from twoball.observables import RunStats
+from twoball.observables import ContactInterval, Measured, RunStats
 
 MAX_BALLS = 16
 
@@ -227,15 +227,6 @@ def release_heights(height: float, tau_ratios: tuple[float, ...], tau_f: float) 
     return (math.sqrt(height) + delays / math.sqrt(2.0)) ** 2
 
 
-@dataclass(frozen=True)
-class StackContact:
-    """One interval during which contact ``contact`` pushes (0: the floor, i: ball i on i-1)."""
-
-    contact: int
-    start: float
-    end: float
-
-
 @dataclass
 class StackTrajectory:
     """Sampled heights, velocities (len(t), N) and contact forces (len(t), N; floor first)."""
@@ -247,25 +238,24 @@ class StackTrajectory:
 
 
 @dataclass
-class StackResult:
-    """The outcome of one stack drop: the top ball's apexes ``h1``, ``h2`` (as ``simulate``'s),
-    every ball's apexes in free flight, every contact interval, how the run ended."""
+class StackResult(Measured):
+    """The outcome of one stack drop, with :class:`twoball.Result`'s names and types
+    (:class:`~twoball.observables.Measured`): the top ball's apexes ``apex_t``, ``apex_h`` (and
+    ``h1``, ``h2``, ...), the contact intervals numbered (0: the floor, i: ball i on ball i - 1)
+    and ``contacts_first`` by the same numbers, how the run ended; and every ball's apexes in
+    free flight (``apexes``)."""
 
     stack: Stack
     force: str
     apexes: list[list[tuple[float, float]]]  # per ball: (t, height) of each apex
-    contacts: list[StackContact]
-    contacts_first: list[int]  # intervals of each contact that start before h1
+    contacts: list[ContactInterval]
+    contacts_first: list[int]  # intervals of each contact (floor first) that start before h1
     end_time: float
     status: Status
+    method: str = "compiled"
     trajectory: StackTrajectory | None = field(default=None, repr=False)
     reason: str | None = None  # None when the run reached what was asked, else why not
     stats: RunStats = field(default=RunStats(), compare=False)
-
-    @property
-    def success(self) -> bool:
-        """True when the run reached what was asked or the stack came to rest."""
-        return self.status.success
 
     @property
     def apex_t(self) -> list[float]:
@@ -278,16 +268,9 @@ class StackResult:
         return [h for _, h in self.apexes[-1]]
 
     @property
-    def h1(self) -> float | None:
-        """The top ball's first apex in free flight (None without one)."""
-        top = self.apexes[-1]
-        return top[0][1] if top else None
-
-    @property
-    def h2(self) -> float | None:
-        """The top ball's second apex (None without one)."""
-        top = self.apexes[-1]
-        return top[1][1] if len(top) > 1 else None
+    def x2_0(self) -> float:
+        """The top ball's height at release (as :attr:`twoball.Result.x2_0`)."""
+        return float(self.stack.x_start[-1])
 
     @property
     def h_icm(self) -> float:
@@ -295,7 +278,9 @@ class StackResult:
         return icm_chain(self.stack)[-1]
 
     def summary(self) -> dict[str, object]:
-        """The observables as plain values (JSON-ready: None where absent)."""
+        """The stack's parameters and the observables as plain values (JSON-ready: None where
+        absent; the observables' keys and types as :meth:`twoball.Result.summary`'s), with
+        every ball's first apex."""
         stack = self.stack
         return {
             "balls": stack.balls,
@@ -304,16 +289,8 @@ class StackResult:
             "tau_ratios": list(stack.tau_ratios),
             "height": stack.height,
             "force": self.force,
-            "h1": self.h1,
-            "h2": self.h2,
-            "h_icm_chain": self.h_icm,
-            "h1_over_icm": None if self.h1 is None else self.h1 / self.h_icm,
-            "h1_over_drop": None if self.h1 is None else self.h1 / stack.x_start[-1],
-            "h2_over_h1": None if self.h2 is None else self.h2 / self.h1,
-            "contacts_first": list(self.contacts_first),
+            **self.measured(),
             "first_apexes": [apexes[0][1] if apexes else None for apexes in self.apexes],
-            "status": self.status.name,
-            "reason": self.reason,
         }
 
 
@@ -346,5 +323,5 @@ def icm_chain(stack: Stack) -> list[float]:
         restitution = stack.eps[i]
         # momentum and restitution: (u - u_below) = -eps (v - v_below), with v = -impact
         up = (below * up - mass * impact + restitution * below * (up + impact)) / (below + mass)
-        heights.append(up * up / 2.0)
+        heights.append(float(up * up / 2.0))  # Python floats, as Result.h_icm
     return heights

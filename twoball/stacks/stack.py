@@ -6,6 +6,10 @@ method, and why no contact can be missed, in :mod:`twoball.kernels.clusters`), t
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from functools import partial
+
+import numpy as np
 
 from twoball.errors import ParameterError, SolverError, Status, phase_limit_hint
 
@@ -13,10 +17,9 @@ from twoball.errors import ParameterError, SolverError, Status, phase_limit_hint
 from twoball.kernels import clusters
 from twoball.kernels import stack as kernel
 from twoball.model import DEFAULT_HEIGHT, beyond_bound
-from twoball.observables import RunStats, as_times, check_span, stop_rule
+from twoball.observables import ContactInterval, RunStats, as_times, check_span, stop_rule
 from twoball.stacks.model import (
     Stack,
-    StackContact,
     StackResult,
     StackTrajectory,
     _apex_bound,
@@ -60,10 +63,11 @@ def simulate_stack(
     throw : bool
         A run that fails raises :class:`~twoball.errors.SolverError`; with False the result says
         so (``success``, ``status``).
-    method : "compiled" or "DOP853"
-        With the Hertz force: the compiled integrator, or scipy's DOP853, kept as a reference
-        (:func:`twoball.stacks.hertz.simulate`). The linear force has only "compiled" (its exact
-        solver): any other is refused with ParameterError.
+    method : str
+        A name of :data:`METHODS` for the force. With the Hertz force: "compiled", the compiled
+        integrator, or "DOP853", scipy's, kept as a reference (:mod:`twoball.stacks.hertz`). The
+        linear force has only "compiled" (its exact solver): any other is refused with
+        ParameterError.
 
     Returns
     -------
@@ -81,58 +85,26 @@ def simulate_stack(
     (True, 4)
     """
     stack = check_stack(mass_ratios, eps, tau_ratios, height=height, force=force)
-    if force == "linear" and method != "compiled":  # it was ignored, silently
+    solvers = METHODS[force]
+    if method not in solvers:
+        elsewhere = [other for other, named in METHODS.items() if method in named]
         raise ParameterError(
-            f"method {method!r} applies to the hertz force only (compiled or DOP853); the linear "
-            "force has one method, the exact solver (method='compiled')"
+            f"method must be one of {', '.join(solvers)} with the {force} force; got {method!r}"
+            + (f" (it applies to the {elsewhere[0]} force only)" if elsewhere else "")
         )
     apexes_wanted, t_end = stop_rule(until)
     times = None
     if t_eval is not None:
         times = as_times("t_eval", t_eval)
         check_span("t_eval", times, math.inf, False)  # no time before the release
-    if force == "hertz":
-        from twoball.stacks import hertz
-
-        result = hertz.simulate(stack, apexes_wanted, t_end, times, method)
-        stack = result.stack  # its gaps are in units of the Hertz floor contact
-    else:
-        out = kernel.run(
-            stack.masses,
-            stack.zeta,
-            stack.x_start,
-            apexes_wanted,
-            t_end,
-            times is not None,
-            _store_for(stack),
-        )
-        apexes: list[list[tuple[float, float]]] = [[] for _ in range(stack.balls)]
-        for ball, when, where in out.apexes.tolist():
-            apexes[int(ball)].append((when, where))
-        trajectory = None
-        if times is not None:
-            heights, speeds, forces = kernel.sample(out.phases, times, stack.masses, stack.zeta)
-            trajectory = StackTrajectory(times, heights, speeds, forces)
-        result = StackResult(
-            stack=stack,
-            force=force,
-            apexes=apexes,
-            # tolist: Python floats at once, not a numpy scalar per value (a third of the
-            # three-ball drop's time outside the kernel)
-            contacts=[StackContact(int(c), s, e) for c, s, e in out.contacts.tolist()],
-            contacts_first=[int(count) for count in out.contacts_first],
-            end_time=float(out.end_time),
-            status=Status(out.status),
-            trajectory=trajectory,
-            stats=RunStats(phases=out.phase_count),
-        )
+    result = solvers[method](stack, apexes_wanted, t_end, times)
+    stack = result.stack  # with the Hertz force its gaps are in units of the Hertz floor contact
     if times is not None and result.status.success:
         # after the end the closed form (linear) would be extrapolated, or nothing sampled
         # (Hertz); after a proven rest every later state is that rest's
         check_span("t_eval", times, result.end_time, result.status is Status.REST)
     bound = _apex_bound(stack, force)
-    top = [h for _, h in result.apexes[-1]]
-    if any(beyond_bound(h, bound) for h in top):
+    if any(beyond_bound(h, bound) for h in result.apex_h):
         result.status = Status.IMPOSSIBLE
     result.reason = result.status.message or None
     if result.status is Status.PHASE_LIMIT:
@@ -140,6 +112,64 @@ def simulate_stack(
     if throw and not result.success:
         raise SolverError(f"the stack run failed on {stack}: {result.reason}", result)
     return result
+
+
+def solve_linear(
+    stack: Stack, apexes_wanted: int, t_end: float, times: np.ndarray | None
+) -> StackResult:
+    """The linear force's exact solver, the compiled N-ball kernel
+    (:func:`twoball.kernels.stack.run`), on a validated stack: to ``apexes_wanted`` apexes of the
+    top ball or ``t_end``, sampled at ``times`` if given."""
+    out = kernel.run(
+        stack.masses,
+        stack.zeta,
+        stack.x_start,
+        apexes_wanted,
+        t_end,
+        times is not None,
+        _store_for(stack),
+    )
+    apexes: list[list[tuple[float, float]]] = [[] for _ in range(stack.balls)]
+    for ball, when, where in out.apexes.tolist():
+        apexes[int(ball)].append((when, where))
+    trajectory = None
+    if times is not None:
+        heights, speeds, forces = kernel.sample(out.phases, times, stack.masses, stack.zeta)
+        trajectory = StackTrajectory(times, heights, speeds, forces)
+    return StackResult(
+        stack=stack,
+        force="linear",
+        method="compiled",
+        apexes=apexes,
+        # tolist: Python floats at once, not a numpy scalar per value (a third of the
+        # three-ball drop's time outside the kernel)
+        contacts=[ContactInterval(int(c), s, e) for c, s, e in out.contacts.tolist()],
+        contacts_first=[int(count) for count in out.contacts_first],
+        end_time=float(out.end_time),
+        status=Status(out.status),
+        trajectory=trajectory,
+        stats=RunStats(phases=out.phase_count),
+    )
+
+
+def _solve_hertz(
+    name: str, stack: Stack, apexes_wanted: int, t_end: float, times: np.ndarray | None
+) -> StackResult:
+    """The Hertz method ``name`` (:data:`twoball.stacks.hertz.METHODS`), imported when first run:
+    it loads scipy's integrator, which the linear force does without."""
+    from twoball.stacks import hertz
+
+    return hertz.METHODS[name](stack, apexes_wanted, t_end, times)
+
+
+# Every method by force, then by name (as :data:`twoball.METHODS` for two balls): one signature,
+# solve(stack, apexes_wanted, t_end, times) -> StackResult, on a validated stack (check_stack),
+# with the apex count and end time of stop_rule and the sample times (or None) checked.
+StackSolver = Callable[[Stack, int, float, np.ndarray | None], StackResult]
+METHODS: dict[str, dict[str, StackSolver]] = {
+    "linear": {"compiled": solve_linear},
+    "hertz": {name: partial(_solve_hertz, name) for name in ("compiled", "DOP853")},
+}
 
 
 # The clusters' closed forms of the last few stacks, by masses and damping ratios: a cluster is

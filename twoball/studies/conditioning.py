@@ -13,17 +13,34 @@ h1, h2 within TOLERANCE and within CONDITIONING_FACTOR times its conditioning.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from twoball.model import DEFAULT_HEIGHT
-from twoball.observables import relative_error
+from twoball.observables import BALLS, relative_error
 from twoball.solve import simulate
 
 DIFFERENCE_ULPS = 2.0**16
 TOLERANCE = 2e-10  # h1 and h2 within this of the reference, relative
 CONDITIONING_FACTOR = 10.0  # and within this many times their conditioning
 REFERENCE_DIGITS = 25  # a reference height stored as text (40 digits computed)
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """The exact solver against a reference on one drop (:func:`against_reference`), what
+    :func:`within_rule` judges: the ball contacts before the first apex of both, the relative
+    errors in h1 and h2 (inf: a bounce missed or invented; NaN: neither has it) and the drop's
+    conditioning. The studies' rows extend it (:class:`~twoball.studies.precision.TruthRow`,
+    :class:`~twoball.studies.many_contacts.ManyContactsRow`)."""
+
+    contacts_first: int
+    contacts_first_truth: int
+    rel_err_h1: float
+    rel_err_h2: float
+    cond_h1: float
+    cond_h2: float
 
 
 def _heights(eps: float, mu: float, tau_ratio: float, height: float) -> np.ndarray:
@@ -60,7 +77,7 @@ def against_reference(
     contacts_first: int,
     *,
     height: float = DEFAULT_HEIGHT,
-) -> dict:
+) -> Comparison:
     """What :func:`within_rule` judges, for the exact solver as it is now on one drop: its ball
     contacts in the first bounce and relative errors in h1 and h2 against reference values (the
     40-digit reference's numbers, or their text as :func:`reference_text` stores them), and the
@@ -75,14 +92,14 @@ def against_reference(
             relative_error(result.h1, references[0]),
             relative_error(result.h2, references[1]),
         ]
-    return {
-        "contacts_first": result.contacts_first,
-        "contacts_first_truth": int(contacts_first),
-        "rel_err_h1": errors[0],
-        "rel_err_h2": errors[1],
-        "cond_h1": float(cond[0]),
-        "cond_h2": float(cond[1]),
-    }
+    return Comparison(
+        contacts_first=result.contacts_first[BALLS],
+        contacts_first_truth=int(contacts_first),
+        rel_err_h1=errors[0],
+        rel_err_h2=errors[1],
+        cond_h1=float(cond[0]),
+        cond_h2=float(cond[1]),
+    )
 
 
 def reference_text(value) -> str:
@@ -93,12 +110,12 @@ def reference_text(value) -> str:
     return "" if value is None else mpmath.nstr(value, REFERENCE_DIGITS)
 
 
-def within_rule(row: dict) -> bool:
-    """Contact counts equal; each error <= TOLERANCE and <= CONDITIONING_FACTOR x conditioning
-    (``row`` has contacts_first, contacts_first_truth, rel_err_h1/h2 and cond_h1/h2)."""
-    if row["contacts_first"] != row["contacts_first_truth"]:
+def within_rule(row: Comparison) -> bool:
+    """The rule: contact counts equal; each error <= TOLERANCE and <= CONDITIONING_FACTOR x
+    conditioning."""
+    if row.contacts_first != row.contacts_first_truth:
         return False
     return all(
-        row[f"rel_err_{h}"] <= min(TOLERANCE, CONDITIONING_FACTOR * row[f"cond_{h}"])
-        for h in ("h1", "h2")
+        error <= min(TOLERANCE, CONDITIONING_FACTOR * cond)
+        for error, cond in ((row.rel_err_h1, row.cond_h1), (row.rel_err_h2, row.cond_h2))
     )

@@ -17,16 +17,23 @@ cores).
 
 from __future__ import annotations
 
-import csv
 import time
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
 from twoball.batch.workers import Workers
 from twoball.errors import ParameterError
+from twoball.observables import BALLS
 from twoball.solve import simulate
-from twoball.studies.conditioning import against_reference, reference_text, within_rule
+from twoball.studies.conditioning import (
+    Comparison,
+    against_reference,
+    reference_text,
+    within_rule,
+)
+from twoball.studies.precision import write_csv
 
 HEIGHT = 1e4
 SEED = 10
@@ -57,12 +64,26 @@ def sample_drops(count: int = SAMPLE, seed: int = SEED) -> list[tuple[float, flo
         mu = float(10.0 ** rng.uniform(-4.0, -3.0))
         tau_ratio = float(10.0 ** rng.uniform(-3.0, -1.0))
         result = simulate(eps, mu, tau_ratio, height=HEIGHT)
-        if result.reason is None and result.contacts_first >= MIN_CONTACTS:
+        if result.reason is None and result.contacts_first[BALLS] >= MIN_CONTACTS:
             drops.append((eps, mu, tau_ratio))
     return drops
 
 
-def measure(drop: tuple[float, float, float]) -> dict:
+@dataclass(frozen=True)
+class ManyContactsRow(Comparison):
+    """One drop of the sample (:func:`measure`): the comparison with the 40-digit reference, the
+    drop, the reference heights as text and the reference's run time; :data:`COLUMNS` are its
+    fields."""
+
+    eps: float
+    mu: float
+    tau_ratio: float
+    truth_seconds: float
+    h1_truth: str
+    h2_truth: str
+
+
+def measure(drop: tuple[float, float, float]) -> ManyContactsRow:
     """One drop: exact vs truth, contact counts, conditioning."""
     from twoball.studies.truth import solve_truth
 
@@ -71,20 +92,22 @@ def measure(drop: tuple[float, float, float]) -> dict:
     truth = solve_truth(eps, mu, tau_ratio, height=HEIGHT)
     seconds = time.perf_counter() - start
     compared = against_reference(
-        eps, mu, tau_ratio, truth.h1, truth.h2, truth.contacts_first, height=HEIGHT
+        eps, mu, tau_ratio, truth.h1, truth.h2, truth.contacts_first[BALLS], height=HEIGHT
     )
-    return {
-        "eps": eps,
-        "mu": mu,
-        "tau_ratio": tau_ratio,
-        **compared,
-        "truth_seconds": round(seconds, 1),
-        "h1_truth": reference_text(truth.h1),
-        "h2_truth": reference_text(truth.h2),
-    }
+    return ManyContactsRow(
+        **asdict(compared),
+        eps=eps,
+        mu=mu,
+        tau_ratio=tau_ratio,
+        truth_seconds=round(seconds, 1),
+        h1_truth=reference_text(truth.h1),
+        h2_truth=reference_text(truth.h2),
+    )
 
 
-def run_study(out: Path, *, count: int = SAMPLE, seed: int = SEED, workers: int = 2) -> list[dict]:
+def run_study(
+    out: Path, *, count: int = SAMPLE, seed: int = SEED, workers: int = 2
+) -> list[ManyContactsRow]:
     """Measure the seeded sample on ``workers`` processes and write many_contacts.csv into
     ``out``; returns the rows."""
     if count < 1:
@@ -94,16 +117,13 @@ def run_study(out: Path, *, count: int = SAMPLE, seed: int = SEED, workers: int 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     drops = sample_drops(count, seed)
-    rows: list[dict] = [{}] * len(drops)
+    rows: list[ManyContactsRow | None] = [None] * len(drops)
     with Workers(min(workers, len(drops)), measure) as pool:
         for index, row, _ in pool.results([(drop,) for drop in drops]):
             rows[index] = row
             print(f"  drop {index + 1}/{len(drops)}: {row}", flush=True)
-    with open(out / "many_contacts.csv", "w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=COLUMNS)
-        writer.writeheader()
-        writer.writerows(rows)
-    worst = max(max(r["rel_err_h1"], r["rel_err_h2"]) for r in rows)
+    write_csv(rows, out / "many_contacts.csv", COLUMNS)
+    worst = max(max(r.rel_err_h1, r.rel_err_h2) for r in rows)
     outside = sum(not within_rule(r) for r in rows)
     print(
         f"{len(rows)} drops: worst relative error {worst:.2g}; outside the rule on {outside}; "

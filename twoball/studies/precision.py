@@ -25,8 +25,9 @@ from typing import TYPE_CHECKING
 from twoball import reference
 from twoball.errors import ParameterError, Status
 from twoball.model import DEFAULT_HEIGHT, check_parameters
-from twoball.observables import relative_error
+from twoball.observables import BALLS, relative_error
 from twoball.solve import simulate
+from twoball.studies.conditioning import Comparison
 from twoball.studies.timing import median_seconds
 
 if TYPE_CHECKING:
@@ -336,7 +337,19 @@ def _title(with_truth: bool, height: float | None = None) -> str:
     )
 
 
-def exact_against_truth(cases: dict[str, tuple[float, float, float]]) -> list[dict]:
+@dataclass(frozen=True)
+class TruthRow(Comparison):
+    """One documented case's exact run against the 40-digit reference
+    (:func:`exact_against_truth`): the comparison, the case's name, the reference heights as
+    text and the reference's run time; :data:`TRUTH_COLUMNS` are its fields."""
+
+    case: str
+    h1_truth: str
+    h2_truth: str
+    truth_seconds: float
+
+
+def exact_against_truth(cases: dict[str, tuple[float, float, float]]) -> list[TruthRow]:
     """The exact solver's relative errors in h1 and h2 against the 40-digit reference, with
     each case's conditioning (:mod:`twoball.studies.conditioning`)."""
     from twoball.studies.conditioning import against_reference, reference_text
@@ -347,15 +360,15 @@ def exact_against_truth(cases: dict[str, tuple[float, float, float]]) -> list[di
         start = time.perf_counter()
         truth = solve_truth(*parameters)
         seconds = time.perf_counter() - start
-        compared = against_reference(*parameters, truth.h1, truth.h2, truth.contacts_first)
+        compared = against_reference(*parameters, truth.h1, truth.h2, truth.contacts_first[BALLS])
         rows.append(
-            {
-                "case": case,
-                "h1_truth": reference_text(truth.h1),
-                "h2_truth": reference_text(truth.h2),
-                **compared,
-                "truth_seconds": seconds,
-            }
+            TruthRow(
+                **asdict(compared),
+                case=case,
+                h1_truth=reference_text(truth.h1),
+                h2_truth=reference_text(truth.h2),
+                truth_seconds=seconds,
+            )
         )
     return rows
 
@@ -370,7 +383,7 @@ def run_study(out: Path, *, repeats: int = 3, budget: float = 20.0, truth: bool 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     truth_rows = exact_against_truth(CASES) if truth else []
-    established = {row["case"]: row for row in truth_rows}
+    established = {row.case: row for row in truth_rows}
     rows = []
     for case, (eps, mu, tau_ratio) in CASES.items():
         print(f"{case}: eps={eps:g}, mu={mu:g}, tau_ratio={tau_ratio:g}, H=1e4", flush=True)
@@ -387,22 +400,19 @@ def run_study(out: Path, *, repeats: int = 3, budget: float = 20.0, truth: bool 
             if row.method == "exact" and case in established:
                 truth_row = established[case]
                 case_rows[index] = replace(
-                    row, rel_err_h1=truth_row["rel_err_h1"], rel_err_h2=truth_row["rel_err_h2"]
+                    row, rel_err_h1=truth_row.rel_err_h1, rel_err_h2=truth_row.rel_err_h2
                 )
         rows += case_rows
     write_csv(rows, out / "work_precision.csv")
     plot_work_precision(rows, out / "work_precision.png", _title(bool(truth_rows), DEFAULT_HEIGHT))
     written = ["work_precision.csv", "work_precision.png"]
     if truth_rows:
-        with open(out / "exact_vs_truth.csv", "w", newline="") as handle:
-            writer = csv.DictWriter(handle, fieldnames=TRUTH_COLUMNS)
-            writer.writeheader()
-            writer.writerows(truth_rows)
+        write_csv(truth_rows, out / "exact_vs_truth.csv", TRUTH_COLUMNS)
         written.append("exact_vs_truth.csv")
         from twoball.studies.conditioning import within_rule
 
-        worst = max(max(r["rel_err_h1"], r["rel_err_h2"]) for r in truth_rows)
-        ratio = max(r[f"rel_err_{h}"] / r[f"cond_{h}"] for r in truth_rows for h in ("h1", "h2"))
+        worst = max(max(r.rel_err_h1, r.rel_err_h2) for r in truth_rows)
+        ratio = max(max(r.rel_err_h1 / r.cond_h1, r.rel_err_h2 / r.cond_h2) for r in truth_rows)
         outside = sum(not within_rule(r) for r in truth_rows)
         print(
             f"exact solver against the 40-digit reference: largest relative error {worst:.1e},"

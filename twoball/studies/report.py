@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from twoball.errors import ParameterError
+from twoball.observables import BALLS, FLOOR
 from twoball.studies.rows import Row, _grid_words, _percent
 
 CLOSE_UP = {"eps": 0.9, "mu": 0.01, "tau_ratio": 0.01}  # the paper's close-up figure
@@ -110,13 +111,13 @@ def close_up_row() -> Row:
     from twoball.solve import simulate
 
     result = simulate(**CLOSE_UP, until="first")
-    floor = [c for c in result.contacts if c.contact == "floor"]
-    ball = [c for c in result.contacts if c.contact == "ball"]
+    floor = [c for c in result.contacts if c.contact == FLOOR]
+    ball = [c for c in result.contacts if c.contact == BALLS]
     inside = sum(any(f.start <= b.start and b.end <= f.end for f in floor) for b in ball)
     return Row(
         "close-up case (eps = 0.9, mu = 0.01, tau_d/tau_f = 0.01)",
         "4 contacts, all during floor contact",
-        f"{result.contacts_first} contacts, {inside} of them during floor contact",
+        f"{result.contacts_first[BALLS]} contacts, {inside} of them during floor contact",
         "one exact run at H = 1e4 (no cube)",
     )
 

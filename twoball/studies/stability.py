@@ -28,6 +28,7 @@ import csv
 import math
 import time
 from collections.abc import Callable, Iterable, Sequence
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -37,7 +38,7 @@ from twoball.batch.workers import Workers
 from twoball.errors import ParameterError, Status
 from twoball.kernels.codes import ROUNDING  # per phase, of the exact solver's state
 from twoball.model import check_parameters
-from twoball.observables import relative_error
+from twoball.observables import BALLS, FLOOR, relative_error
 from twoball.reference import METHODS as REFERENCE_METHODS
 from twoball.solve import simulate
 from twoball.studies import precision
@@ -71,25 +72,45 @@ CONTACT_CHECK = ("DOP853", 1e-11)
 EXACT_LIMIT_SECONDS = 1.0
 RIGHT_RELATIVE_ERROR = 1e-4  # a scipy result within this of the exact one counts as right
 ENERGY_RISE_SCIPY = 1e-6  # well beyond a tolerance of 1e-8: a real gain, not truncation noise
-COLUMNS = (
-    "eps",
-    "mu",
-    "tau_ratio",
-    "height",
-    "method",
-    "finished",
-    "seconds",
-    "verdict",
-    "problems",
-    "reason",
-    "h1",
-    "h2",
-    "rel_err_h1",
-    "rel_err_h2",
-    "ball_contacts",
-    "exact_ball_contacts",
-    "energy_rise",
-    "deepest_overlap",
+
+
+@dataclass(frozen=True)
+class StabilityRow:
+    """One method's run on one case (:func:`diagnose`), completed by the comparison with the
+    exact solver (:func:`judge`): read by the figure (:func:`stability_figure`) and the table
+    (:func:`write_csv`, the fields of :data:`COLUMNS`). None where a figure was not measured (a
+    run that crashed or was killed, a comparison not made)."""
+
+    eps: float
+    mu: float
+    tau_ratio: float
+    height: float
+    method: str
+    finished: bool
+    seconds: float
+    verdict: str | None = None  # right, wrong, failed or too slow (VERDICT_COLOURS), once judged
+    problems: list[str] = field(default_factory=list)
+    reason: str = ""
+    h1: float | None = None
+    h2: float | None = None
+    rel_err_h1: float | None = None
+    rel_err_h2: float | None = None
+    ball_contacts: int | None = None
+    exact_ball_contacts: int | None = None
+    energy_rise: float | None = None
+    deepest_overlap: float | None = None
+    end_time: float | None = None  # not in the table: the comparison's
+    contact_starts: list[float] = field(default_factory=list)
+
+    @property
+    def case(self) -> tuple[float, float, float, float]:
+        """(eps, mu, tau_ratio, height)."""
+        return (self.eps, self.mu, self.tau_ratio, self.height)
+
+
+# the table's columns: every field but the two the comparison needs
+COLUMNS = tuple(
+    f.name for f in fields(StabilityRow) if f.name not in ("end_time", "contact_starts")
 )
 
 
@@ -155,7 +176,7 @@ def _energy_scale(mu: float, x1_0: float, x2_0: float) -> float:
 
 
 def _ball_contacts_before(result, end: float) -> int:
-    return sum(1 for c in result.contacts if c.contact == "ball" and c.start < end)
+    return sum(1 for c in result.contacts if c.contact == BALLS and c.start < end)
 
 
 def _unreported_pushes(result) -> list[str]:
@@ -166,14 +187,14 @@ def _unreported_pushes(result) -> list[str]:
     x1, x2, v1, v2 = trajectory.x1, trajectory.x2, trajectory.v1, trajectory.v2
     slack = 1e-9 * (1.0 + np.abs(x1) + np.abs(x2) + np.abs(v1) + np.abs(v2))
     missed = []
-    for name, eta, rate, zeta in (
-        ("floor", x1, v1, drop.zeta01),
-        ("ball", x2 - x1, v2 - v1, drop.zeta12),
+    for contact, name, eta, rate, zeta in (
+        (FLOOR, "floor", x1, v1, drop.zeta01),
+        (BALLS, "ball", x2 - x1, v2 - v1, drop.zeta12),
     ):
         pushing = np.maximum(eta, eta + 2.0 * zeta * rate) < -slack
         covered = np.zeros_like(pushing)
         for c in result.contacts:
-            if c.contact == name:
+            if c.contact == contact:
                 width = 1e-9 * (1.0 + abs(c.end))
                 covered |= (trajectory.t >= c.start - width) & (trajectory.t <= c.end + width)
         if np.any(pushing & ~covered):
@@ -213,7 +234,7 @@ def _trajectory_problems(result, method: str) -> tuple[float, float, list[str]]:
 
 def diagnose(
     eps: float, mu: float, tau_ratio: float, height: float, method: str, tolerance: float
-) -> dict:
+) -> StabilityRow:
     """Run one method on one case with its trajectory sampled, and check it against the model.
 
     Returns the run's figures and the problems found without the exact solver (the comparison
@@ -221,7 +242,7 @@ def diagnose(
     """
     check_parameters(eps, mu, tau_ratio, height=height)
     options = {} if method == "exact" else {"rtol": tolerance, "atol": tolerance}
-    row = {"eps": eps, "mu": mu, "tau_ratio": tau_ratio, "height": height, "method": method}
+    case = {"eps": eps, "mu": mu, "tau_ratio": tau_ratio, "height": height, "method": method}
     start = time.perf_counter()
     try:
         result = simulate(
@@ -229,10 +250,14 @@ def diagnose(
             **options,
         )  # fmt: skip
     except (ValueError, ArithmeticError, RuntimeError, MemoryError) as error:
-        row.update(finished=False, seconds=time.perf_counter() - start)
-        row.update(reason=f"{type(error).__name__}: {error}", problems=["crashed"])
-        return row
-    row["seconds"] = time.perf_counter() - start
+        return StabilityRow(
+            **case,
+            finished=False,
+            seconds=time.perf_counter() - start,
+            reason=f"{type(error).__name__}: {error}",
+            problems=["crashed"],
+        )
+    seconds = time.perf_counter() - start
     problems = []
     reason = result.reason or ""
     failed = result.status == Status.FAILED
@@ -246,50 +271,52 @@ def diagnose(
     values = [v for v in (result.h1, result.h2) if v is not None]
     if not all(math.isfinite(v) for v in values):
         problems.append("non-finite result")
-    row.update(
+    return StabilityRow(
+        **case,
         finished=not failed,
+        seconds=seconds,
         reason=reason,
         problems=problems,
         h1=result.h1,
         h2=result.h2,
         end_time=result.end_time,
-        contact_starts=[c.start for c in result.contacts if c.contact == "ball"],
+        contact_starts=[c.start for c in result.contacts if c.contact == BALLS],
         energy_rise=rise,
         deepest_overlap=deepest,
     )
-    return row
 
 
-def judge(row: dict, exact_row: dict) -> dict:
-    """Complete a :func:`diagnose` row with the comparison against the exact solver's row."""
-    row = dict(row)
-    problems = list(row.get("problems", []))
-    if row["method"] == "exact":
-        if row.get("finished") and row["seconds"] > EXACT_LIMIT_SECONDS:
+def judge(row: StabilityRow, exact_row: StabilityRow | None) -> StabilityRow:
+    """Complete a :func:`diagnose` row with the comparison against the exact solver's row (None:
+    the case has none)."""
+    problems = list(row.problems)
+    found = {}
+    if row.method == "exact":
+        if row.finished and row.seconds > EXACT_LIMIT_SECONDS:
             problems.append("too slow")
-    elif row.get("finished") and exact_row.get("finished"):
-        end = min(row["end_time"], exact_row["end_time"])
-        mine = sum(1 for s in row["contact_starts"] if s < end)
-        theirs = sum(1 for s in exact_row["contact_starts"] if s < end)
-        row["ball_contacts"], row["exact_ball_contacts"] = mine, theirs
+    elif row.finished and exact_row is not None and exact_row.finished:
+        end = min(row.end_time, exact_row.end_time)
+        mine = sum(1 for s in row.contact_starts if s < end)
+        theirs = sum(1 for s in exact_row.contact_starts if s < end)
+        found.update(ball_contacts=mine, exact_ball_contacts=theirs)
         if mine < theirs:
             problems.append("missed ball contact")
         elif mine > theirs:
             problems.append("extra ball contact")
         for name in ("h1", "h2"):
-            error = relative_error(row[name], exact_row[name])
-            row[f"rel_err_{name}"] = error
+            error = relative_error(getattr(row, name), getattr(exact_row, name))
+            found[f"rel_err_{name}"] = error
             if error > RIGHT_RELATIVE_ERROR:
                 problems.append(f"wrong {name}")
-    if row["method"] == "exact" and row.get("finished"):
-        row["ball_contacts"] = row["exact_ball_contacts"] = len(row["contact_starts"])
+    if row.method == "exact" and row.finished:
+        found.update(ball_contacts=len(row.contact_starts))
+        found.update(exact_ball_contacts=len(row.contact_starts))
     problems = list(dict.fromkeys(problems))
-    if not row.get("finished"):
+    if not row.finished:
         verdict = "too slow" if problems == ["too slow"] else "failed"
     else:
         verdict = "right" if not problems else "wrong"
-    row.update(problems=problems, verdict=verdict)
-    return row
+    return replace(row, **found, problems=problems, verdict=verdict)
 
 
 def study(
@@ -301,8 +328,8 @@ def study(
     workers: int = 2,
     check: tuple[str, float] | None = None,
     progress=None,
-    diagnose_one: Callable[..., dict] | None = None,
-) -> list[dict]:
+    diagnose_one: Callable[..., StabilityRow] | None = None,
+) -> list[StabilityRow]:
     """The stability study: the exact solver on ``exact_cases``, every other method on
     ``scipy_subset`` (which must be among ``exact_cases``), each under a time cap.
 
@@ -322,41 +349,35 @@ def study(
     checked = len(tasks)
     if check is not None:
         tasks += [(*case, *check) for case in scipy_subset]
-    rows: list[dict] = [{}] * len(tasks)
+    rows: list[StabilityRow | None] = [None] * len(tasks)
     with Workers(workers, diagnose if diagnose_one is None else diagnose_one, cap=cap) as pool:
         for index, row, seconds in pool.results(tasks):
             if row is None:  # killed over the cap
                 eps, mu, tau_ratio, height, method, _ = tasks[index]
-                row = {
-                    "eps": eps,
-                    "mu": mu,
-                    "tau_ratio": tau_ratio,
-                    "height": height,
-                    "method": method,
-                    "finished": False,
-                    "seconds": seconds,
-                    "reason": f"killed after {cap:g} s",
-                    "problems": ["too slow"],
-                }
+                row = StabilityRow(
+                    eps,
+                    mu,
+                    tau_ratio,
+                    height,
+                    method,
+                    finished=False,
+                    seconds=seconds,
+                    reason=f"killed after {cap:g} s",
+                    problems=["too slow"],
+                )
             rows[index] = row
             if progress is not None:
                 progress(row)
-    for row in rows[checked:]:
-        row["method"] = f"{check[0]} {check[1]:g}"
-    exact_rows = {
-        tuple(r[k] for k in ("eps", "mu", "tau_ratio", "height")): r
-        for r in rows[: len(exact_cases)]
-    }
-    judged = []
-    for row in rows:
-        key = tuple(row[k] for k in ("eps", "mu", "tau_ratio", "height"))
-        judged.append(judge(row, exact_rows.get(key, {})))
-    return judged
+    if check is not None:
+        name = f"{check[0]} {check[1]:g}"
+        rows[checked:] = [replace(row, method=name) for row in rows[checked:]]
+    exact_rows = {row.case: row for row in rows[: len(exact_cases)]}
+    return [judge(row, exact_rows.get(row.case)) for row in rows]
 
 
-def write_csv(rows: Sequence[dict], path: str | Path) -> None:
+def write_csv(rows: Sequence[StabilityRow], path: str | Path) -> None:
     """The judged rows as CSV with the columns :data:`COLUMNS`, problems joined by "; "."""
-    shown = [{**row, "problems": "; ".join(row.get("problems", []))} for row in rows]
+    shown = [{**asdict(row), "problems": "; ".join(row.problems)} for row in rows]
     precision.write_csv(shown, path, COLUMNS)
 
 
@@ -368,13 +389,13 @@ VERDICT_COLOURS = {
 }
 
 
-def stability_figure(rows: Sequence[dict]) -> Figure:
+def stability_figure(rows: Sequence[StabilityRow]) -> Figure:
     """Left: verdict of every method on the scipy subset; right: the exact solver's run time
     over the whole grid, against the 1 s limit."""
-    scipy_rows = [r for r in rows if r["method"] != "exact"]
-    subset = list(dict.fromkeys(_case_key(r) for r in scipy_rows))
-    methods = list(dict.fromkeys(r["method"] for r in rows))
-    by_key = {(_case_key(r), r["method"]): r for r in rows}
+    scipy_rows = [r for r in rows if r.method != "exact"]
+    subset = list(dict.fromkeys(r.case for r in scipy_rows))
+    methods = list(dict.fromkeys(r.method for r in rows))
+    by_key = {(r.case, r.method): r for r in rows}
     from matplotlib.figure import Figure
 
     figure = Figure(figsize=(15, 0.32 * len(subset) + 2.5), layout="constrained")
@@ -384,7 +405,7 @@ def stability_figure(rows: Sequence[dict]) -> Figure:
             row = by_key.get((case, method))
             if row is None:
                 continue
-            left.add_patch(_rectangle(j, i, VERDICT_COLOURS[row["verdict"]]))
+            left.add_patch(_rectangle(j, i, VERDICT_COLOURS[row.verdict]))
             text = _short(row)
             left.text(j + 0.5, i + 0.5, text, ha="center", va="center", fontsize=6.5)
     left.set_xlim(0, len(methods))
@@ -411,24 +432,20 @@ def stability_figure(rows: Sequence[dict]) -> Figure:
         " cell text: seconds and what went wrong",
         fontsize=9,
     )
-    exact_rows = [r for r in rows if r["method"] == "exact"]
-    seconds = np.array([r["seconds"] for r in exact_rows])
-    colours = [VERDICT_COLOURS[r["verdict"]] for r in exact_rows]
+    exact_rows = [r for r in rows if r.method == "exact"]
+    seconds = np.array([r.seconds for r in exact_rows])
+    colours = [VERDICT_COLOURS[r.verdict] for r in exact_rows]
     right.scatter(np.arange(len(exact_rows)), np.maximum(seconds, 1e-6), c=colours, s=8)
     right.axhline(EXACT_LIMIT_SECONDS, color="k", linestyle="--", linewidth=0.8)
     right.set_yscale("log")
     right.set_xlabel("grid case (eps, mu, tau_d/tau_f, H; in CSV order)")
     right.set_ylabel("run time to the second apex [s] (with trajectory sampling)")
-    bad = sum(1 for r in exact_rows if r["verdict"] != "right")
+    bad = sum(1 for r in exact_rows if r.verdict != "right")
     right.set_title(
         f"Exact solver, {len(exact_rows)} cases: {bad} not right (dashed: 1 s)",
         fontsize=9,
     )
     return figure
-
-
-def _case_key(row: dict) -> tuple:
-    return (row["eps"], row["mu"], row["tau_ratio"], row["height"])
 
 
 def _rectangle(x: float, y: float, colour: str):
@@ -450,9 +467,9 @@ ABBREVIATIONS = {
 }
 
 
-def _short(row: dict) -> str:
-    seconds = f"{row['seconds']:.2g}s"
-    problems = [ABBREVIATIONS.get(p, p) for p in row.get("problems", [])]
+def _short(row: StabilityRow) -> str:
+    seconds = f"{row.seconds:.2g}s"
+    problems = [ABBREVIATIONS.get(p, p) for p in row.problems]
     return seconds if not problems else seconds + "\n" + ",".join(problems[:3])
 
 
@@ -461,46 +478,64 @@ def _short(row: dict) -> str:
 # tau_d/tau_f) only; they do as H grows.
 H_VALUES = tuple(10.0**k for k in range(1, 9))
 H_POINTS = ((0.816, 0.05, 0.3), (0.9, 0.01, 0.01), (0.7, 0.1, 0.7), (0.816, 0.01, 0.05))
-H_COLUMNS = (
-    "eps",
-    "mu",
-    "tau_ratio",
-    "height",
-    "h1_over_icm",
-    "h2_over_h1",
-    "h1_over_drop",
-    "h2_over_drop",
-    "contacts_first",
-)
+
+
+@dataclass(frozen=True)
+class ConvergenceRow:
+    """The four ratios and the ball contacts before the first apex of one drop at one height
+    (:func:`h_convergence`), read by its figure and table (the fields: :data:`H_COLUMNS`)."""
+
+    eps: float
+    mu: float
+    tau_ratio: float
+    height: float
+    h1_over_icm: float | None
+    h2_over_h1: float | None
+    h1_over_drop: float | None
+    h2_over_drop: float | None
+    contacts_first: int  # the ball contacts (a result's contacts_first[BALLS])
+
+
+H_COLUMNS = tuple(f.name for f in fields(ConvergenceRow))
 
 
 def h_convergence(
     points: Sequence[tuple[float, float, float]] = H_POINTS, heights: Sequence[float] = H_VALUES
-) -> list[dict]:
+) -> list[ConvergenceRow]:
     """The four ratios and the contact count at each point and height (exact solver)."""
     rows = []
     for eps, mu, tau_ratio in points:
         for height in heights:
-            summary = simulate(eps, mu, tau_ratio, height=height).summary()
-            rows.append({key: summary[key] for key in H_COLUMNS})
+            result = simulate(eps, mu, tau_ratio, height=height)
+            rows.append(
+                ConvergenceRow(
+                    eps,
+                    mu,
+                    tau_ratio,
+                    height,
+                    h1_over_icm=result.h1_over_icm,
+                    h2_over_h1=result.h2_over_h1,
+                    h1_over_drop=result.h1_over_drop,
+                    h2_over_drop=result.h2_over_drop,
+                    contacts_first=result.contacts_first[BALLS],
+                )
+            )
     return rows
 
 
-def h_convergence_figure(rows: Sequence[dict]) -> Figure:
+def h_convergence_figure(rows: Sequence[ConvergenceRow]) -> Figure:
     """h1/h_ICM and h2/h1 against H, one line per parameter point."""
     from matplotlib.figure import Figure
 
     figure = Figure(figsize=(10, 4), layout="constrained")
     axes = figure.subplots(1, 2)
-    points = list(dict.fromkeys((r["eps"], r["mu"], r["tau_ratio"]) for r in rows))
+    points = list(dict.fromkeys((r.eps, r.mu, r.tau_ratio) for r in rows))
     for index, point in enumerate(points):
-        mine = [r for r in rows if (r["eps"], r["mu"], r["tau_ratio"]) == point]
+        mine = [r for r in rows if (r.eps, r.mu, r.tau_ratio) == point]
         label = f"eps={point[0]:g}, mu={point[1]:g}, tau_d/tau_f={point[2]:g}"
         for axis, key in zip(axes, ("h1_over_icm", "h2_over_h1"), strict=True):
-            values = [math.nan if r[key] is None else r[key] for r in mine]
-            axis.plot(
-                [r["height"] for r in mine], values, marker="o", color=f"C{index}", label=label
-            )
+            values = [math.nan if getattr(r, key) is None else getattr(r, key) for r in mine]
+            axis.plot([r.height for r in mine], values, marker="o", color=f"C{index}", label=label)
     for axis, name in zip(axes, ("h1 / h_ICM", "h2 / h1"), strict=True):
         axis.set_xscale("log")
         axis.set_xlabel("dimensionless drop height H = h k / (m1 g)")
@@ -533,7 +568,7 @@ def run_study(out: Path, *, cap: float = 10.0, workers: int = 2, quick: bool = F
     done = [0]
     total = len(cases) + len(subset) * len(METHODS)
 
-    def progress(row: dict) -> None:
+    def progress(row: StabilityRow) -> None:
         done[0] += 1
         if done[0] % 50 == 0 or done[0] == total:
             print(f"  {done[0]}/{total} runs", flush=True)
@@ -546,13 +581,13 @@ def run_study(out: Path, *, cap: float = 10.0, workers: int = 2, quick: bool = F
     with open(out / "h_convergence.csv", "w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=H_COLUMNS)
         writer.writeheader()
-        writer.writerows(convergence)
+        writer.writerows(asdict(row) for row in convergence)
     h_convergence_figure(convergence).savefig(out / "h_convergence.png", dpi=110)
     print(
         f"{len(rows)} runs in {time.perf_counter() - started:.0f} s; wrote {out}/stability.csv,"
         " stability.png, h_convergence.csv, h_convergence.png"
     )
-    for method in dict.fromkeys(r["method"] for r in rows):
-        mine = [r for r in rows if r["method"] == method]
-        counts = {v: sum(1 for r in mine if r["verdict"] == v) for v in VERDICT_COLOURS}
+    for method in dict.fromkeys(r.method for r in rows):
+        mine = [r for r in rows if r.method == method]
+        counts = {v: sum(1 for r in mine if r.verdict == v) for v in VERDICT_COLOURS}
         print(f"  {method:12s} " + ", ".join(f"{k} {n}" for k, n in counts.items()))

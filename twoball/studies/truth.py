@@ -47,7 +47,7 @@ class Truth:
     apex_t: list
     apex_h: list
     contacts: list  # (contact, start, end): 0 floor, 1 ball
-    contacts_first: int
+    contacts_first: list[int]  # intervals of each contact before the first apex, as a Result's
 
     @property
     def h1(self):
@@ -202,7 +202,7 @@ def solve_truth(
         kind = 0
         started = [None, None]
         apex_t, apex_h, contacts = [], [], []
-        contacts_first = 0
+        contacts_first = [0, 0]
         steps = 0
         for _ in range(MAX_PHASES):
             if kind not in phases:
@@ -247,7 +247,7 @@ def solve_truth(
                 contacts.append((event, started[event], t))
             else:
                 started[event] = t
-                if event == 1 and not apex_t:
-                    contacts_first += 1
+                if not apex_t:
+                    contacts_first[event] += 1
             kind ^= bit
         raise RuntimeError("truth: phase limit reached")
