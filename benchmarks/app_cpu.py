@@ -64,12 +64,15 @@ def scene_moves(scene: str, count: int) -> tuple[list[float], int]:
     with set_curdoc(document):
         explorer = Explorer({"scene": scene.split()[0]})
         explorer.page().server_doc(document)
-        name, values = MOVES[scene]
+    name, values = MOVES[scene]
 
-        def move(i: int) -> None:
-            setattr(explorer.state, name, float(values[i % len(values)]))
+    def move(i: int) -> None:
+        setattr(explorer.state, name, float(values[i % len(values)]))
 
-        return timed_moves(document, move, count)
+    # (moved outside the document's context: with it current and no session, the scene's
+    # pn.io.hold collected its changes and never handed them to on_change, and the patch
+    # measured was the slider's alone)
+    return timed_moves(document, move, count)
 
 
 def baseline_moves(count: int) -> tuple[list[float], int]:
