@@ -7,6 +7,10 @@ is a page with one slider and a 10-point line. Medians of ``--pages`` pages afte
 pages; CPU time of the process (``time.process_time``).
 
     .venv/bin/python benchmarks/app_open.py [--pages 10] [--scene drop closeup] [--profile drop]
+
+``--served``: the same pages opened one at a time from ``twoball serve --num-procs 1`` by a
+protocol client (tools/bokehclient.py), the server's CPU per page read from /proc (after each
+page, a second for its onload callbacks and the URL's rewrite).
 """
 
 from __future__ import annotations
@@ -90,13 +94,56 @@ def measure(build, query: dict[str, str], pages: int) -> tuple[dict[str, float],
     return parts, runs[-1][1], runs[-1][2]
 
 
+def served(scene: str, pages: int) -> list[float]:
+    """Server CPU (ms) of each of ``pages`` pages opened one after another."""
+    import asyncio
+    import tempfile
+
+    sys.path.insert(0, str(REPO / "benchmarks"))
+    sys.path.insert(0, str(REPO / "tools"))
+    import app_load
+    from appdriver import cpu_seconds, free_port
+    from bokehclient import PageClient
+
+    async def run() -> list[float]:
+        port = free_port()
+        log = Path(tempfile.mkdtemp()) / "server.log"
+        process = app_load.start_server(app_load.twoball_serve(port, 1), port, log, 1, True)
+        url = f"http://127.0.0.1:{port}/app?scene={scene}"
+        costs = []
+        try:
+            for index in range(pages + 2):  # (the first two: the process's first pages)
+                start = cpu_seconds(process.pid)
+                client = PageClient(url)
+                await client.open()
+                await asyncio.sleep(1.0)
+                if index >= 2:
+                    costs.append(1e3 * (cpu_seconds(process.pid) - start))
+                await client.close()
+        finally:
+            process.terminate()
+            process.wait(timeout=30)
+        return costs
+
+    return asyncio.run(run())
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--pages", type=int, default=10)
     parser.add_argument("--scene", nargs="*", default=list(SCENES))
     parser.add_argument("--present", action="store_true", help="presentation mode (?present=1)")
     parser.add_argument("--profile", help="profile the pages of this scene instead")
+    parser.add_argument("--served", action="store_true", help="from twoball serve, one by one")
     args = parser.parse_args()
+    if args.served:
+        for scene in args.scene:
+            costs = served(scene, args.pages)
+            print(
+                f"{scene}: served, server CPU per page, median of {args.pages}: "
+                f"{statistics.median(costs):.0f} ms (all: {', '.join(f'{c:.0f}' for c in costs)})"
+            )
+        return
     pn.extension()
     from twoball import warmup
 
