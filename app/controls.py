@@ -17,7 +17,7 @@ from bokeh.models import CustomJS, CustomJSTickFormatter
 from twoball import presets
 
 from .scene import PENDING_JS, Built, alert, later
-from .state import ExplorerState, app_range, validate
+from .state import ExplorerState, app_range, span, validate
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
 POWER_OF_TEN = "return Number((10 ** tick).toPrecision(3)).toString()"
@@ -84,12 +84,17 @@ class Controls(Built):
 
     def __init__(self, messages: list[str] | None = None, **params):
         super().__init__(**params)
-        self.message = alert(
-            "",
-            alert_type="warning",
-            visible=False,
-            sizing_mode="stretch_width",
-            styles={"overflow-wrap": "anywhere"},
+        # the URL's messages at the top; a typed value's under its input (at the top, a phone
+        # showed it out of view of the field just typed in)
+        self.message, self.typed_message = (
+            alert(
+                "",
+                alert_type="warning",
+                visible=False,
+                sizing_mode="stretch_width",
+                styles={"overflow-wrap": "anywhere"},
+            )
+            for _ in range(2)
         )
         # on a projector the titles are short: at 20 px a long one pushed its value out of
         # the sidebar ("mu = m2/m1 (log scale): 0.09...")
@@ -150,10 +155,13 @@ class Controls(Built):
             format=CustomJSTickFormatter(code=POWER_OF_TEN),
         )
 
-    def show_messages(self, messages: list[str]) -> None:
-        """Show the messages (or hide the box when there are none), literally."""
-        self.message.object = "\n\n".join(plain(m) for m in messages)
-        self.message.visible = bool(messages)
+    def show_messages(self, messages: list[str], typed: bool = False) -> None:
+        """Show the messages, literally: a typed value's under the inputs (``typed``), others at
+        the top; either box is hidden when it has none, and new messages clear the old."""
+        for box in (self.message, self.typed_message):
+            shown = messages if (box is self.typed_message) == typed else []
+            box.object = "\n\n".join(plain(m) for m in shown)
+            box.visible = bool(shown)
 
     def _slider_moved(self, name: str, value: float) -> None:
         """A slider released by the user: the messages go, and a log slider sets its value
@@ -206,7 +214,8 @@ class Controls(Built):
             value, message = self._metres_checked(typed)
         else:
             value, message = validate("height", typed, self.state.height)
-        self.show_messages([f"{'drop height [m]' if si else 'H'}: {message}"] if message else [])
+        label = "drop height [m]" if si else "H"
+        self.show_messages([f"{label}: {message}"] if message else [], typed=True)
         self.state.height = value
         self._show_state()
 
@@ -221,7 +230,7 @@ class Controls(Built):
         if not low <= typed <= high:
             clamped = min(max(typed, low), high)
             return presets.height_from_metres(clamped), (
-                f"{typed:g} m is outside the explorer's range [{low:.3g} m, {high:.3g} m]; "
+                f"{typed:g} m is outside the explorer's range, {span(low, high, ' m')}; "
                 f"using {clamped:.4g} m."
             )
         return presets.height_from_metres(typed), None
@@ -232,7 +241,7 @@ class Controls(Built):
 
     def _take_eps12(self, text: str) -> None:
         value, message = validate("eps12", text, self.state.eps12)
-        self.show_messages([f"eps12: {message}"] if message else [])
+        self.show_messages([f"eps12: {message}"] if message else [], typed=True)
         self.state.eps12 = value
         self._show_state()
 
@@ -271,7 +280,7 @@ class Controls(Built):
 
         def opened(event: param.parameterized.Event) -> None:
             if not event.new and not advanced.objects:
-                advanced.objects = [self.height, self.eps12]
+                advanced.objects = [self.height, self.eps12, self.typed_message]
 
         advanced.param.watch(opened, "collapsed")
         return pn.Column(

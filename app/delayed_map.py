@@ -269,6 +269,7 @@ class MapScene(Scene):
             height=PROJECTOR_MAP_HEIGHT if self.state.presentation else 520,
             framewise=False,
             fontsize=font_sizes(self.state.presentation),
+            toolbar="right" if self.state.presentation else "above",
         )
 
     def _state_changed(self, *events: param.parameterized.Event) -> None:
@@ -307,7 +308,7 @@ class MapScene(Scene):
             self.star = ColumnDataSource(self._star_position())
             answers_pending(self.star)
             figure.scatter(
-                "x", "y", source=self.star, marker="star", size=18, name="star",
+                "x", "y", source=self.star, marker="star", size=26, line_width=2, name="star",
                 fill_color="yellow", line_color="black",
             )  # fmt: skip
 
@@ -409,7 +410,11 @@ class MapScene(Scene):
             blank = blank_image(mu_dim, tau_dim, variable, shown_cube(self.cube_name()))
             if variable in RATIO_CENTRES:  # (a log scale needs limits: the blank has no data)
                 return blank.opts(
-                    colorbar=True, logz=True, clim=(0.5, 2.0), colorbar_opts=ratio_colorbar()
+                    colorbar=True,
+                    logz=True,
+                    clim=(0.5, 2.0),
+                    colorbar_opts=ratio_colorbar(),
+                    colorbar_position=self._colorbar_position(),
                 )
             return blank
         self.current()
@@ -437,7 +442,18 @@ class MapScene(Scene):
             )
         else:
             opts = dict(cmap="viridis", logz=False, clim=(np.nan, np.nan))
-        return mesh.opts(colorbar=True, tools=["hover", "tap"], **opts)
+        return mesh.opts(
+            colorbar=True,
+            colorbar_position=self._colorbar_position(),
+            tools=["hover", "tap"],
+            **opts,
+        )
+
+    def _colorbar_position(self) -> str:
+        """Below the map, so that a phone's width is the map's (beside it, with the tools,
+        the map was a strip 145 px wide at 390 px); beside it on a projector, whose height is
+        the scarce side."""
+        return "right" if self.state.presentation else "bottom"
 
     def _outline(self, revision: bool) -> hv.Contours:
         """The outline of the delayed rebounds (h2 > h1) of the slice.

@@ -13,6 +13,7 @@ from collections.abc import Mapping
 import param
 
 from twoball.model import DEFAULT_HEIGHT, Parameters, check_value
+from twoball.units import number_text
 
 from .scenes import SCENES
 from .steps import STEPS
@@ -109,17 +110,26 @@ def validate(name: str, value: object, fallback: float | None) -> tuple[float | 
     """
     if name == "eps12" and (value is None or str(value).strip().lower() in ("", "none")):
         return None, None
+    low, high = app_range(name)
     try:
         number = check_value(name, value)
-    except ValueError as error:
-        shown = "equal to eps" if fallback is None else f"{fallback:g}"
-        return fallback, f"{error}. Using {shown}."
-    low, high = app_range(name)
+    except ValueError:  # (the model's message quotes its own range; the explorer's is shown)
+        shown = "equal to eps" if fallback is None else number_text(fallback)
+        return fallback, (
+            f"{name} must be a number {span(low, high)}; got {str(value)[:40]!r}. Using {shown}."
+        )
     if number < low or number > high:
         clamped = min(max(number, low), high)
-        message = f"{name} = {number:g} is outside the explorer's range [{low:g}, {high:g}]"
-        return clamped, f"{message}; using {clamped:g}."
+        return clamped, (
+            f"{name} = {number_text(number)} is outside the explorer's range, {span(low, high)}; "
+            f"using {number_text(clamped)}."
+        )
     return number, None
+
+
+def span(low: float, high: float, unit: str = "") -> str:
+    """A range in words for a message a student reads ("from 0.01 to 1", not "[0.01, 1]")."""
+    return f"from {number_text(low)}{unit} to {number_text(high)}{unit}"
 
 
 def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, list[str]]:
@@ -204,7 +214,8 @@ def _stack_value(name: str, text: str, fallback: float) -> tuple[float, str | No
     if not (low <= number <= high and whole):
         kind = "a whole number" if name == "balls" else "a number"
         return fallback, (
-            f"{name} must be {kind} in [{low:g}, {high:g}]; got {text[:40]!r}. Using {fallback:g}."
+            f"{name} must be {kind} {span(low, high)}; got {text[:40]!r}. Using "
+            f"{number_text(fallback)}."
         )
     return (int(number) if name == "balls" else number), None
 
@@ -226,7 +237,7 @@ def contact_eps(
         except ValueError:
             return None, f"eps per contact must be numbers separated by commas; got {part[:40]!r}"
         if not low <= value <= high:
-            return None, f"each eps per contact must be in [{low:g}, {high:g}]; got {part.strip()}"
+            return None, f"each eps per contact must be {span(low, high)}; got {part.strip()}"
         values.append(value)
     if balls is not None and len(values) != balls:
         names = ", ".join(["floor"] + [f"{i}-{i + 1}" for i in range(1, balls)])

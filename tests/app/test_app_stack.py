@@ -48,7 +48,7 @@ def test_a_bad_stack_value_in_the_url_is_reported(browser, app_server):
     base, _ = app_server
     context, page, errors = open_page(browser, f"{base}/app?scene=stack&N=9&force=spring")
     try:
-        expect(page.get_by_text("URL N: balls must be a whole number in [2, 8]")).to_be_visible(
+        expect(page.get_by_text("URL N: balls must be a whole number from 2 to 8")).to_be_visible(
             timeout=60_000
         )
         expect(page.get_by_text("URL force: must be one of linear, hertz")).to_be_visible()

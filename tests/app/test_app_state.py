@@ -18,11 +18,11 @@ def test_validate_accepts_a_value_in_range():
 @pytest.mark.parametrize(
     ("name", "text", "words"),
     [
-        ("eps", "abc", "eps must be a number in [0.01, 1]"),
-        ("eps", "1.5", "eps must be a finite number in [0.01, 1]"),
-        ("mu", "-1", "mu must be a finite number in [1e-09, 1e+06]"),
-        ("height", "nan", "height must be a finite number in (0, inf)"),
-        ("tau_ratio", "inf", "tau_ratio must be a finite number in [0, inf)"),
+        ("eps", "abc", "eps must be a number from 0.01 to 1; got 'abc'"),
+        ("eps", "1.5", "eps must be a number from 0.01 to 1; got '1.5'"),
+        ("mu", "-1", "mu must be a number from 0.0001 to 10"),  # (the explorer's range)
+        ("height", "nan", "height must be a number from 10 to 100,000,000"),
+        ("tau_ratio", "inf", "tau_ratio must be a number from 0.0001 to 10"),
     ],
 )
 def test_validate_falls_back_with_a_message_naming_the_parameter(name, text, words):
@@ -137,7 +137,7 @@ def test_the_stack_eps_per_contact_round_trips_and_bad_input_is_reported():
         assert "stack_eps_contacts" not in values
         assert len(messages) == 1 and messages[0].startswith("URL eps_contacts:")
     values, messages = read_query({"N": "9"}, ExplorerState())
-    assert values["balls"] == 3 and "[2, 8]" in messages[0]
+    assert values["balls"] == 3 and "from 2 to 8" in messages[0]
 
 
 def test_contact_eps_asks_for_one_value_per_contact():
