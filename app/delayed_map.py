@@ -266,7 +266,9 @@ class MapScene(Scene):
             xlabel="mu = m2/m1 (log scale)",
             ylabel="tau_d/tau_f (log scale)",
             responsive=True,
-            height=PROJECTOR_MAP_HEIGHT if self.state.presentation else 520,
+            height=PROJECTOR_MAP_HEIGHT
+            if self.state.presentation
+            else 640,  # (with its colour bar)
             framewise=False,
             fontsize=font_sizes(self.state.presentation),
             toolbar="right" if self.state.presentation else "above",
