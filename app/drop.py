@@ -33,6 +33,7 @@ from twoball import presets
 from twoball.observables import BALLS
 from twoball.units import units_named
 
+from .animation import FramePlayer, frame_at, frame_callback, frame_columns, new_frames
 from .collisions import collisions
 from .scene import Scene, answers_pending, draw, later, on_screen, readable
 from .worksheet import drop_csv
@@ -141,28 +142,18 @@ PROJECTOR_PLOT_HEIGHT = 290  # presentation mode (scene.py): plots and player wi
 class DropScene(Scene):
     """Heights against time to the second apex, apexes marked, drop height and ICM as lines."""
 
-    frame = param.Integer(default=0, bounds=(0, None), doc="Animation frame.")
-
     def __init__(self, **params):
         super().__init__(**params)
         self.result: twoball.Result | None = None
-        self.player = pn.widgets.Player(
-            label="Animation",
-            start=0,
-            end=FLIGHT_FRAMES - 1,
-            value=0,
-            interval=40,
-            loop_policy="once",
-            show_loop_controls=False,
-            sizing_mode="stretch_width",
-            max_width=520,
+        self.balls = ColumnDataSource(
+            {"x": [0.0, 0.0], "y": [0.0, 0.0], "r": [0.05, 0.02], "color": [LOWER, UPPER]}
         )
+        self.trail = ColumnDataSource({"t": [], "top0": [], "top1": []})
+        self.cursor = Span(dimension="height", location=0.0, line_color="black", line_width=1)
         self.times = np.zeros(1)
         self.plotted: twoball.Trajectory | None = None  # the drop at the plotted times
-        self.frames: twoball.Trajectory | None = None  # the balls at the animation's frames
         self.trails = pn.widgets.Checkbox(label="trails (the path of each ball's top)")
-        self.trails.param.watch(self._show_frame, "value")
-        self.player.link(self, value="frame")
+        self.trails.param.watch(self._show_trails, "value")
         self.download = pn.widgets.FileDownload(  # written when clicked, not at every move
             callback=self._csv, filename="drop.csv", label="Download this drop (CSV)", embed=False
         )
@@ -177,17 +168,34 @@ class DropScene(Scene):
         self.curves = ColumnDataSource({"t": [], "x1": [], "x2": []})
         answers_pending(self.curves)
         self.apexes = ColumnDataSource({"t": [], "h": [], "text": []})
-        self.balls = ColumnDataSource(
-            {"x": [0.0, 0.0], "y": [0.0, 0.0], "r": [0.05, 0.02], "color": [LOWER, UPPER]}
-        )
-        self.trail = ColumnDataSource({"t": [], "x1": [], "x2": []})
         self.drop_line = Span(dimension="width", line_color="gray", line_dash="dashed")
         self.icm_line = Span(
             dimension="width", line_color="green", line_dash="dotted", line_width=2
         )
-        self.cursor = Span(dimension="height", location=0.0, line_color="black", line_width=1)
+        self.frames = new_frames()  # the animation's, played in the browser (app/animation.py)
         self.heights = self._heights_figure()
         self.animation = self._animation_figure()
+        self.on_frame = frame_callback(
+            frames=self.frames,
+            balls=self.balls,
+            cursor=self.cursor,
+            title=self.animation.title,
+            colors=[LOWER, UPPER],
+            trail=self.trail,
+        )
+        self.frames.js_on_change("data", self.on_frame)
+        self.player = FramePlayer(
+            self.on_frame,
+            label="Animation",
+            start=0,
+            end=FLIGHT_FRAMES - 1,
+            value=0,
+            interval=40,
+            loop_policy="once",
+            show_loop_controls=False,
+            sizing_mode="stretch_width",
+            max_width=520,
+        )
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # 1280x720: under the header, tabs and summary, the player
@@ -250,7 +258,6 @@ class DropScene(Scene):
         self.summary.object = self._summary_text()
         self.plotted = self.result.evaluate(plotted_times(self.result))
         self.times = frame_times(self.result.end_time, self.result.contacts)
-        self.frames = self.result.evaluate(self.times)
         self.player.end = len(self.times) - 1
 
     @param.depends("revision", watch=True)
@@ -287,7 +294,7 @@ class DropScene(Scene):
         for fig in (self.heights, self.animation):
             fig.yaxis.axis_label = units.length_label
         self.heights.xaxis.axis_label = units.time_label
-        self._show_frame()
+        self._send_frames(units)
 
     def _draw_pinned(self, units) -> None:
         pinned = self.pinned
@@ -328,8 +335,11 @@ class DropScene(Scene):
         fig = self.animation
         self._trail_lines = underneath(fig, [
             draw(fig, Line(x=x, y=column, line_color=color, line_dash="dotted"), self.trail)
-            for x, column, color in ((-0.6, "x1", LOWER), (0.6, "x2", UPPER))
+            for x, column, color in ((-0.6, "top0", LOWER), (0.6, "top1", UPPER))
         ])  # fmt: skip
+        self.on_frame.args = {**self.on_frame.args, "trail_lines": self._trail_lines}
+        for line in self._trail_lines:  # (drawn when shown, at the frame the player is on)
+            line.js_on_change("visible", self.on_frame)
 
     def _toggle_pin(self) -> None:
         """Pin the drop on screen (the next drops are drawn over it), or let it go."""
@@ -345,42 +355,38 @@ class DropScene(Scene):
         self.summary.object = self._summary_text()
         self.redraw_now()
 
-    @param.depends("frame", watch=True)
-    def _show_frame(self, *events: param.parameterized.Event) -> None:
-        """Place the balls at the frame's time: the lower ball stands on its height X1, the
+    def _send_frames(self, units) -> None:
+        """The animation's frames of this drop, to be played in the browser, and the one the
+        player is on drawn (app/animation.py): the lower ball stands on its height X1, the
         upper ball on the lower one when X2 = X1 (they overlap by the compression)."""
-        if self.result is None:
-            return
-        units = units_named(self.state.units)
-        tr, r = self.plotted, self.result
-        frame = min(self.frame, len(self.times) - 1)
-        at = self.times[frame]
+        r = self.result
+        at = self.result.evaluate(self.times)
         top = self.animation.y_range.end - self.animation.y_range.start
         r1, r2 = (top * f for f in ball_radii(self.state.mu))
-        x1 = self.frames.x1[frame] * units.length
-        x2 = self.frames.x2[frame] * units.length
-        self.balls.data = {
-            "x": [0.0, 0.0],
-            "y": [x1 + r1, x2 + 2 * r1 + r2],
-            "r": [r1, r2],
-            "color": [LOWER, UPPER],
-        }
-        if self.trails.value:
-            self._add_trail_lines()
-            past = tr.t <= at
-            self.trail.data = {
-                "t": on_screen(tr.t[past]),
-                "x1": on_screen(tr.x1[past] * units.length + 2 * r1),
-                "x2": on_screen(tr.x2[past] * units.length + 2 * (r1 + r2)),
-            }
-        elif len(self.trail.data["t"]):
-            self.trail.data = {"t": [], "x1": [], "x2": []}
-        self.cursor.location = at * units.time
-        slow = any(g[0].start <= at <= max(c.end for c in g) for g in collisions(r.contacts))
+        windows = [(g[0].start, max(c.end for c in g)) for g in collisions(r.contacts)]
+        slow = np.zeros(self.times.size, dtype=bool)
+        for start, end in windows:
+            slow |= (start <= self.times) & (self.times <= end)
         unit = "s" if units.time != 1.0 else "tau"
-        self.animation.title.text = f"t = {at * units.time:.4g} {unit}" + (
-            "  slow motion" if slow else ""
-        )
+        shown = self.times * units.time
+        captions = [
+            f"t = {t:.4g} {unit}" + ("  slow motion" if is_slow else "")
+            for t, is_slow in zip(shown, slow, strict=True)
+        ]
+        lower = at.x1 * units.length + r1
+        upper = at.x2 * units.length + 2 * r1 + r2
+        self.frames.data = frame_columns(shown, [lower, upper], [r1, r2], captions)
+        frame = min(self.player.value, len(self.times) - 1)
+        self.balls.data = frame_at(self.frames.data, frame, [LOWER, UPPER])
+        self.cursor.location = float(shown[frame])
+        self.animation.title.text = captions[frame]
+
+    def _show_trails(self, event: param.parameterized.Event) -> None:
+        """Trails on or off (drawn in the browser as the animation plays: app/animation.py)."""
+        if event.new:
+            self._add_trail_lines()
+        for line in self._trail_lines or []:
+            line.visible = event.new
 
     def _csv(self) -> io.StringIO:
         """The drop on screen for a worksheet (app/worksheet.py)."""

@@ -465,23 +465,46 @@ def test_a_page_opened_on_a_lesson_step_shows_its_units_on_the_switch():
 
 
 def test_trails_are_drawn_under_the_balls_when_first_asked_for():
-    """The trails' lines join the animation at the first tick (a page that never asks for them
-    does not pay for them), under the balls, and hold the path up to the frame shown."""
+    """The trails' lines join the animation when first asked for (a page that never asks for
+    them does not pay for them), under the balls, shown and hidden with the box; the browser
+    draws them as it plays (app/animation.py), so its callback knows them."""
     explorer = rendered()
     scene = explorer.scenes["drop"]
     before = len(scene.animation.renderers)
-    scene.frame = len(scene.times) // 2
     scene.trails.value = True
     renderers = scene.animation.renderers
     assert len(renderers) == before + 2
     assert [r.data_source for r in renderers[:2]] == [scene.trail, scene.trail]  # underneath
-    at = scene.times[scene.frame]
-    path = np.asarray(scene.trail.data["t"])
-    assert (
-        path.size
-        and path.max() <= at
-        and path.max() == pytest.approx(scene.plotted.t[scene.plotted.t <= at].max())
-    )
+    assert scene.on_frame.args["trail_lines"] == renderers[:2]
+    assert all(line.visible for line in renderers[:2])
     scene.trails.value = False
+    assert not any(line.visible for line in renderers[:2])
     scene.trails.value = True  # once added, never twice
     assert len(scene.animation.renderers) == before + 2
+
+
+def test_the_animation_s_frames_are_the_drop_at_their_times():
+    """The frames the browser plays: each ball's drawn centre less its radius (the lower ball)
+    is its height from the solver at the frame's time, the upper ball stands on the lower one,
+    and the caption says slow motion exactly inside a collision."""
+    from app.collisions import collisions
+
+    explorer = rendered({"units": "SI"})
+    scene = explorer.scenes["drop"]
+    frames = scene.frames.data
+    result = scene.result
+    units = twoball.units.units_named("SI")
+    times = scene.times  # (the frames carry them as float32, as shown)
+    assert np.allclose(np.asarray(frames["t"]), times * units.time, rtol=1e-6)
+    assert times.size == scene.player.end + 1 and times[-1] == pytest.approx(result.end_time)
+    exact = result.evaluate(times)
+    radius = np.asarray(frames["r0"])
+    lower = np.asarray(frames["y0"]) - radius
+    upper = np.asarray(frames["y1"]) - 2 * radius - np.asarray(frames["r1"])
+    scale = max(result.apex_h) * units.length
+    assert np.allclose(lower, exact.x1 * units.length, rtol=0, atol=1e-6 * scale)
+    assert np.allclose(upper, exact.x2 * units.length, rtol=0, atol=1e-6 * scale)
+    windows = [(g[0].start, max(c.end for c in g)) for g in collisions(result.contacts)]
+    for t, caption in zip(times, frames["caption"], strict=True):
+        inside = any(a <= t <= b for a, b in windows)
+        assert caption.startswith("t = ") and caption.endswith(" s" + "  slow motion" * inside)
