@@ -1,92 +1,167 @@
 """The animations of the drop and Stack scenes, played in the browser.
 
-A scene sends its frames once per drop: a ColumnDataSource with each frame's time (as shown),
-caption, and each ball's centre ``y<b>`` and radius ``r<b>`` as drawn (ball ``b`` from the
-bottom). The player's frame number picks one in the browser (:data:`FRAME_JS`), and the balls,
-the time cursor on the heights and the caption change there alone (Bokeh's ``setv(...,
-{sync: false})``: nothing is sent back). Drawn on the server, a frame cost 3 ms of server CPU,
-71 ms a second for each student playing, so a class pressing play at once saturated two cores
-(docs/performance.md, "A class at once"); now the server only hears the frame number, which
-Panel's player syncs.
+A scene's frames are sent once per drop, when its player first moves
+(:meth:`Animation.send_frames`): a ColumnDataSource with each frame's time as shown ``t``,
+whether it is in slow motion ``slow`` and each ball's centre as drawn ``y<b>`` (ball ``b`` from
+the bottom); the balls' radii and colours stay in the drawn balls' source. The player's frame
+number picks a frame in the browser (:data:`FRAME_JS`), and the balls, the time cursor on the
+heights and the caption change there alone (Bokeh's ``setv(..., {sync: false})``: nothing is
+sent back). Drawn on the server, a frame cost 3 ms of server CPU, 71 ms a second for each
+student playing, so a class pressing play at once saturated two cores (docs/performance.md,
+"A class at once"); now the server only hears the frame number, which Panel's player syncs.
+Captions are written in the browser, from ``t``: sent as text they were a third of a stack's
+frames on the network.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from decimal import ROUND_HALF_UP, Decimal
+
 import numpy as np
 import panel as pn
-from bokeh.models import ColumnDataSource, CustomJS
+from bokeh.models import ColumnDataSource, CustomJS, Span, Title
 
-# args: frames, balls (the drawn balls' source), cursor (a Span), title (the stage's Title),
-# colors (one a ball), trail (a source, or null) and trail_lines (its renderers), player (the
-# Player's model, set when it is made)
+# args: frames, balls (the drawn balls' source: its radii and colours stay, its centres change),
+# cursor (a Span), title (the stage's Title), unit (of time, in the caption), trail (a source,
+# or null) and trail_lines (its renderers), player (the Player's model, set when it is made)
 FRAME_JS = """
 const data = frames.data;
-const count = data.t.length;
-if (count == 0 || player == null) return;
-const at = Math.max(0, Math.min(player.value, count - 1));
-const y = [], r = [];
-for (let b = 0; b < colors.length; b++) {
-  y.push(data["y" + b][at]);
-  r.push(data["r" + b][at]);
-}
-balls.setv({data: {x: colors.map(() => 0), y: y, r: r, color: colors}}, {sync: false});
+const frame_count = data.t.length;
+if (frame_count == 0 || player == null) return;
+const at = Math.max(0, Math.min(player.value, frame_count - 1));
+const drawn = balls.data;
+balls.setv({data: {...drawn, y: drawn.r.map((_, b) => data["y" + b][at])}}, {sync: false});
 cursor.setv({location: data.t[at]}, {sync: false});
-title.setv({text: data.caption[at]}, {sync: false});
+const time = String(Number(data.t[at].toPrecision(4)));  // as time_caption writes it
+title.setv({text: `t = ${time} ${unit}` + (data.slow[at] ? "  slow motion" : "")}, {sync: false});
 if (trail != null && trail_lines.length > 0 && trail_lines[0].visible) {
   const shown = {t: Array.from(data.t.slice(0, at + 1))};
-  for (let b = 0; b < colors.length; b++) {
-    const centres = data["y" + b], radii = data["r" + b];
-    shown["top" + b] = shown.t.map((_, i) => centres[i] + radii[i]);
-  }
+  drawn.r.forEach((radius, b) => {
+    const centres = data["y" + b];
+    shown["top" + b] = shown.t.map((_, i) => centres[i] + radius);
+  });
   trail.setv({data: shown}, {sync: false});
 }
 """
 
 
-def frame_callback(**args) -> CustomJS:
-    """The :data:`FRAME_JS` callback of an animation (its args as :data:`FRAME_JS` says)."""
-    return CustomJS(args={"player": None, "trail": None, "trail_lines": [], **args}, code=FRAME_JS)
+def time_caption(time: float, unit: str, slow: bool = False) -> str:
+    """A frame's caption as :data:`FRAME_JS` writes it: four significant digits, a tie rounded
+    up (JavaScript's toPrecision; Python's formats round it to even), no trailing zeros (the
+    two languages' shortest forms differ only below 1e-4 and above 1e16, never an
+    animation's times)."""
+    exact = Decimal(time)
+    if exact != 0:
+        exact = exact.quantize(Decimal(1).scaleb(exact.adjusted() - 3), rounding=ROUND_HALF_UP)
+    shown = float(exact)
+    text = str(int(shown)) if shown.is_integer() else repr(shown)
+    return f"t = {text} {unit}" + ("  slow motion" if slow else "")
+
+
+class Animation:
+    """The frames of a scene's animation and what draws them in the browser.
+
+    ``balls`` is the stage's source of drawn balls (x, y, r, color), ``cursor`` the time
+    cursor on the heights, ``title`` the stage's title, ``trail`` (optional) a source of each
+    ball's top up to the frame (columns t, top0, top1, ...)."""
+
+    def __init__(
+        self,
+        balls: ColumnDataSource,
+        cursor: Span,
+        title: Title,
+        trail: ColumnDataSource | None = None,
+    ):
+        self.frames = ColumnDataSource({"t": [], "slow": [], "y0": []})
+        self.balls, self.cursor, self.title = balls, cursor, title
+        self.on_frame = CustomJS(
+            args=dict(
+                frames=self.frames,
+                balls=balls,
+                cursor=cursor,
+                title=title,
+                unit="tau",
+                trail=trail,
+                trail_lines=[],
+                player=None,
+            ),
+            code=FRAME_JS,
+        )
+        self.frames.js_on_change("data", self.on_frame)
+        self._unsent: tuple | None = None  # (the drop's frames, sent when asked: send_frames)
+
+    def draw_trails_with(self, lines: list) -> None:
+        """Draw the trail (into its renderers ``lines``) as the animation plays, and at once
+        when they are shown."""
+        self.on_frame.args = {**self.on_frame.args, "trail_lines": lines}
+        for line in lines:
+            line.js_on_change("visible", self.on_frame)
+
+    def show(
+        self,
+        times: np.ndarray,
+        centres: list[float],
+        frames: Callable[[], list[np.ndarray]],
+        radii: list[float],
+        colors: list[str],
+        at: int,
+        unit: str,
+        slow: np.ndarray | None = None,
+    ) -> None:
+        """A new drop: its frames' ``times`` as shown; each ball's centre as drawn at frame
+        ``at`` (where the player is: drawn from here), bottom ball first, with its radius and
+        colour; ``frames()`` each ball's centres at every frame, which frames are ``slow``
+        motion. The frames are computed and sent when the player first moves
+        (:meth:`send_frames`): a class that only moves sliders does not pay for them (a
+        stack's are 35 kB)."""
+        at = min(max(at, 0), len(times) - 1)
+        slow = np.zeros(len(times), dtype=bool) if slow is None else slow
+        self.balls.data = {  # (the browser reads the radii when the frames come)
+            "x": [0.0] * len(centres),
+            "y": [float(centre) for centre in centres],
+            "r": [float(radius) for radius in radii],
+            "color": list(colors[: len(centres)]),
+        }
+        shown = np.asarray(times, dtype=np.float32)  # (the caption's digits are the browser's)
+        self.cursor.location = float(shown[at])
+        self.title.text = time_caption(float(shown[at]), unit, bool(slow[at]))
+        self._unsent = (shown, frames, slow, unit)
+        if len(self.frames.data["t"]):  # the last drop's, which would be drawn if played now
+            self.frames.data = {"t": [], "slow": [], "y0": []}
+
+    def send_frames(self) -> None:
+        """Send the drop's frames to the browser, if they are not there yet."""
+        if self._unsent is None:
+            return
+        shown, frames, slow, unit = self._unsent
+        self._unsent = None
+        if self.on_frame.args["unit"] != unit:
+            self.on_frame.args = {**self.on_frame.args, "unit": unit}
+        data = {"t": shown, "slow": slow.astype(np.uint8)}
+        for ball, centre in enumerate(frames()):
+            data[f"y{ball}"] = np.asarray(centre, dtype=np.float32)
+        self.frames.data = data
+
+    def clear(self) -> None:
+        """No frames and no balls (a refused drop)."""
+        self._unsent = None
+        self.balls.data = {"x": [], "y": [], "r": [], "color": []}
+        self.frames.data = {"t": [], "slow": [], "y0": []}
 
 
 class FramePlayer(pn.widgets.Player):
-    """Panel's player, each of whose frames is drawn in the browser by ``on_frame`` (a
-    :func:`frame_callback`), given its model when the model is made."""
+    """Panel's player, each of whose frames is drawn in the browser by an
+    :class:`Animation`, given its model when the model is made; its first move after a new
+    drop has the drop's frames sent."""
 
-    def __init__(self, on_frame: CustomJS, **params):
+    def __init__(self, animation: Animation, **params):
         super().__init__(**params)
-        self._on_frame = on_frame
+        self._on_frame = animation.on_frame
+        self.param.watch(lambda _: animation.send_frames(), "value")
 
     def _get_model(self, doc, root=None, parent=None, comm=None):
         model = super()._get_model(doc, root, parent, comm)
         self._on_frame.args = {**self._on_frame.args, "player": model}
         model.js_on_change("value", self._on_frame)
         return model
-
-
-def frame_columns(
-    times: np.ndarray, centres: list[np.ndarray], radii: list[float], captions: list[str]
-) -> dict:
-    """A :class:`ColumnDataSource`'s data of frames: ``times`` as shown, each ball's centres
-    and (constant) radius as drawn, bottom ball first, and each frame's caption."""
-    data = {"t": np.asarray(times, dtype=np.float32), "caption": captions}
-    for ball, (centre, radius) in enumerate(zip(centres, radii, strict=True)):
-        data[f"y{ball}"] = np.asarray(centre, dtype=np.float32)
-        data[f"r{ball}"] = np.full(len(times), radius, dtype=np.float32)
-    return data
-
-
-def frame_at(data: dict, at: int, colors: list[str]) -> dict:
-    """The drawn balls' data at frame ``at`` of ``data`` (:func:`frame_columns`), as
-    :data:`FRAME_JS` draws them: the server's first frame of a drop."""
-    at = min(max(at, 0), len(data["t"]) - 1)
-    return {
-        "x": [0.0] * len(colors),
-        "y": [float(data[f"y{b}"][at]) for b in range(len(colors))],
-        "r": [float(data[f"r{b}"][at]) for b in range(len(colors))],
-        "color": list(colors),
-    }
-
-
-def new_frames() -> ColumnDataSource:
-    """An empty source of frames."""
-    return ColumnDataSource({"t": [], "caption": []})

@@ -33,7 +33,7 @@ from twoball import presets
 from twoball.observables import BALLS
 from twoball.units import units_named
 
-from .animation import FramePlayer, frame_at, frame_callback, frame_columns, new_frames
+from .animation import Animation, FramePlayer
 from .collisions import collisions
 from .scene import Scene, answers_pending, draw, later, on_screen, readable
 from .worksheet import drop_csv
@@ -172,20 +172,12 @@ class DropScene(Scene):
         self.icm_line = Span(
             dimension="width", line_color="green", line_dash="dotted", line_width=2
         )
-        self.frames = new_frames()  # the animation's, played in the browser (app/animation.py)
         self.heights = self._heights_figure()
         self.animation = self._animation_figure()
-        self.on_frame = frame_callback(
-            frames=self.frames,
-            balls=self.balls,
-            cursor=self.cursor,
-            title=self.animation.title,
-            colors=[LOWER, UPPER],
-            trail=self.trail,
-        )
-        self.frames.js_on_change("data", self.on_frame)
+        # played in the browser (app/animation.py)
+        self.animated = Animation(self.balls, self.cursor, self.animation.title, self.trail)
         self.player = FramePlayer(
-            self.on_frame,
+            self.animated,
             label="Animation",
             start=0,
             end=FLIGHT_FRAMES - 1,
@@ -294,7 +286,7 @@ class DropScene(Scene):
         for fig in (self.heights, self.animation):
             fig.yaxis.axis_label = units.length_label
         self.heights.xaxis.axis_label = units.time_label
-        self._send_frames(units)
+        self._animate(units)
 
     def _draw_pinned(self, units) -> None:
         pinned = self.pinned
@@ -337,9 +329,7 @@ class DropScene(Scene):
             draw(fig, Line(x=x, y=column, line_color=color, line_dash="dotted"), self.trail)
             for x, column, color in ((-0.6, "top0", LOWER), (0.6, "top1", UPPER))
         ])  # fmt: skip
-        self.on_frame.args = {**self.on_frame.args, "trail_lines": self._trail_lines}
-        for line in self._trail_lines:  # (drawn when shown, at the frame the player is on)
-            line.js_on_change("visible", self.on_frame)
+        self.animated.draw_trails_with(self._trail_lines)
 
     def _toggle_pin(self) -> None:
         """Pin the drop on screen (the next drops are drawn over it), or let it go."""
@@ -355,31 +345,33 @@ class DropScene(Scene):
         self.summary.object = self._summary_text()
         self.redraw_now()
 
-    def _send_frames(self, units) -> None:
-        """The animation's frames of this drop, to be played in the browser, and the one the
-        player is on drawn (app/animation.py): the lower ball stands on its height X1, the
-        upper ball on the lower one when X2 = X1 (they overlap by the compression)."""
+    def _animate(self, units) -> None:
+        """The animation of this drop, played in the browser (app/animation.py): the lower
+        ball stands on its height X1, the upper ball on the lower one when X2 = X1 (they
+        overlap by the compression)."""
         r = self.result
-        at = self.result.evaluate(self.times)
         top = self.animation.y_range.end - self.animation.y_range.start
         r1, r2 = (top * f for f in ball_radii(self.state.mu))
+
+        def centres(times: np.ndarray) -> list[np.ndarray]:
+            at = r.evaluate(times)
+            return [at.x1 * units.length + r1, at.x2 * units.length + 2 * r1 + r2]
+
         windows = [(g[0].start, max(c.end for c in g)) for g in collisions(r.contacts)]
         slow = np.zeros(self.times.size, dtype=bool)
         for start, end in windows:
             slow |= (start <= self.times) & (self.times <= end)
-        unit = "s" if units.time != 1.0 else "tau"
-        shown = self.times * units.time
-        captions = [
-            f"t = {t:.4g} {unit}" + ("  slow motion" if is_slow else "")
-            for t, is_slow in zip(shown, slow, strict=True)
-        ]
-        lower = at.x1 * units.length + r1
-        upper = at.x2 * units.length + 2 * r1 + r2
-        self.frames.data = frame_columns(shown, [lower, upper], [r1, r2], captions)
-        frame = min(self.player.value, len(self.times) - 1)
-        self.balls.data = frame_at(self.frames.data, frame, [LOWER, UPPER])
-        self.cursor.location = float(shown[frame])
-        self.animation.title.text = captions[frame]
+        frame = min(self.player.value, self.times.size - 1)
+        self.animated.show(
+            self.times * units.time,
+            [float(c[0]) for c in centres(self.times[frame : frame + 1])],
+            lambda: centres(self.times),
+            [r1, r2],
+            [LOWER, UPPER],
+            at=frame,
+            unit="s" if units.time != 1.0 else "tau",
+            slow=slow,
+        )
 
     def _show_trails(self, event: param.parameterized.Event) -> None:
         """Trails on or off (drawn in the browser as the animation plays: app/animation.py)."""

@@ -28,6 +28,7 @@ from twoball.errors import ParameterError
 from twoball.stacks import StackResult, icm_chain, simulate_stack
 from twoball.units import number_text
 
+from .animation import Animation, FramePlayer
 from .controls import ReleasedIntSlider, ReleasedSlider, plain
 from .drop import balls_glyph, frame_times, height_axis, stage, underneath
 from .scene import Scene, answers_pending, draw, on_screen, readable
@@ -65,7 +66,6 @@ class StackScene(Scene):
         "force",
         "stack_eps_contacts",
     )
-    frame = param.Integer(default=0, bounds=(0, None), doc="Animation frame.")
 
     def __init__(self, **params):
         super().__init__(**params)
@@ -108,18 +108,6 @@ class StackScene(Scene):
             collapsed=True,
             sizing_mode="stretch_width",
         )
-        self.player = pn.widgets.Player(
-            label="Animation",
-            start=0,
-            end=1,
-            value=0,
-            interval=40,
-            loop_policy="once",
-            show_loop_controls=False,
-            sizing_mode="stretch_width",
-            max_width=520,
-        )
-        self.player.link(self, value="frame")
         self.summary = pn.pane.Markdown(sizing_mode="stretch_width")
         self.curves = ColumnDataSource({"t": []})
         self._lines: list = []  # a line per ball drawn so far (:meth:`_add_lines`)
@@ -132,6 +120,20 @@ class StackScene(Scene):
         self.cursor = Span(dimension="height", location=0.0, line_color="black", line_width=1)
         self.heights = self._heights_figure()
         self.animation = self._animation_figure()
+        # played in the browser (app/animation.py)
+        self.animated = Animation(self.balls_drawn, self.cursor, self.animation.title)
+        self.player = FramePlayer(
+            self.animated,
+            label="Animation",
+            start=0,
+            end=1,
+            value=0,
+            interval=40,
+            loop_policy="once",
+            show_loop_controls=False,
+            sizing_mode="stretch_width",
+            max_width=520,
+        )
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # plots and player within 720 px (scene.py)
@@ -197,10 +199,14 @@ class StackScene(Scene):
         self.eps_message.visible = message is not None
         return s.stack_eps if values is None else values
 
-    def update(self) -> None:
+    def _arguments(self) -> tuple[tuple, dict]:
+        """simulate_stack's arguments and options for the stack on screen."""
         s = self.state
         arguments = ([s.stack_ratio] * (s.balls - 1), self.contact_eps(), s.stack_gap)
-        options = {"height": s.height, "force": s.force, "throw": False}
+        return arguments, {"height": s.height, "force": s.force, "throw": False}
+
+    def update(self) -> None:
+        arguments, options = self._arguments()
         try:
             first = simulate_stack(*arguments, **options)  # apexes and contacts only
         except ParameterError as error:  # e.g. six balls, each 0.01 of the one below: 1e-10
@@ -220,7 +226,7 @@ class StackScene(Scene):
         self.result.apexes = first.apexes  # the run to a time stops at the same place
         self.result.status = first.status
         self.summary.object = self._summary_text()
-        self.times = frame_times(first.end_time, first.contacts)
+        self.times = frame_times(first.end_time, first.contacts)  # the animation's
         self.player.end = len(self.times) - 1
 
     @param.depends("revision", watch=True)
@@ -232,7 +238,7 @@ class StackScene(Scene):
         if r is None:  # refused (the summary says why): nothing drawn rather than the last stack
             self.curves.data = {"t": [], **{f"x{ball}": [] for ball in range(len(self._lines))}}
             self.apexes.data = {"t": [], "h": [], "text": []}
-            self.balls_drawn.data = {"x": [], "y": [], "r": [], "color": []}
+            self.animated.clear()
             return
         tr = r.trajectory
         n = r.stack.balls
@@ -256,29 +262,36 @@ class StackScene(Scene):
         self.heights.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
         room = high / (1 - 2 * BALL_RADIUS * n)
         self.animation.y_range.update(start=low, end=room, reset_start=low, reset_end=room)
-        self._show_frame()
+        self._animate()
 
-    @param.depends("frame", watch=True)
-    def _show_frame(self, *events: param.parameterized.Event) -> None:
-        """Each ball drawn on its height, stacked: ball i stands on ball i-1 when X_i = X_(i-1)
-        (their overlap is the compression); radii follow the masses (equal density)."""
-        if self.result is None:
-            return
+    def _animate(self) -> None:
+        """The animation of this stack, played in the browser (app/animation.py): each ball
+        on its height, stacked, ball i standing on ball i-1 when X_i = X_(i-1) (their overlap
+        is the compression); radii follow the masses (equal density). The frames are the
+        solver's at their times, in a run of their own when the player first moves; the frame
+        on screen now is read off the plotted curves."""
         r = self.result
-        tr = r.trajectory
-        at = self.times[min(self.frame, len(self.times) - 1)]
         span = self.animation.y_range.end - self.animation.y_range.start
         radii = span * BALL_RADIUS * r.stack.masses ** (1 / 3)
-        heights = np.array([np.interp(at, tr.t, tr.x[:, ball]) for ball in range(r.stack.balls)])
-        below = np.concatenate([[0.0], np.cumsum(2 * radii)[:-1]])
-        self.balls_drawn.data = {
-            "x": [0.0] * r.stack.balls,
-            "y": list(heights + below + radii),
-            "r": list(radii),
-            "color": list(PALETTE[: r.stack.balls]),
-        }
-        self.cursor.location = at
-        self.animation.title.text = f"t = {at:.4g} tau"
+        below = np.concatenate([[0.0], np.cumsum(2 * radii)[:-1]]) + radii
+        frame = min(self.player.value, self.times.size - 1)
+        tr = r.trajectory
+        now = [np.interp(self.times[frame], tr.t, tr.x[:, b]) for b in range(r.stack.balls)]
+        arguments, options = self._arguments()
+
+        def frames() -> list[np.ndarray]:
+            run = simulate_stack(*arguments, **options, until=r.end_time, t_eval=self.times)
+            return [run.trajectory.x[:, ball] + below[ball] for ball in range(r.stack.balls)]
+
+        self.animated.show(
+            self.times,
+            list(np.array(now) + below),
+            frames,
+            list(radii),
+            list(PALETTE),
+            at=frame,
+            unit="tau",
+        )
 
     def _summary_text(self) -> str:
         r = self.result

@@ -12,7 +12,11 @@ server on two cores. Three parts, each bounded in count and time:
    the server's last patch for it (the URL's rewrite 0.3 s later is not counted), the server's
    CPU per move (less what it spends idle with the sessions open), resident memory per
    session, and errors.
-3. **Memory**: ``--cycles`` times, open ``--cycle-sessions`` sessions and close them; the server's
+3. **Play**: ``--play`` sessions press the scene's play button together: each sends the
+   player's frame number every 40 ms (as Panel's player does in a browser) for
+   ``--play-seconds``; the server's CPU a second per playing session (less its idle rate), and
+   what it sends back (the frames are drawn in the browser: app/animation.py).
+4. **Memory**: ``--cycles`` times, open ``--cycle-sessions`` sessions and close them; the server's
    resident memory after each cycle.
 
 The server (every process of it: ``--num-procs`` forks) is measured from /proc. The baseline in
@@ -68,6 +72,7 @@ def percentile(values: list[float], q: float) -> float:
 
 
 IDLE_SECONDS = 4.0
+FRAME_SECONDS = 0.04  # the players' interval (app/drop.py, app/stack.py)
 
 
 def not_the_move(client: PageClient) -> set[str]:
@@ -162,6 +167,43 @@ async def moving(url: str, count: int, seconds: float, every: float, pid: int, s
     }
 
 
+async def playing(url: str, count: int, seconds: float, pid: int) -> dict:
+    """``count`` sessions playing the scene's animation at once for ``seconds`` s."""
+    clients = [PageClient(url) for _ in range(count)]
+    for client in clients:
+        await client.open(timeout=120)
+    await settled(pid)
+    idle_start = cpu_seconds(pid)
+    await asyncio.sleep(IDLE_SECONDS)
+    idle_rate = (cpu_seconds(pid) - idle_start) / IDLE_SECONDS
+    received = [client.received() for client in clients]
+    cpu_start, started = cpu_seconds(pid), time.monotonic()
+
+    async def student(client: PageClient) -> int:
+        player = next(i for i, m in client.models.items() if m["name"].endswith("Player"))
+        end = client.models[player]["attributes"]["end"]
+        frame = 0
+        while time.monotonic() - started < seconds:
+            frame = frame + 1 if frame < end else 0
+            await client.set(player, "value", frame)
+            await asyncio.sleep(FRAME_SECONDS)
+        return frame
+
+    await asyncio.gather(*(student(c) for c in clients))
+    elapsed = time.monotonic() - started
+    await asyncio.sleep(1.0)  # the last frames' answers
+    cpu = cpu_seconds(pid) - cpu_start - idle_rate * elapsed
+    sent_back = sum(c.received() - r for c, r in zip(clients, received, strict=True))
+    errors = sum(len(c.errors) for c in clients)
+    await _close(clients)
+    return {
+        "cpu_ms_per_s": 1e3 * cpu / elapsed / count,
+        "load": cpu / elapsed,
+        "bytes_per_s": sent_back / elapsed / count,
+        "errors": errors,
+    }
+
+
 async def cycles(url: str, count: int, rounds: int, pid: int, settle: float) -> list[float]:
     """Resident memory (MB) before and after each of ``rounds`` cycles of ``count`` sessions
     opened and closed."""
@@ -249,6 +291,15 @@ async def run(label: str, command: list[str], url: str, port: int, args, log: Pa
                 flush=True,
             )
             await asyncio.sleep(2.0)
+        if args.play and label == "twoball":
+            row = await playing(url, args.play, args.play_seconds, process.pid)
+            print(
+                f"{label}: {args.play} sessions playing the animation for "
+                f"{args.play_seconds:g} s: server CPU {row['cpu_ms_per_s']:.1f} ms a second per "
+                f"session ({row['load']:.2f} cores in all), {row['bytes_per_s']:.0f} bytes a "
+                f"second to each session; errors {row['errors']}",
+                flush=True,
+            )
         if args.cycles:
             sizes = await cycles(url, args.cycle_sessions, args.cycles, process.pid, 8.0)
             growth = [f"{100 * (b / sizes[1] - 1):+.1f} %" for b in sizes[2:]]
@@ -298,6 +349,8 @@ def main() -> None:
     parser.add_argument("--burst", type=int, default=30)
     parser.add_argument("--cycles", type=int, default=3)
     parser.add_argument("--cycle-sessions", type=int, default=60)
+    parser.add_argument("--play", type=int, default=0, help="sessions playing at once")
+    parser.add_argument("--play-seconds", type=float, default=10.0)
     parser.add_argument("--num-procs", type=int, default=len(os.sched_getaffinity(0)))
     parser.add_argument("--scene", default="drop")
     parser.add_argument(

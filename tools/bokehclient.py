@@ -181,6 +181,13 @@ class PageClient:
             await self._send("PATCH-DOC", {"events": [event]})
         return time.monotonic()
 
+    async def set(self, model_id: str, attr: str, value: object) -> float:
+        """Change one attribute of a model as the browser does (e.g. a player's ``value`` at
+        each frame); returns when it was sent."""
+        event = {"kind": "ModelChanged", "model": {"id": model_id}, "attr": attr, "new": value}
+        await self._send("PATCH-DOC", {"events": [event]})
+        return time.monotonic()
+
     def value(self, model_id: str, attr: str) -> object:
         """The last value the server sent for a model's attribute (or the pulled one)."""
         for patch in reversed(self.patches):

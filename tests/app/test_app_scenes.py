@@ -475,7 +475,7 @@ def test_trails_are_drawn_under_the_balls_when_first_asked_for():
     renderers = scene.animation.renderers
     assert len(renderers) == before + 2
     assert [r.data_source for r in renderers[:2]] == [scene.trail, scene.trail]  # underneath
-    assert scene.on_frame.args["trail_lines"] == renderers[:2]
+    assert scene.animated.on_frame.args["trail_lines"] == renderers[:2]
     assert all(line.visible for line in renderers[:2])
     scene.trails.value = False
     assert not any(line.visible for line in renderers[:2])
@@ -491,20 +491,74 @@ def test_the_animation_s_frames_are_the_drop_at_their_times():
 
     explorer = rendered({"units": "SI"})
     scene = explorer.scenes["drop"]
-    frames = scene.frames.data
+    assert len(scene.animated.frames.data["t"]) == 0  # sent when the player first moves
+    assert scene.animation.title.text == "t = 0 s"  # the player's first frame, drawn here
+    scene.player.value = 1
+    frames = scene.animated.frames.data
     result = scene.result
     units = twoball.units.units_named("SI")
     times = scene.times  # (the frames carry them as float32, as shown)
     assert np.allclose(np.asarray(frames["t"]), times * units.time, rtol=1e-6)
     assert times.size == scene.player.end + 1 and times[-1] == pytest.approx(result.end_time)
     exact = result.evaluate(times)
-    radius = np.asarray(frames["r0"])
+    radius, upper_radius = scene.balls.data["r"]
     lower = np.asarray(frames["y0"]) - radius
-    upper = np.asarray(frames["y1"]) - 2 * radius - np.asarray(frames["r1"])
+    upper = np.asarray(frames["y1"]) - 2 * radius - upper_radius
     scale = max(result.apex_h) * units.length
     assert np.allclose(lower, exact.x1 * units.length, rtol=0, atol=1e-6 * scale)
     assert np.allclose(upper, exact.x2 * units.length, rtol=0, atol=1e-6 * scale)
     windows = [(g[0].start, max(c.end for c in g)) for g in collisions(result.contacts)]
-    for t, caption in zip(times, frames["caption"], strict=True):
-        inside = any(a <= t <= b for a, b in windows)
-        assert caption.startswith("t = ") and caption.endswith(" s" + "  slow motion" * inside)
+    inside = [any(a <= t <= b for a, b in windows) for t in times]
+    assert list(np.asarray(frames["slow"], dtype=bool)) == inside
+    assert 0 < sum(inside) < len(inside)
+    explorer.state.eps = 0.8  # a new drop: its frames wait for the player again
+    scene.current()
+    assert len(scene.animated.frames.data["t"]) == 0
+    assert scene.balls.data["y"][0] == pytest.approx(
+        scene.result.evaluate(scene.times[1:2]).x1[0] * units.length + scene.balls.data["r"][0],
+        rel=1e-12,
+    )  # frame 1, where the player is, drawn from the server
+
+
+def test_the_stack_animation_s_frames_are_the_stack_at_their_times():
+    """The Stack scene's frames: each ball's drawn centre, less its radius and the diameters of
+    the balls below it, is its height from an independent run of the solver at the frame's
+    time; four balls, then three (the frames and the drawn balls as many as the stack has)."""
+    explorer = rendered({"scene": "stack", "N": "4", "ratio": "0.3"})
+    scene = explorer.scenes["stack"]
+    for balls in (4, 3):
+        explorer.state.balls = balls
+        scene.current()
+        scene.player.value = balls  # the player moves: the frames are sent
+        frames = scene.animated.frames.data
+        times = np.asarray(frames["t"], dtype=float)
+        assert times.size == scene.player.end + 1 and times[0] == 0.0
+        assert times[-1] == pytest.approx(scene.result.end_time, rel=1e-6)
+        assert sorted(c for c in frames if c.startswith("y")) == [f"y{b}" for b in range(balls)]
+        exact = twoball.simulate_stack(
+            [0.3] * (balls - 1), 0.9, 0.2, until=scene.result.end_time, t_eval=scene.times
+        ).trajectory
+        below = 0.0
+        scale = max(h for apexes in scene.result.apexes for _, h in apexes)
+        radii = scene.balls_drawn.data["r"]
+        assert len(radii) == balls and len(scene.balls_drawn.data["color"]) == balls
+        for ball, radius in enumerate(radii):
+            height = np.asarray(frames[f"y{ball}"], dtype=float) - radius - below
+            assert np.allclose(height, exact.x[:, ball], rtol=0, atol=1e-6 * scale)
+            below += 2 * radius
+        assert not np.asarray(frames["slow"]).any()
+
+
+@pytest.mark.parametrize(
+    ("time", "caption"),
+    [(0.0, "t = 0 tau"), (5.46799993515, "t = 5.468 tau"), (1307.2, "t = 1307 tau"),
+     (12345.0, "t = 12350 tau"), (1234.5, "t = 1235 tau"), (0.00123449, "t = 0.001234 tau"),
+     (2.5, "t = 2.5 tau")],
+)  # fmt: skip
+def test_a_frame_s_caption_has_four_digits_as_javascript_writes_them(time, caption):
+    """time_caption writes what the browser's String(Number(t.toPrecision(4))) does: the
+    expected strings are what Node prints for these times (ties round up there, to even in
+    Python's own formats)."""
+    from app.animation import time_caption
+
+    assert time_caption(time, "tau") == caption
