@@ -22,10 +22,41 @@ import numpy as np
 import panel as pn
 from bokeh.models import ColumnDataSource, CustomJS, Span, Title
 
+# Panel's player sends its frame number to the server at every frame (about 1.5 ms of server CPU
+# each, 37 ms a second for each student playing). Once a page has a drop's frames, a playing
+# player's frames stay in the page (setv without sync; the callbacks that draw still run), and
+# the server hears where it stopped (value_throttled, at the pause or the last frame). Where
+# Panel's player lacks what this replaces (a later Panel), the player syncs as before.
+LOCAL_PLAY_JS = """
+function install_local_play(view) {
+  if (view.twoball_local_play || !view.set_frame || !view.pause_animation
+      || !view.update_title_and_value) return;
+  const set_frame = view.set_frame, pause_animation = view.pause_animation;
+  view.set_frame = function (frame, throttled = true) {
+    const frames = this.model.twoball_frames;
+    if (this.timer == null || frames == null || frames.data.t.length == 0)
+      return set_frame.call(this, frame, throttled);
+    this.model.setv({value: frame}, {sync: false});
+    this.update_title_and_value();
+    if (this.sliderEl.value != String(frame)) this.sliderEl.value = String(frame);
+  };
+  view.pause_animation = function () {
+    pause_animation.call(this);
+    if (this.model.value_throttled !== this.model.value)
+      this.model.value_throttled = this.model.value;
+  };
+  view.twoball_local_play = true;
+}
+"""
+
 # args: frames, balls (the drawn balls' source: its radii and colours stay, its centres change),
 # cursor (a Span), title (the stage's Title), unit (of time, in the caption), trail (a source,
 # or null) and trail_lines (its renderers), player (the Player's model, set when it is made)
 FRAME_JS = """
+if (player != null) {
+  player.twoball_frames = frames;
+  install_local_play(player.default_view.prototype);
+}
 const data = frames.data;
 const frame_count = data.t.length;
 if (frame_count == 0 || player == null) return;
@@ -86,7 +117,7 @@ class Animation:
                 trail_lines=[],
                 player=None,
             ),
-            code=FRAME_JS,
+            code=LOCAL_PLAY_JS + FRAME_JS,
         )
         self.frames.js_on_change("data", self.on_frame)
         self._unsent: tuple | None = None  # (the drop's frames, sent when asked: send_frames)
@@ -153,7 +184,8 @@ class Animation:
 class FramePlayer(pn.widgets.Player):
     """Panel's player, each of whose frames is drawn in the browser by an
     :class:`Animation`, given its model when the model is made; its first move after a new
-    drop has the drop's frames sent."""
+    drop has the drop's frames sent. Where it stands on the server is ``value_throttled``
+    (a playing page does not send each frame: :data:`LOCAL_PLAY_JS`)."""
 
     def __init__(self, animation: Animation, **params):
         super().__init__(**params)

@@ -361,7 +361,7 @@ class DropScene(Scene):
         slow = np.zeros(self.times.size, dtype=bool)
         for start, end in windows:
             slow |= (start <= self.times) & (self.times <= end)
-        frame = min(self.player.value, self.times.size - 1)
+        frame = min(self.player.value_throttled, self.times.size - 1)
         self.animated.show(
             self.times * units.time,
             [float(c[0]) for c in centres(self.times[frame : frame + 1])],

@@ -274,7 +274,7 @@ class StackScene(Scene):
         span = self.animation.y_range.end - self.animation.y_range.start
         radii = span * BALL_RADIUS * r.stack.masses ** (1 / 3)
         below = np.concatenate([[0.0], np.cumsum(2 * radii)[:-1]]) + radii
-        frame = min(self.player.value, self.times.size - 1)
+        frame = min(self.player.value_throttled, self.times.size - 1)
         tr = r.trajectory
         now = [np.interp(self.times[frame], tr.t, tr.x[:, b]) for b in range(r.stack.balls)]
         arguments, options = self._arguments()

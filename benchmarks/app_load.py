@@ -12,10 +12,10 @@ server on two cores. Three parts, each bounded in count and time:
    the server's last patch for it (the URL's rewrite 0.3 s later is not counted), the server's
    CPU per move (less what it spends idle with the sessions open), resident memory per
    session, and errors.
-3. **Play**: ``--play`` sessions press the scene's play button together: each sends the
-   player's frame number every 40 ms (as Panel's player does in a browser) for
-   ``--play-seconds``; the server's CPU a second per playing session (less its idle rate), and
-   what it sends back (the frames are drawn in the browser: app/animation.py).
+3. **Play**: ``--play`` sessions press the scene's play button together and play for
+   ``--play-seconds`` as the page does (app/animation.py): each frame's number is sent only
+   until the frames have come, then the pause sends where the player stopped; the server's CPU
+   per frame played (less its idle rate) and what it sends back.
 4. **Memory**: ``--cycles`` times, open ``--cycle-sessions`` sessions and close them; the server's
    resident memory after each cycle.
 
@@ -180,16 +180,30 @@ async def playing(url: str, count: int, seconds: float, pid: int) -> dict:
     cpu_start, started = cpu_seconds(pid), time.monotonic()
 
     async def student(client: PageClient) -> int:
+        """Play for ``seconds`` as the page does (app/animation.py): press play, send each
+        frame's number until the frames have come, then nothing until the pause, which sends
+        where the player stopped; the number of frames played."""
         player = next(i for i, m in client.models.items() if m["name"].endswith("Player"))
         end = client.models[player]["attributes"]["end"]
-        frame = 0
+        asked = len(client.patches)
+        await client.set(player, "direction", 1)
+        frame = played = 0
         while time.monotonic() - started < seconds:
             frame = frame + 1 if frame < end else 0
-            await client.set(player, "value", frame)
+            if not any(
+                event.get("kind") == "ColumnDataChanged"
+                for patch in client.patches[asked:]
+                for event in patch.events
+            ):  # (the frames not yet here)
+                await client.set(player, "value", frame)
+                await client.set(player, "value_throttled", frame)
+            played += 1
             await asyncio.sleep(FRAME_SECONDS)
-        return frame
+        await client.set(player, "direction", 0)
+        await client.set(player, "value_throttled", frame)
+        return played
 
-    await asyncio.gather(*(student(c) for c in clients))
+    frames = sum(await asyncio.gather(*(student(c) for c in clients)))
     elapsed = time.monotonic() - started
     await asyncio.sleep(1.0)  # the last frames' answers
     cpu = cpu_seconds(pid) - cpu_start - idle_rate * elapsed
@@ -197,9 +211,10 @@ async def playing(url: str, count: int, seconds: float, pid: int) -> dict:
     errors = sum(len(c.errors) for c in clients)
     await _close(clients)
     return {
-        "cpu_ms_per_s": 1e3 * cpu / elapsed / count,
+        "fps": frames / elapsed / count,
+        "cpu_ms_per_frame": 1e3 * cpu / frames,
         "load": cpu / elapsed,
-        "bytes_per_s": sent_back / elapsed / count,
+        "bytes_per_frame": sent_back / frames,
         "errors": errors,
     }
 
@@ -295,9 +310,10 @@ async def run(label: str, command: list[str], url: str, port: int, args, log: Pa
             row = await playing(url, args.play, args.play_seconds, process.pid)
             print(
                 f"{label}: {args.play} sessions playing the animation for "
-                f"{args.play_seconds:g} s: server CPU {row['cpu_ms_per_s']:.1f} ms a second per "
-                f"session ({row['load']:.2f} cores in all), {row['bytes_per_s']:.0f} bytes a "
-                f"second to each session; errors {row['errors']}",
+                f"{args.play_seconds:g} s, {row['fps']:.1f} frames a second each: server CPU "
+                f"{row['cpu_ms_per_frame']:.3f} ms a frame played ({row['load']:.2f} cores in "
+                f"all), {row['bytes_per_frame']:.0f} bytes to the page a frame; errors "
+                f"{row['errors']}",
                 flush=True,
             )
         if args.cycles:

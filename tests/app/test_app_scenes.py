@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import param
 import pytest
 from bokeh.document import Document
 
@@ -483,6 +484,13 @@ def test_trails_are_drawn_under_the_balls_when_first_asked_for():
     assert len(scene.animation.renderers) == before + 2
 
 
+def move_player(player, frame: int) -> None:
+    """The player moved to ``frame`` as a browser's first move does: its value and
+    value_throttled (which Panel keeps constant on the server's side)."""
+    with param.edit_constant(player):
+        player.param.update(value=frame, value_throttled=frame)
+
+
 def test_the_animation_s_frames_are_the_drop_at_their_times():
     """The frames the browser plays: each ball's drawn centre less its radius (the lower ball)
     is its height from the solver at the frame's time, the upper ball stands on the lower one,
@@ -493,7 +501,7 @@ def test_the_animation_s_frames_are_the_drop_at_their_times():
     scene = explorer.scenes["drop"]
     assert len(scene.animated.frames.data["t"]) == 0  # sent when the player first moves
     assert scene.animation.title.text == "t = 0 s"  # the player's first frame, drawn here
-    scene.player.value = 1
+    move_player(scene.player, 1)
     frames = scene.animated.frames.data
     result = scene.result
     units = twoball.units.units_named("SI")
@@ -529,7 +537,7 @@ def test_the_stack_animation_s_frames_are_the_stack_at_their_times():
     for balls in (4, 3):
         explorer.state.balls = balls
         scene.current()
-        scene.player.value = balls  # the player moves: the frames are sent
+        move_player(scene.player, balls)  # the frames are sent
         frames = scene.animated.frames.data
         times = np.asarray(frames["t"], dtype=float)
         assert times.size == scene.player.end + 1 and times[0] == 0.0
