@@ -10,13 +10,15 @@ from .scene import send_without_delay
 
 # app/static/ (Bokeh serves it): history.js, Back and Forward rebuild the page from the URL they
 # go to (the URL follows the state; nothing told the server when it went back); keys.js, a
-# presentation clicker's keys drive the lesson; a11y.js, names and a focus ring the widgets lack
+# presentation clicker's keys drive the lesson; a11y.js, names and a focus ring the widgets lack;
+# drag.js, a slider's drag stays in the page until its release
 pn.extension(
     notifications=False,
     js_files={
         "history": "app/static/history.js",
         "keys": "app/static/keys.js",
         "a11y": "app/static/a11y.js",
+        "drag": "app/static/drag.js",
     },
 )
 

@@ -13,6 +13,7 @@ import time
 
 import pytest
 from appdriver import (
+    deep_query,
     fingerprint,
     open_page,
     page_query,
@@ -22,6 +23,7 @@ from appdriver import (
     wait_for_change,
     wait_for_plots,
 )
+from playwright.sync_api import expect
 
 from app.scenes import SCENE_REGISTRY
 
@@ -330,6 +332,54 @@ def test_back_rebuilds_the_page_from_the_url_it_shows(browser, app_server):
         wait_for_plots(page)
         assert slider_titles(page) == before
         assert page_query(page)["mu"] == "0.01"
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_a_drag_stays_in_the_page_until_the_release(browser, app_server, artifacts):
+    """Dragging the eps slider with the mouse: its title follows every step, the page sends the
+    server nothing until the release (app/static/drag.js: Bokeh sent each step, ~1.5 ms of
+    server CPU each), and the release sends the final value, which the drop and the URL
+    follow."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?{PAPER}")
+    sent: list[tuple[float, str]] = []
+    page.on(
+        "websocket",
+        lambda socket: socket.on(
+            "framesent",
+            lambda payload: (
+                sent.append((time.monotonic(), payload)) if isinstance(payload, str) else None
+            ),
+        ),
+    )
+    try:
+        page.reload()  # (the socket opened after the listener)
+        before = wait_for_plots(page)
+        page.wait_for_timeout(1500)
+        handle = next(h for h in deep_query(page, ".noUi-handle") if h["visible"])
+        x, y = (handle["left"] + handle["right"]) / 2, (handle["top"] + handle["bottom"]) / 2
+        title = page.locator(".bk-slider-title").filter(has_text="eps (restitution)").first
+        assert title.inner_text().endswith("0.900"), title.inner_text()
+        page.mouse.move(x, y)
+        page.mouse.down()
+        dragging = time.monotonic()
+        shown = []
+        for step in range(1, 11):
+            page.mouse.move(x - 6 * step, y)
+            page.wait_for_timeout(60)
+            shown.append(title.inner_text())
+        during = [text for t, text in sent if t >= dragging and '"value"' in text]
+        page.mouse.up()
+        assert len(set(shown)) >= 5, shown  # the title followed the drag
+        assert during == []  # and nothing went to the server
+        final = float(shown[-1].rsplit(":", 1)[1])
+        assert final < 0.9
+        wait_for_change(page, before)
+        expect(page).to_have_url(re.compile(rf"eps={final:g}\b"), timeout=10_000)
+        released = [text for t, text in sent if t >= dragging and '"value' in text]
+        assert len(released) == 1 and '"value_throttled"' in released[0], released
         assert errors == []
     finally:
         context.close()
