@@ -9,6 +9,7 @@ from typing import NamedTuple
 import numpy as np
 
 from twoball.jit import njit
+from twoball.kernels.closed_forms import _release_time
 from twoball.kernels.clusters import (
     _bound,
     _bounds,
@@ -50,24 +51,32 @@ from twoball.kernels.runs import _room_for_one
 
 @njit
 def advance_phase(
-    t, x0, v0, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried, pair
+    t, e0, de0, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried, pair
 ):
-    """Advance one phase, started at time t, to its first event.
+    """Advance one phase, started at time t from the relative state e0, de0 (the contacts'
+    overlaps and their rates: :func:`twoball.kernels.clusters._phase`), to its first event.
 
-    Returns (event, index, tau, x, v): a contact switch (index the contact), an apex (index the
+    Returns (event, index, tau, e, de): a contact switch (index the contact), an apex (index the
     ball; horizon_ball's apex is ``horizon`` away, or -1 for the end of the run), the end, rest,
     a stuck root finder or the step limit. ``pair`` is :func:`twoball.kernels.phases.prepare` of a
     two-ball stack (a placeholder for more balls): its rest proof is used for N = 2.
     """
     n = masses.size
-    phase = _phase(active, x0, v0, store, masses, zeta)
+    phase = _phase(active, e0, de0, store, masses, zeta)
     x = np.empty(n)
     v = np.empty(n)
     a = np.empty(n)
+    e = np.empty(n)
+    de = np.empty(n)
+    shift_x = np.empty(n)
+    shift_v = np.empty(n)
     shape_z = np.zeros((n, 2 * n))
     shape_w = np.zeros((n, 2 * n))
     mode_z = np.zeros((n, 2 * n))
     mode_w = np.zeros((n, 2 * n))
+    change_z = np.zeros((n, 2 * n))
+    size_change = np.zeros((n, 2 * n))
+    size_value = np.zeros((n, 2 * n))
     sizes_w = np.zeros((n, n, 2))
     sizes_z = np.zeros((1, n, 2))
     curvature = np.zeros((n, 5))  # see _bounds
@@ -83,7 +92,10 @@ def advance_phase(
     everything = phase.count == 1 and phase.grounded[0] and store.contacts[phase.cid[0]] == n
     rest_rounding = np.zeros(n)
     if everything and n >= 3:
-        rest_rounding = _rest_rounding(store, phase.cid[0], x0, v0, carried)
+        heights, velocities = np.cumsum(e0), np.cumsum(de0)
+        rest_rounding = _rest_rounding(store, phase.cid[0], heights, velocities, carried)
+    horizon_contact = -1  # a contact whose force ends at the horizon
+    solved = np.zeros(n, dtype=np.bool_)  # contacts whose end is found in closed form
     tau = 0.0
     last_step = 0.0
     for _ in range(MAX_STEPS_PER_PHASE):
@@ -101,6 +113,9 @@ def advance_phase(
             big_x,
             shape,
             offset,
+            eta_rest,
+            e0,
+            de0,
             x,
             v,
             a,
@@ -108,6 +123,13 @@ def advance_phase(
             shape_w,
             mode_z,
             mode_w,
+            e,
+            de,
+            change_z,
+            size_change,
+            size_value,
+            shift_x,
+            shift_v,
         )
         _bounds(
             count,
@@ -136,25 +158,26 @@ def advance_phase(
             upper = of_ball[c]
             cid_u = cids[upper]
             k_u = contacts[cid_u]
+            if solved[c] and tau > 0.0:
+                continue  # its end is the horizon, or beyond it
             noise_u = noise[cid_u]
             tol_state = noise_u * (sizes[upper] + speeds[upper] * (1.0 + tau) + tau * tau)
             tol_rate = noise_u * (speeds[upper] + 1.0 + tau)
             if active[c]:
                 i = c - (0 if grounded[upper] else lows[upper] + 1)
-                eta = eta_rest[cid_u, i] + shape_z[upper, i]
-                deta = shape_z[upper, k_u + i]
-                ddeta = shape_w[upper, k_u + i]
+                eta, deta, ddeta = e[c], de[c], shape_w[upper, k_u + i]
                 bound_eta, bound_g = curvature[c, 3], curvature[c, 4]
             else:
                 rigid_u = 0.0 if grounded[upper] else -1.0
                 bound_eta, bound_g = curvature[c, 0], curvature[c, 1]
+                eta, deta = e[c], de[c]
                 if c == 0:
-                    eta, deta, ddeta = x[0], v[0], a[0]
+                    ddeta = a[0]
                     rigid = -rigid_u
                 else:
                     lower = of_ball[c - 1]
                     cid_l = cids[lower]
-                    eta, deta, ddeta = x[c] - x[c - 1], v[c] - v[c - 1], a[c] - a[c - 1]
+                    ddeta = a[c] - a[c - 1]
                     rigid_l = 0.0 if grounded[lower] else -1.0
                     rigid = abs(rigid_u - rigid_l)
                     bound_eta += curvature[c - 1, 0]
@@ -181,6 +204,25 @@ def advance_phase(
                     shift = 0.0
                 if tau + shift < best:
                     best, event = tau + shift, c
+            elif active[c] and k_u == 1 and tau == 0.0:
+                # A contact alone in its cluster is a damped oscillator about its static
+                # overlap: its force ends at a root found in closed form, which bounds the phase
+                # as an apex does (twoball.kernels.phases.advance_phase), not by steps.
+                level = tol if fresh and value <= tol else 0.0
+                w = -blocks[cid_u, 0, 1, 0]
+                release = _release_time(
+                    e0[c] - eta_rest[cid_u, 0],
+                    de0[c],
+                    zeta[c] * w,
+                    w,
+                    zeta[c],
+                    level - eta_rest[cid_u, 0],
+                    horizon,
+                )
+                solved[c] = True
+                if release < horizon:
+                    horizon, horizon_contact = release, c
+                    step = min(step, horizon)
             else:
                 step = min(step, h)
         if event >= 0:
@@ -198,6 +240,9 @@ def advance_phase(
                 big_x,
                 shape,
                 offset,
+                eta_rest,
+                e0,
+                de0,
                 x,
                 v,
                 a,
@@ -205,8 +250,15 @@ def advance_phase(
                 shape_w,
                 mode_z,
                 mode_w,
+                e,
+                de,
+                change_z,
+                size_change,
+                size_value,
+                shift_x,
+                shift_v,
             )
-            return EVENT_SWITCH, event, best, x, v
+            return EVENT_SWITCH, event, best, e, de
         if everything:
             margin_ok = True
             cid = cids[0]
@@ -220,9 +272,9 @@ def advance_phase(
                 if not margin > tol_rest:
                     margin_ok = False
             if not margin_ok and n == 2:
-                margin_ok = _pair_at_rest(pair, x, v, phase.size[0], phase.speed[0], tau, carried)
+                margin_ok = _pair_at_rest(pair, e, de, phase.size[0], phase.speed[0], tau, carried)
             if margin_ok:
-                return EVENT_REST, -1, tau, x, v
+                return EVENT_REST, -1, tau, e, de
         if tau + step >= horizon:
             _evaluate_arrays(
                 horizon,
@@ -238,6 +290,9 @@ def advance_phase(
                 big_x,
                 shape,
                 offset,
+                eta_rest,
+                e0,
+                de0,
                 x,
                 v,
                 a,
@@ -245,19 +300,28 @@ def advance_phase(
                 shape_w,
                 mode_z,
                 mode_w,
+                e,
+                de,
+                change_z,
+                size_change,
+                size_value,
+                shift_x,
+                shift_v,
             )
+            if horizon_contact >= 0:
+                return EVENT_SWITCH, horizon_contact, horizon, e, de
             if horizon_ball >= 0:
-                return EVENT_APEX, horizon_ball, horizon, x, v
-            return EVENT_TIME, -1, horizon, x, v
+                return EVENT_APEX, horizon_ball, horizon, e, de
+            return EVENT_TIME, -1, horizon, e, de
         if not 0.0 < step < np.inf:
-            return EVENT_STUCK, -1, tau, x0.copy(), v0.copy()
+            return EVENT_STUCK, -1, tau, e0.copy(), de0.copy()
         tau += step
         last_step = step
-    return EVENT_STEPS, -1, tau, x0.copy(), v0.copy()
+    return EVENT_STEPS, -1, tau, e0.copy(), de0.copy()
 
 
 @njit
-def _pair_at_rest(pair, x, v, size, speed, tau, carried):
+def _pair_at_rest(pair, e, de, size, speed, tau, carried):
     """Rest of two balls, both contacts active, proven as :func:`twoball.kernels.runs.run` proves it
     (docs/model.md, "What is measured"): per mode, with the tight bound of a strongly overdamped
     mode (:func:`twoball.kernels.closed_forms._overdamped_bound`). The cluster's total energy, which
@@ -265,10 +329,9 @@ def _pair_at_rest(pair, x, v, size, speed, tau, carried):
     upper ball: rest proven at t = 3310 by twoball.simulate, never by that energy)."""
     params, rest, x_inv, blocks = pair.params, pair.rest, pair.x_inv, pair.blocks
     companions, y_rest, rates, mode_rows = pair.companions, pair.y_rest, pair.rates, pair.mode_rows
-    # the two-ball solver's state is in its relative coordinates (x1, eta, v1, eta')
-    eta, deta = x[1] - x[0], v[1] - v[0]
-    block_states = _block_states(x[0], eta, v[0], deta, x_inv, companions, y_rest)
-    roots = _energy_roots(BOTH, v[0], deta, 0.0, 0.0, params, blocks, block_states)
+    # the two-ball solver's state (x1, eta, v1, eta') is the stack's relative state
+    block_states = _block_states(e[0], e[1], de[0], de[1], x_inv, companions, y_rest)
+    roots = _energy_roots(BOTH, de[0], de[1], 0.0, 0.0, params, blocks, block_states)
     offset = _rest_size(y_rest)
     tol = ROUNDING * params[P_NOISE] * (size + offset + speed * (1.0 + tau) + tau * tau)
     return _at_rest(roots, params, rest, rates, mode_rows, block_states, tol + carried)
@@ -282,7 +345,7 @@ class StackRun(NamedTuple):
     apexes: np.ndarray  # (n, 3): ball, t, height, in order
     contacts: np.ndarray  # (n, 3): contact, start, end
     contacts_first: np.ndarray  # (N,) intervals of each contact that start before h1
-    phases: np.ndarray  # (n, 2 + 2N): t, active bits, heights, velocities (if recorded)
+    phases: np.ndarray  # (n, 2 + 2N): t, active bits, overlaps, their rates (if recorded)
     phase_count: int
 
 
@@ -291,10 +354,17 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
     """Run a stack from rest at heights ``x_start`` until the top ball's ``apexes_wanted``-th
     apex, ``t_end`` or rest (docs/model.md, "Stacks of N balls"). ``store`` holds the clusters'
     closed forms for these masses and damping ratios (:func:`new_clusters`, or one that earlier
-    runs of the same balls filled: :func:`_store_for`)."""
+    runs of the same balls filled: :func:`_store_for`).
+
+    The state is carried relative (docs/stacks.md, "How the state is carried"): each contact's
+    overlap e[c] = x_c - x_(c-1) (e[0] = x_0, the floor's) and its rate, each phase adding its
+    change to them; a height is the sum of the overlaps below it."""
     n = masses.size
-    x = x_start.copy()
-    v = np.zeros(n)
+    e = np.empty(n)
+    e[0] = x_start[0]
+    for c in range(1, n):
+        e[c] = x_start[c] - x_start[c - 1]
+    de = np.zeros(n)
     # Balls released touching (a gap of zero) start with their contact active and unloaded
     # (force zero either way): left inactive, the compression wave of the first impact reaches
     # it as a tangency of high order (eta ~ -(t - t0)^6 for the fourth contact), which rounding
@@ -309,6 +379,9 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
     t = 0.0
     apexes = np.empty((8, 3))
     n_apex = 0
+    heights = np.empty(n)  # at the phase's start, summed from the overlaps
+    speeds = np.empty(n)
+    apex_passed = np.zeros(n, dtype=np.bool_)  # a lower ball's, since its last contact switch
     top_apexes = 0
     contacts = np.empty((16, 3))
     n_contacts = 0
@@ -329,17 +402,37 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
                 if active[c]:
                     bits += 1 << c
             phases[n_phases, 0], phases[n_phases, 1] = t, bits
-            phases[n_phases, 2 : 2 + n] = x
-            phases[n_phases, 2 + n :] = v
+            phases[n_phases, 2 : 2 + n] = e
+            phases[n_phases, 2 + n :] = de
             n_phases += 1
-        horizon, horizon_ball = t_end - t, -1
+        height = speed = 0.0
         for ball in range(n):
-            free = not active[ball] and (ball == n - 1 or not active[ball + 1])
-            if free and 0.0 < v[ball] < horizon:
-                horizon, horizon_ball = v[ball], ball  # a free ball's apex is v away
-        event, index, tau, x, v = advance_phase(
-            t, x, v, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried, pair
+            height += e[ball]
+            speed += de[ball]
+            heights[ball], speeds[ball] = height, speed
+        # The top ball's apex ends a phase (its height is measured there); a lower ball's is
+        # read from its parabola once the phase has passed it, not a phase of its own
+        # (docs/performance.md, "What grows with N").
+        horizon, horizon_ball = t_end - t, -1
+        if not active[n - 1] and 0.0 < speeds[n - 1] < horizon:
+            horizon, horizon_ball = speeds[n - 1], n - 1  # a free ball's apex is v away
+        event, index, tau, e, de = advance_phase(
+            t, e, de, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried, pair
         )
+        phase_apexes = n_apex
+        for ball in range(n - 1):
+            free = not active[ball] and not active[ball + 1]
+            rise = speeds[ball]
+            if free and not apex_passed[ball] and 0.0 < rise <= tau:
+                apex_passed[ball] = True
+                apexes = _room_for_one(apexes, n_apex)
+                row = n_apex  # in order of time among this phase's apexes
+                while row > phase_apexes and apexes[row - 1, 1] > t + rise:
+                    apexes[row] = apexes[row - 1]
+                    row -= 1
+                apexes[row, 0], apexes[row, 1] = ball, t + rise
+                apexes[row, 2] = heights[ball] + 0.5 * rise * rise
+                n_apex += 1
         # A state that leaves a grounded cluster of several contacts carries the rounding of its
         # closed form about the static rest (see twoball.kernels.runs.run).
         grounded_top = 0
@@ -362,16 +455,18 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
                 if top_apexes == 0:
                     first[index] += 1
             active[index] = not active[index]
+            apex_passed[index] = False
+            if index >= 1:
+                apex_passed[index - 1] = False
         elif event == EVENT_APEX:
-            v[index] = 0.0
+            de[index] -= de.sum()  # the top ball stops there: its velocity to zero
             apexes = _room_for_one(apexes, n_apex)
-            apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, x[index]
+            apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, e.sum()
             n_apex += 1
-            if index == n - 1:
-                top_apexes += 1
-                if top_apexes == apexes_wanted:
-                    status = STATUS_DONE
-                    break
+            top_apexes += 1
+            if top_apexes == apexes_wanted:
+                status = STATUS_DONE
+                break
         elif event == EVENT_TIME:
             status = STATUS_DONE
             break
@@ -407,7 +502,7 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
 @njit
 def sample(phases, times, masses, zeta):
     """Exact heights, velocities and contact forces at the given times from the recorded
-    phases: arrays (len(times), N) each."""
+    phases (their relative states: :func:`run`): arrays (len(times), N) each."""
     n = masses.size
     store = new_clusters(n)
     heights = np.empty((times.size, n))
@@ -439,7 +534,7 @@ def sample(phases, times, masses, zeta):
         speeds[s] = v
         for c in range(n):
             if active[c]:
-                eta = x[c] - (x[c - 1] if c >= 1 else 0.0)
+                eta = x[c] - (x[c - 1] if c >= 1 else 0.0)  # sampled: to the heights' rounding
                 deta = v[c] - (v[c - 1] if c >= 1 else 0.0)
                 forces[s, c] = max(-(eta + 2.0 * zeta[c] * deta), 0.0)
     return heights, speeds, forces
