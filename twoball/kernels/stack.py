@@ -49,37 +49,85 @@ from twoball.kernels.phases import (
 from twoball.kernels.runs import _room_for_one
 
 
+class Workspace(NamedTuple):
+    """:func:`advance_phase`'s arrays, allocated once per run (:func:`new_workspace`): a phase
+    of a three-ball drop lasts a few microseconds, of which allocating them took a third."""
+
+    x: np.ndarray  # (N,) heights, velocities, accelerations (see _evaluate)
+    v: np.ndarray
+    a: np.ndarray
+    shift_x: np.ndarray  # (N,) see _evaluate_arrays
+    shift_v: np.ndarray
+    shape_z: np.ndarray  # (N, 2N) per phase cluster
+    shape_w: np.ndarray
+    mode_z: np.ndarray
+    mode_w: np.ndarray
+    change_z: np.ndarray
+    size_change: np.ndarray
+    size_value: np.ndarray
+    sizes_w: np.ndarray  # (N, N, 2) see _sizes
+    sizes_z: np.ndarray  # (1, N, 2)
+    curvature: np.ndarray  # (N, 5) see _bounds
+    solved: np.ndarray  # (N,) bool: contacts whose end is found in closed form
+
+
+@njit
+def new_workspace(n):
+    """A :class:`Workspace` for an n-ball stack."""
+    return Workspace(
+        np.empty(n),
+        np.empty(n),
+        np.empty(n),
+        np.empty(n),
+        np.empty(n),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, n, 2)),
+        np.zeros((1, n, 2)),
+        np.zeros((n, 5)),
+        np.zeros(n, dtype=np.bool_),
+    )
+
+
 @njit
 def advance_phase(
-    t, e0, de0, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried, pair
+    t,
+    e0,
+    de0,
+    e,
+    de,
+    active,
+    horizon,
+    horizon_ball,
+    store,
+    masses,
+    zeta,
+    entered_by,
+    carried,
+    pair,
+    work,
 ):
     """Advance one phase, started at time t from the relative state e0, de0 (the contacts'
     overlaps and their rates: :func:`twoball.kernels.clusters._phase`), to its first event.
 
-    Returns (event, index, tau, e, de): a contact switch (index the contact), an apex (index the
-    ball; horizon_ball's apex is ``horizon`` away, or -1 for the end of the run), the end, rest,
-    a stuck root finder or the step limit. ``pair`` is :func:`twoball.kernels.phases.prepare` of a
-    two-ball stack (a placeholder for more balls): its rest proof is used for N = 2.
+    Returns (event, index, tau), the state there written into e, de: a contact switch (index
+    the contact), an apex (index the ball; horizon_ball's apex is ``horizon`` away, or -1 for
+    the end of the run), the end, rest, a stuck root finder or the step limit. ``pair`` is
+    :func:`twoball.kernels.phases.prepare` of a two-ball stack (a placeholder for more balls):
+    its rest proof is used for N = 2. ``work`` is a :class:`Workspace`.
     """
     n = masses.size
     phase = _phase(active, e0, de0, store, masses, zeta)
-    x = np.empty(n)
-    v = np.empty(n)
-    a = np.empty(n)
-    e = np.empty(n)
-    de = np.empty(n)
-    shift_x = np.empty(n)
-    shift_v = np.empty(n)
-    shape_z = np.zeros((n, 2 * n))
-    shape_w = np.zeros((n, 2 * n))
-    mode_z = np.zeros((n, 2 * n))
-    mode_w = np.zeros((n, 2 * n))
-    change_z = np.zeros((n, 2 * n))
-    size_change = np.zeros((n, 2 * n))
-    size_value = np.zeros((n, 2 * n))
-    sizes_w = np.zeros((n, n, 2))
-    sizes_z = np.zeros((1, n, 2))
-    curvature = np.zeros((n, 5))  # see _bounds
+    x, v, a, shift_x, shift_v = work.x, work.v, work.a, work.shift_x, work.shift_v
+    shape_z, shape_w, mode_z, mode_w = work.shape_z, work.shape_w, work.mode_z, work.mode_w
+    change_z, size_change, size_value = work.change_z, work.size_change, work.size_value
+    sizes_w, sizes_z, curvature, solved = work.sizes_w, work.sizes_z, work.curvature, work.solved
+    solved[:] = False
     # the store's and the phase's arrays, read once (see _evaluate)
     kinds, blocks, companions, rates = store.kind, store.blocks, store.companion, store.rates
     contacts, noise, eta_rest = store.contacts, store.noise, store.eta_rest
@@ -95,7 +143,6 @@ def advance_phase(
         heights, velocities = np.cumsum(e0), np.cumsum(de0)
         rest_rounding = _rest_rounding(store, phase.cid[0], heights, velocities, carried)
     horizon_contact = -1  # a contact whose force ends at the horizon
-    solved = np.zeros(n, dtype=np.bool_)  # contacts whose end is found in closed form
     tau = 0.0
     last_step = 0.0
     for _ in range(MAX_STEPS_PER_PHASE):
@@ -258,7 +305,7 @@ def advance_phase(
                 shift_x,
                 shift_v,
             )
-            return EVENT_SWITCH, event, best, e, de
+            return EVENT_SWITCH, event, best
         if everything:
             margin_ok = True
             cid = cids[0]
@@ -274,7 +321,7 @@ def advance_phase(
             if not margin_ok and n == 2:
                 margin_ok = _pair_at_rest(pair, e, de, phase.size[0], phase.speed[0], tau, carried)
             if margin_ok:
-                return EVENT_REST, -1, tau, e, de
+                return EVENT_REST, -1, tau
         if tau + step >= horizon:
             _evaluate_arrays(
                 horizon,
@@ -309,15 +356,17 @@ def advance_phase(
                 shift_v,
             )
             if horizon_contact >= 0:
-                return EVENT_SWITCH, horizon_contact, horizon, e, de
+                return EVENT_SWITCH, horizon_contact, horizon
             if horizon_ball >= 0:
-                return EVENT_APEX, horizon_ball, horizon, e, de
-            return EVENT_TIME, -1, horizon, e, de
+                return EVENT_APEX, horizon_ball, horizon
+            return EVENT_TIME, -1, horizon
         if not 0.0 < step < np.inf:
-            return EVENT_STUCK, -1, tau, e0.copy(), de0.copy()
+            e[:], de[:] = e0, de0
+            return EVENT_STUCK, -1, tau
         tau += step
         last_step = step
-    return EVENT_STEPS, -1, tau, e0.copy(), de0.copy()
+    e[:], de[:] = e0, de0
+    return EVENT_STEPS, -1, tau
 
 
 @njit
@@ -365,6 +414,9 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
     for c in range(1, n):
         e[c] = x_start[c] - x_start[c - 1]
     de = np.zeros(n)
+    e_next = np.empty(n)  # where a phase writes its end state
+    de_next = np.empty(n)
+    work = new_workspace(n)
     # Balls released touching (a gap of zero) start with their contact active and unloaded
     # (force zero either way): left inactive, the compression wave of the first impact reaches
     # it as a tangency of high order (eta ~ -(t - t0)^6 for the fourth contact), which rounding
@@ -416,9 +468,25 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
         horizon, horizon_ball = t_end - t, -1
         if not active[n - 1] and 0.0 < speeds[n - 1] < horizon:
             horizon, horizon_ball = speeds[n - 1], n - 1  # a free ball's apex is v away
-        event, index, tau, e, de = advance_phase(
-            t, e, de, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried, pair
+        event, index, tau = advance_phase(
+            t,
+            e,
+            de,
+            e_next,
+            de_next,
+            active,
+            horizon,
+            horizon_ball,
+            store,
+            masses,
+            zeta,
+            entered_by,
+            carried,
+            pair,
+            work,
         )
+        e, e_next = e_next, e  # the phase's end is the next one's start
+        de, de_next = de_next, de
         phase_apexes = n_apex
         for ball in range(n - 1):
             free = not active[ball] and not active[ball + 1]
