@@ -354,7 +354,7 @@ def _phase(active, e, de, store, masses, zeta):
         first = 0 if grounded[count] else start + 1
         total = mass_x = mass_v = 0.0
         size[count] = 1.0
-        for ball in range(start, j + 1):  # loops, not slices or temporaries (see _evaluate)
+        for ball in range(start, j + 1):  # loops, not slices or temporaries (see _evaluate_arrays)
             height += e[ball]
             rate += de[ball]
             total += masses[ball]
@@ -378,48 +378,6 @@ def _phase(active, e, de, store, masses, zeta):
         count += 1
         j += 1
     return Phase(count, lo, hi, cid, grounded, modes, centre, size, speed, of_ball)
-
-
-@njit
-def _evaluate(tau, phase, store, n, x, v, a, shape_z, shape_w, mode_z, mode_w):
-    """Heights, velocities, accelerations of every ball at tau into the phase (into x, v, a),
-    each phase cluster's z and w = z' (into shape_z, shape_w) and their block (mode)
-    coordinates X^-1 z and X^-1 w (into mode_z, mode_w). For sampling: the relative state that
-    the run carries is :func:`_evaluate_arrays`' (here computed from a zero start and left)."""
-    zeros = np.zeros(n)
-    work = np.zeros((n, 2 * n))
-    _evaluate_arrays(
-        tau,
-        phase.count,
-        phase.cid,
-        phase.lo,
-        phase.hi,
-        phase.grounded,
-        phase.centre,
-        phase.modes,
-        store.contacts,
-        store.blocks,
-        store.x,
-        store.shape,
-        store.offset,
-        store.eta_rest,
-        zeros,
-        zeros,
-        x,
-        v,
-        a,
-        shape_z,
-        shape_w,
-        mode_z,
-        mode_w,
-        np.zeros(n),
-        np.zeros(n),
-        work,
-        work.copy(),
-        work.copy(),
-        np.zeros(n),
-        np.zeros(n),
-    )
 
 
 @njit
@@ -455,9 +413,12 @@ def _evaluate_arrays(
     shift_x,
     shift_v,
 ):
-    """:func:`_evaluate` on the phase's and the store's arrays, passed one by one: the step
-    loop reads them once per phase. Written without array slices or tuples of arrays: each
-    would count references, which took most of the time of a step.
+    """Heights, velocities, accelerations of every ball at tau into the phase (into x, v, a),
+    each phase cluster's z and w = z' (into shape_z, shape_w) and their block (mode)
+    coordinates X^-1 z and X^-1 w (into mode_z, mode_w), from the phase's (:func:`_phase`) and
+    the store's arrays, passed one by one: the step loop reads them once per phase. Written
+    without array slices or tuples of arrays: each would count references, which took most of
+    the time of a step.
 
     Also the relative state at tau (into e, de) from the phase's start e0, de0 (docs/stacks.md,
     "How the state is carried"): each overlap and rate moved by its change, formed to its own
@@ -544,7 +505,7 @@ def _sizes(kinds, blocks, companions, rates, cid, k, modes, p, out):
     :func:`_block_weights` weighs, into out[p]: |y| (rotation), |y_0| and |y_1| (diagonal), the
     amplitudes of the slow and the fast exponential (strongly overdamped), sqrt(2 E) =
     sqrt(u'^2 + det(B) u^2) (otherwise). None of them can grow. Whole arrays and indices, not
-    slices (see :func:`_evaluate`)."""
+    slices (see :func:`_evaluate_arrays`)."""
     for blk in range(k):
         kind = kinds[cid, blk]
         y0, y1 = modes[p, 2 * blk], modes[p, 2 * blk + 1]

@@ -14,7 +14,6 @@ from twoball.kernels.clusters import (
     _bound,
     _bounds,
     _cluster_id,
-    _evaluate,
     _evaluate_arrays,
     _phase,
     _rest_rounding,
@@ -53,7 +52,7 @@ class Workspace(NamedTuple):
     """:func:`advance_phase`'s arrays, allocated once per run (:func:`new_workspace`): a phase
     of a three-ball drop lasts a few microseconds, of which allocating them took a third."""
 
-    x: np.ndarray  # (N,) heights, velocities, accelerations (see _evaluate)
+    x: np.ndarray  # (N,) heights, velocities, accelerations (see _evaluate_arrays)
     v: np.ndarray
     a: np.ndarray
     shift_x: np.ndarray  # (N,) see _evaluate_arrays
@@ -128,7 +127,7 @@ def advance_phase(
     change_z, size_change, size_value = work.change_z, work.size_change, work.size_value
     sizes_w, sizes_z, curvature, solved = work.sizes_w, work.sizes_z, work.curvature, work.solved
     solved[:] = False
-    # the store's and the phase's arrays, read once (see _evaluate)
+    # the store's and the phase's arrays, read once (see _evaluate_arrays)
     kinds, blocks, companions, rates = store.kind, store.blocks, store.companion, store.rates
     contacts, noise, eta_rest = store.contacts, store.noise, store.eta_rest
     w_x2, w_g_low, w_g_up = store.w_x2, store.w_g_low, store.w_g_up
@@ -576,13 +575,9 @@ def sample(phases, times, masses, zeta):
     heights = np.empty((times.size, n))
     speeds = np.empty((times.size, n))
     forces = np.zeros((times.size, n))
-    x = np.empty(n)
-    v = np.empty(n)
-    a = np.empty(n)
-    shape_z = np.zeros((n, 2 * n))
-    shape_w = np.zeros((n, 2 * n))
-    mode_z = np.zeros((n, 2 * n))
-    mode_w = np.zeros((n, 2 * n))
+    work = new_workspace(n)
+    e = np.empty(n)  # the relative state at each time, which sampling does not read
+    de = np.empty(n)
     active = np.zeros(n, dtype=np.bool_)
     current = -1
     phase = _phase(active, phases[0, 2 : 2 + n], phases[0, 2 + n :], store, masses, zeta)
@@ -597,7 +592,39 @@ def sample(phases, times, masses, zeta):
             )
             current = index
         tau = times[s] - phases[index, 0]
-        _evaluate(tau, phase, store, n, x, v, a, shape_z, shape_w, mode_z, mode_w)
+        _evaluate_arrays(
+            tau,
+            phase.count,
+            phase.cid,
+            phase.lo,
+            phase.hi,
+            phase.grounded,
+            phase.centre,
+            phase.modes,
+            store.contacts,
+            store.blocks,
+            store.x,
+            store.shape,
+            store.offset,
+            store.eta_rest,
+            phases[index, 2 : 2 + n],
+            phases[index, 2 + n :],
+            work.x,
+            work.v,
+            work.a,
+            work.shape_z,
+            work.shape_w,
+            work.mode_z,
+            work.mode_w,
+            e,
+            de,
+            work.change_z,
+            work.size_change,
+            work.size_value,
+            work.shift_x,
+            work.shift_v,
+        )
+        x, v = work.x, work.v
         heights[s] = x
         speeds[s] = v
         for c in range(n):
