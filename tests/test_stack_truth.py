@@ -39,12 +39,16 @@ def test_the_table_holds_the_seeded_drops():
 def test_the_kernel_against_the_40_digit_reference():
     """Every drop of docs/stack_vs_truth.csv, the kernel as it is now against the stored
     reference values: equal contact counts and h1 within ten times its stored conditioning on
-    all; h2 within it on all but the one drop the table lists as outside (docs/accuracy.md,
-    "The linear stack"), and on those within 100 times, so that a regression shows."""
+    all; h2 within it on all but as many drops as the table lists as outside (docs/accuracy.md,
+    "The linear stack": drops where one or two ulps of an input move h2 by more than ten times
+    its conditioning, so that which of them fall outside changes with any rounding), and on
+    those within 100 times, so that a regression shows."""
     from twoball.studies import stack_truth
 
+    stored_rows = _stored_references()
+    listed_outside = sum(stored["within"] == "False" for stored in stored_rows)
     outside = 0
-    for stored in _stored_references():
+    for stored in stored_rows:
         row = stack_truth.against(_case(stored), stored)
         row["cond_h1"], row["cond_h2"] = float(stored["cond_h1"]), float(stored["cond_h2"])
         assert row["contacts_first"] == row["contacts_first_truth"], (stored, row)
@@ -52,7 +56,7 @@ def test_the_kernel_against_the_40_digit_reference():
         if not stack_truth.within(row):
             outside += 1
             assert row["rel_err_h2"] <= 100.0 * row["cond_h2"], (stored, row)
-    assert outside <= 1
+    assert outside <= listed_outside <= 3
 
 
 def test_the_rule_refuses_what_it_should():

@@ -53,7 +53,7 @@ from twoball.kernels.closed_forms import (
     _split_modes,
 )
 from twoball.kernels.codes import ROUNDING
-from twoball.kernels.phases import _flow
+from twoball.kernels.phases import _block_change
 
 # How a block's future is bounded (:func:`_block_kind`).
 BLOCK_ROTATION, BLOCK_DIAGONAL, BLOCK_EXPONENTIALS, BLOCK_ENERGY = 0, 1, 2, 3
@@ -318,8 +318,13 @@ class Phase(NamedTuple):
 
 
 @njit
-def _phase(active, x, v, store, masses, zeta):
-    """Split the stack into clusters for this set of active contacts; their modes at the start."""
+def _phase(active, e, de, store, masses, zeta):
+    """Split the stack into clusters for this set of active contacts; their modes at the start.
+
+    The state is relative (docs/stacks.md, "How the state is carried"): e[0] the floor's overlap
+    (ball 0's height), e[c] = x_c - x_(c-1) the overlap of contact c, de their rates. A cluster's
+    z is read from them as it stands; only the centres of mass of free clusters, and the scales
+    of rounding, take the heights, summed from the overlaps below."""
     n = masses.size
     lo = np.zeros(n, dtype=np.int64)
     hi = np.zeros(n, dtype=np.int64)
@@ -332,6 +337,7 @@ def _phase(active, x, v, store, masses, zeta):
     of_ball = np.zeros(n, dtype=np.int64)
     z = np.empty(2 * n)
     eta_rest, x_inv = store.eta_rest, store.x_inv
+    height = rate = 0.0
     count = 0
     j = 0
     while j < n:
@@ -348,21 +354,21 @@ def _phase(active, x, v, store, masses, zeta):
         first = 0 if grounded[count] else start + 1
         total = mass_x = mass_v = 0.0
         size[count] = 1.0
-        for ball in range(start, j + 1):  # loops, not slices or temporaries (see _evaluate)
+        for ball in range(start, j + 1):  # loops, not slices or temporaries (see _evaluate_arrays)
+            height += e[ball]
+            rate += de[ball]
             total += masses[ball]
-            mass_x += masses[ball] * x[ball]
-            mass_v += masses[ball] * v[ball]
+            mass_x += masses[ball] * height
+            mass_v += masses[ball] * rate
             of_ball[ball] = count
-            size[count] += abs(x[ball])
-            speed[count] += abs(v[ball])
+            size[count] += abs(height)
+            speed[count] += abs(rate)
         centre[count, 0] = mass_x / total
         centre[count, 1] = mass_v / total
         for i in range(k):
             c = first + i
-            below_x = x[c - 1] if c >= 1 else 0.0
-            below_v = v[c - 1] if c >= 1 else 0.0
-            z[i] = x[c] - below_x - eta_rest[here, i]
-            z[k + i] = v[c] - below_v
+            z[i] = e[c] - eta_rest[here, i]
+            z[k + i] = de[c]
             size[count] += abs(eta_rest[here, i])
         for row in range(2 * k):  # modes = X^-1 z
             total = 0.0
@@ -372,35 +378,6 @@ def _phase(active, x, v, store, masses, zeta):
         count += 1
         j += 1
     return Phase(count, lo, hi, cid, grounded, modes, centre, size, speed, of_ball)
-
-
-@njit
-def _evaluate(tau, phase, store, n, x, v, a, shape_z, shape_w, mode_z, mode_w):
-    """Heights, velocities, accelerations of every ball at tau into the phase (into x, v, a),
-    each phase cluster's z and w = z' (into shape_z, shape_w) and their block (mode)
-    coordinates X^-1 z and X^-1 w (into mode_z, mode_w)."""
-    _evaluate_arrays(
-        tau,
-        phase.count,
-        phase.cid,
-        phase.lo,
-        phase.hi,
-        phase.grounded,
-        phase.centre,
-        phase.modes,
-        store.contacts,
-        store.blocks,
-        store.x,
-        store.shape,
-        store.offset,
-        x,
-        v,
-        a,
-        shape_z,
-        shape_w,
-        mode_z,
-        mode_w,
-    )
 
 
 @njit
@@ -418,6 +395,9 @@ def _evaluate_arrays(
     big_x,
     shape,
     offset,
+    eta_rest,
+    e0,
+    de0,
     x,
     v,
     a,
@@ -425,10 +405,31 @@ def _evaluate_arrays(
     shape_w,
     mode_z,
     mode_w,
+    e,
+    de,
+    change_z,
+    size_change,
+    size_value,
+    shift_x,
+    shift_v,
 ):
-    """:func:`_evaluate` on the phase's and the store's arrays, passed one by one: the step
-    loop reads them once per phase. Written without array slices or tuples of arrays: each
-    would count references, which took most of the time of a step."""
+    """Heights, velocities, accelerations of every ball at tau into the phase (into x, v, a),
+    each phase cluster's z and w = z' (into shape_z, shape_w) and their block (mode)
+    coordinates X^-1 z and X^-1 w (into mode_z, mode_w), from the phase's (:func:`_phase`) and
+    the store's arrays, passed one by one: the step loop reads them once per phase. Written
+    without array slices or tuples of arrays: each would count references, which took most of
+    the time of a step.
+
+    Also the relative state at tau (into e, de) from the phase's start e0, de0 (docs/stacks.md,
+    "How the state is carried"): each overlap and rate moved by its change, formed to its own
+    rounding, as :func:`twoball.kernels.phases.state_at` moves the two-ball state. An active
+    contact's change is X (exp(B tau) - I) X^-1 z (or, once that sums larger terms than the value
+    itself, as after the modes have decayed, eta_rest + z(tau)); an inactive contact's is the
+    difference of the changes of the two balls' heights, tau eta' plus each ball's share of its
+    cluster's change beyond its start velocity (into shift_x, shift_v), gravity cancelling
+    between two free clusters. change_z, size_change and size_value are work arrays."""
+    gravity_below = 0.0  # -tau^2/2 (or 0) in the height of the ball below, and its rate
+    gravity_rate_below = 0.0
     for p in range(count):
         cid = cids[p]
         k = contacts[cid]
@@ -436,15 +437,16 @@ def _evaluate_arrays(
         for row in range(d):
             shape_z[p, row] = 0.0
             shape_w[p, row] = 0.0
+            change_z[p, row] = 0.0
+            size_change[p, row] = 0.0
+            size_value[p, row] = 0.0
         for blk in range(k):
-            n0, n1, r0, r1 = _flow(
-                blocks[cid, blk, 0, 0],
-                blocks[cid, blk, 0, 1],
-                blocks[cid, blk, 1, 0],
-                blocks[cid, blk, 1, 1],
-                modes[p, 2 * blk],
-                modes[p, 2 * blk + 1],
-                tau,
+            block = (
+                (blocks[cid, blk, 0, 0], blocks[cid, blk, 0, 1]),
+                (blocks[cid, blk, 1, 0], blocks[cid, blk, 1, 1]),
+            )
+            n0, n1, d0, d1, r0, r1 = _block_change(
+                block, modes[p, 2 * blk], modes[p, 2 * blk + 1], tau
             )
             mode_z[p, 2 * blk], mode_z[p, 2 * blk + 1] = n0, n1
             mode_w[p, 2 * blk], mode_w[p, 2 * blk + 1] = r0, r1
@@ -452,23 +454,49 @@ def _evaluate_arrays(
                 left, right = big_x[cid, row, 2 * blk], big_x[cid, row, 2 * blk + 1]
                 shape_z[p, row] += left * n0 + right * n1
                 shape_w[p, row] += left * r0 + right * r1
+                change_z[p, row] += left * d0 + right * d1
+                size_change[p, row] += abs(left * d0) + abs(right * d1)
+                size_value[p, row] += abs(left * n0) + abs(right * n1)
         if grounded[p]:
             base_x = base_v = base_a = 0.0
+            gravity, gravity_rate = 0.0, 0.0
         else:
             base_x = centre[p, 0] + tau * (centre[p, 1] - 0.5 * tau)
             base_v = centre[p, 1] - tau
             base_a = -1.0
+            gravity, gravity_rate = -0.5 * tau * tau, -tau
+        first = 0 if grounded[p] else lows[p] + 1
         for ball in range(lows[p], highs[p] + 1):
             jl = ball - lows[p]
-            xs = vs = acc = 0.0
+            xs = vs = acc = moved = moved_rate = 0.0
             for i in range(k):
                 coefficient = shape[cid, jl, i]
                 xs += coefficient * shape_z[p, i]
                 vs += coefficient * shape_z[p, k + i]
                 acc += coefficient * shape_w[p, k + i]
+                moved += coefficient * (change_z[p, i] - tau * de0[first + i])
+                moved_rate += coefficient * change_z[p, k + i]
             x[ball] = base_x + offset[cid, jl] + xs
             v[ball] = base_v + vs
             a[ball] = base_a + acc
+            shift_x[ball], shift_v[ball] = moved, moved_rate
+        for i in range(k):  # the active contacts: start plus change, or rest plus value
+            c = first + i
+            if size_change[p, i] <= abs(eta_rest[cid, i]) + size_value[p, i]:
+                e[c] = e0[c] + change_z[p, i]
+            else:
+                e[c] = eta_rest[cid, i] + shape_z[p, i]
+            if size_change[p, k + i] <= size_value[p, k + i]:
+                de[c] = de0[c] + change_z[p, k + i]
+            else:
+                de[c] = shape_z[p, k + i]
+        if not grounded[p]:  # the inactive contact below the cluster
+            c = lows[p]
+            below_x = shift_x[c - 1] if c >= 1 else 0.0
+            below_v = shift_v[c - 1] if c >= 1 else 0.0
+            e[c] = e0[c] + (tau * de0[c] + (shift_x[c] - below_x) + (gravity - gravity_below))
+            de[c] = de0[c] + ((shift_v[c] - below_v) + (gravity_rate - gravity_rate_below))
+        gravity_below, gravity_rate_below = gravity, gravity_rate
 
 
 @njit
@@ -477,7 +505,7 @@ def _sizes(kinds, blocks, companions, rates, cid, k, modes, p, out):
     :func:`_block_weights` weighs, into out[p]: |y| (rotation), |y_0| and |y_1| (diagonal), the
     amplitudes of the slow and the fast exponential (strongly overdamped), sqrt(2 E) =
     sqrt(u'^2 + det(B) u^2) (otherwise). None of them can grow. Whole arrays and indices, not
-    slices (see :func:`_evaluate`)."""
+    slices (see :func:`_evaluate_arrays`)."""
     for blk in range(k):
         kind = kinds[cid, blk]
         y0, y1 = modes[p, 2 * blk], modes[p, 2 * blk + 1]

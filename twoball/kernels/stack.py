@@ -9,11 +9,11 @@ from typing import NamedTuple
 import numpy as np
 
 from twoball.jit import njit
+from twoball.kernels.closed_forms import _release_time
 from twoball.kernels.clusters import (
     _bound,
     _bounds,
     _cluster_id,
-    _evaluate,
     _evaluate_arrays,
     _phase,
     _rest_rounding,
@@ -48,30 +48,86 @@ from twoball.kernels.phases import (
 from twoball.kernels.runs import _room_for_one
 
 
+class Workspace(NamedTuple):
+    """:func:`advance_phase`'s arrays, allocated once per run (:func:`new_workspace`): a phase
+    of a three-ball drop lasts a few microseconds, of which allocating them took a third."""
+
+    x: np.ndarray  # (N,) heights, velocities, accelerations (see _evaluate_arrays)
+    v: np.ndarray
+    a: np.ndarray
+    shift_x: np.ndarray  # (N,) see _evaluate_arrays
+    shift_v: np.ndarray
+    shape_z: np.ndarray  # (N, 2N) per phase cluster
+    shape_w: np.ndarray
+    mode_z: np.ndarray
+    mode_w: np.ndarray
+    change_z: np.ndarray
+    size_change: np.ndarray
+    size_value: np.ndarray
+    sizes_w: np.ndarray  # (N, N, 2) see _sizes
+    sizes_z: np.ndarray  # (1, N, 2)
+    curvature: np.ndarray  # (N, 5) see _bounds
+    solved: np.ndarray  # (N,) bool: contacts whose end is found in closed form
+
+
+@njit
+def new_workspace(n):
+    """A :class:`Workspace` for an n-ball stack."""
+    return Workspace(
+        np.empty(n),
+        np.empty(n),
+        np.empty(n),
+        np.empty(n),
+        np.empty(n),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, n, 2)),
+        np.zeros((1, n, 2)),
+        np.zeros((n, 5)),
+        np.zeros(n, dtype=np.bool_),
+    )
+
+
 @njit
 def advance_phase(
-    t, x0, v0, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried, pair
+    t,
+    e0,
+    de0,
+    e,
+    de,
+    active,
+    horizon,
+    horizon_ball,
+    store,
+    masses,
+    zeta,
+    entered_by,
+    carried,
+    pair,
+    work,
 ):
-    """Advance one phase, started at time t, to its first event.
+    """Advance one phase, started at time t from the relative state e0, de0 (the contacts'
+    overlaps and their rates: :func:`twoball.kernels.clusters._phase`), to its first event.
 
-    Returns (event, index, tau, x, v): a contact switch (index the contact), an apex (index the
-    ball; horizon_ball's apex is ``horizon`` away, or -1 for the end of the run), the end, rest,
-    a stuck root finder or the step limit. ``pair`` is :func:`twoball.kernels.phases.prepare` of a
-    two-ball stack (a placeholder for more balls): its rest proof is used for N = 2.
+    Returns (event, index, tau), the state there written into e, de: a contact switch (index
+    the contact), an apex (index the ball; horizon_ball's apex is ``horizon`` away, or -1 for
+    the end of the run), the end, rest, a stuck root finder or the step limit. ``pair`` is
+    :func:`twoball.kernels.phases.prepare` of a two-ball stack (a placeholder for more balls):
+    its rest proof is used for N = 2. ``work`` is a :class:`Workspace`.
     """
     n = masses.size
-    phase = _phase(active, x0, v0, store, masses, zeta)
-    x = np.empty(n)
-    v = np.empty(n)
-    a = np.empty(n)
-    shape_z = np.zeros((n, 2 * n))
-    shape_w = np.zeros((n, 2 * n))
-    mode_z = np.zeros((n, 2 * n))
-    mode_w = np.zeros((n, 2 * n))
-    sizes_w = np.zeros((n, n, 2))
-    sizes_z = np.zeros((1, n, 2))
-    curvature = np.zeros((n, 5))  # see _bounds
-    # the store's and the phase's arrays, read once (see _evaluate)
+    phase = _phase(active, e0, de0, store, masses, zeta)
+    x, v, a, shift_x, shift_v = work.x, work.v, work.a, work.shift_x, work.shift_v
+    shape_z, shape_w, mode_z, mode_w = work.shape_z, work.shape_w, work.mode_z, work.mode_w
+    change_z, size_change, size_value = work.change_z, work.size_change, work.size_value
+    sizes_w, sizes_z, curvature, solved = work.sizes_w, work.sizes_z, work.curvature, work.solved
+    solved[:] = False
+    # the store's and the phase's arrays, read once (see _evaluate_arrays)
     kinds, blocks, companions, rates = store.kind, store.blocks, store.companion, store.rates
     contacts, noise, eta_rest = store.contacts, store.noise, store.eta_rest
     w_x2, w_g_low, w_g_up = store.w_x2, store.w_g_low, store.w_g_up
@@ -83,7 +139,9 @@ def advance_phase(
     everything = phase.count == 1 and phase.grounded[0] and store.contacts[phase.cid[0]] == n
     rest_rounding = np.zeros(n)
     if everything and n >= 3:
-        rest_rounding = _rest_rounding(store, phase.cid[0], x0, v0, carried)
+        heights, velocities = np.cumsum(e0), np.cumsum(de0)
+        rest_rounding = _rest_rounding(store, phase.cid[0], heights, velocities, carried)
+    horizon_contact = -1  # a contact whose force ends at the horizon
     tau = 0.0
     last_step = 0.0
     for _ in range(MAX_STEPS_PER_PHASE):
@@ -101,6 +159,9 @@ def advance_phase(
             big_x,
             shape,
             offset,
+            eta_rest,
+            e0,
+            de0,
             x,
             v,
             a,
@@ -108,6 +169,13 @@ def advance_phase(
             shape_w,
             mode_z,
             mode_w,
+            e,
+            de,
+            change_z,
+            size_change,
+            size_value,
+            shift_x,
+            shift_v,
         )
         _bounds(
             count,
@@ -136,25 +204,26 @@ def advance_phase(
             upper = of_ball[c]
             cid_u = cids[upper]
             k_u = contacts[cid_u]
+            if solved[c] and tau > 0.0:
+                continue  # its end is the horizon, or beyond it
             noise_u = noise[cid_u]
             tol_state = noise_u * (sizes[upper] + speeds[upper] * (1.0 + tau) + tau * tau)
             tol_rate = noise_u * (speeds[upper] + 1.0 + tau)
             if active[c]:
                 i = c - (0 if grounded[upper] else lows[upper] + 1)
-                eta = eta_rest[cid_u, i] + shape_z[upper, i]
-                deta = shape_z[upper, k_u + i]
-                ddeta = shape_w[upper, k_u + i]
+                eta, deta, ddeta = e[c], de[c], shape_w[upper, k_u + i]
                 bound_eta, bound_g = curvature[c, 3], curvature[c, 4]
             else:
                 rigid_u = 0.0 if grounded[upper] else -1.0
                 bound_eta, bound_g = curvature[c, 0], curvature[c, 1]
+                eta, deta = e[c], de[c]
                 if c == 0:
-                    eta, deta, ddeta = x[0], v[0], a[0]
+                    ddeta = a[0]
                     rigid = -rigid_u
                 else:
                     lower = of_ball[c - 1]
                     cid_l = cids[lower]
-                    eta, deta, ddeta = x[c] - x[c - 1], v[c] - v[c - 1], a[c] - a[c - 1]
+                    ddeta = a[c] - a[c - 1]
                     rigid_l = 0.0 if grounded[lower] else -1.0
                     rigid = abs(rigid_u - rigid_l)
                     bound_eta += curvature[c - 1, 0]
@@ -181,6 +250,25 @@ def advance_phase(
                     shift = 0.0
                 if tau + shift < best:
                     best, event = tau + shift, c
+            elif active[c] and k_u == 1 and tau == 0.0:
+                # A contact alone in its cluster is a damped oscillator about its static
+                # overlap: its force ends at a root found in closed form, which bounds the phase
+                # as an apex does (twoball.kernels.phases.advance_phase), not by steps.
+                level = tol if fresh and value <= tol else 0.0
+                w = -blocks[cid_u, 0, 1, 0]
+                release = _release_time(
+                    e0[c] - eta_rest[cid_u, 0],
+                    de0[c],
+                    zeta[c] * w,
+                    w,
+                    zeta[c],
+                    level - eta_rest[cid_u, 0],
+                    horizon,
+                )
+                solved[c] = True
+                if release < horizon:
+                    horizon, horizon_contact = release, c
+                    step = min(step, horizon)
             else:
                 step = min(step, h)
         if event >= 0:
@@ -198,6 +286,9 @@ def advance_phase(
                 big_x,
                 shape,
                 offset,
+                eta_rest,
+                e0,
+                de0,
                 x,
                 v,
                 a,
@@ -205,8 +296,15 @@ def advance_phase(
                 shape_w,
                 mode_z,
                 mode_w,
+                e,
+                de,
+                change_z,
+                size_change,
+                size_value,
+                shift_x,
+                shift_v,
             )
-            return EVENT_SWITCH, event, best, x, v
+            return EVENT_SWITCH, event, best
         if everything:
             margin_ok = True
             cid = cids[0]
@@ -220,9 +318,9 @@ def advance_phase(
                 if not margin > tol_rest:
                     margin_ok = False
             if not margin_ok and n == 2:
-                margin_ok = _pair_at_rest(pair, x, v, phase.size[0], phase.speed[0], tau, carried)
+                margin_ok = _pair_at_rest(pair, e, de, phase.size[0], phase.speed[0], tau, carried)
             if margin_ok:
-                return EVENT_REST, -1, tau, x, v
+                return EVENT_REST, -1, tau
         if tau + step >= horizon:
             _evaluate_arrays(
                 horizon,
@@ -238,6 +336,9 @@ def advance_phase(
                 big_x,
                 shape,
                 offset,
+                eta_rest,
+                e0,
+                de0,
                 x,
                 v,
                 a,
@@ -245,19 +346,30 @@ def advance_phase(
                 shape_w,
                 mode_z,
                 mode_w,
+                e,
+                de,
+                change_z,
+                size_change,
+                size_value,
+                shift_x,
+                shift_v,
             )
+            if horizon_contact >= 0:
+                return EVENT_SWITCH, horizon_contact, horizon
             if horizon_ball >= 0:
-                return EVENT_APEX, horizon_ball, horizon, x, v
-            return EVENT_TIME, -1, horizon, x, v
+                return EVENT_APEX, horizon_ball, horizon
+            return EVENT_TIME, -1, horizon
         if not 0.0 < step < np.inf:
-            return EVENT_STUCK, -1, tau, x0.copy(), v0.copy()
+            e[:], de[:] = e0, de0
+            return EVENT_STUCK, -1, tau
         tau += step
         last_step = step
-    return EVENT_STEPS, -1, tau, x0.copy(), v0.copy()
+    e[:], de[:] = e0, de0
+    return EVENT_STEPS, -1, tau
 
 
 @njit
-def _pair_at_rest(pair, x, v, size, speed, tau, carried):
+def _pair_at_rest(pair, e, de, size, speed, tau, carried):
     """Rest of two balls, both contacts active, proven as :func:`twoball.kernels.runs.run` proves it
     (docs/model.md, "What is measured"): per mode, with the tight bound of a strongly overdamped
     mode (:func:`twoball.kernels.closed_forms._overdamped_bound`). The cluster's total energy, which
@@ -265,10 +377,9 @@ def _pair_at_rest(pair, x, v, size, speed, tau, carried):
     upper ball: rest proven at t = 3310 by twoball.simulate, never by that energy)."""
     params, rest, x_inv, blocks = pair.params, pair.rest, pair.x_inv, pair.blocks
     companions, y_rest, rates, mode_rows = pair.companions, pair.y_rest, pair.rates, pair.mode_rows
-    # the two-ball solver's state is in its relative coordinates (x1, eta, v1, eta')
-    eta, deta = x[1] - x[0], v[1] - v[0]
-    block_states = _block_states(x[0], eta, v[0], deta, x_inv, companions, y_rest)
-    roots = _energy_roots(BOTH, v[0], deta, 0.0, 0.0, params, blocks, block_states)
+    # the two-ball solver's state (x1, eta, v1, eta') is the stack's relative state
+    block_states = _block_states(e[0], e[1], de[0], de[1], x_inv, companions, y_rest)
+    roots = _energy_roots(BOTH, de[0], de[1], 0.0, 0.0, params, blocks, block_states)
     offset = _rest_size(y_rest)
     tol = ROUNDING * params[P_NOISE] * (size + offset + speed * (1.0 + tau) + tau * tau)
     return _at_rest(roots, params, rest, rates, mode_rows, block_states, tol + carried)
@@ -282,7 +393,7 @@ class StackRun(NamedTuple):
     apexes: np.ndarray  # (n, 3): ball, t, height, in order
     contacts: np.ndarray  # (n, 3): contact, start, end
     contacts_first: np.ndarray  # (N,) intervals of each contact that start before h1
-    phases: np.ndarray  # (n, 2 + 2N): t, active bits, heights, velocities (if recorded)
+    phases: np.ndarray  # (n, 2 + 2N): t, active bits, overlaps, their rates (if recorded)
     phase_count: int
 
 
@@ -291,10 +402,20 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
     """Run a stack from rest at heights ``x_start`` until the top ball's ``apexes_wanted``-th
     apex, ``t_end`` or rest (docs/model.md, "Stacks of N balls"). ``store`` holds the clusters'
     closed forms for these masses and damping ratios (:func:`new_clusters`, or one that earlier
-    runs of the same balls filled: :func:`_store_for`)."""
+    runs of the same balls filled: :func:`_store_for`).
+
+    The state is carried relative (docs/stacks.md, "How the state is carried"): each contact's
+    overlap e[c] = x_c - x_(c-1) (e[0] = x_0, the floor's) and its rate, each phase adding its
+    change to them; a height is the sum of the overlaps below it."""
     n = masses.size
-    x = x_start.copy()
-    v = np.zeros(n)
+    e = np.empty(n)
+    e[0] = x_start[0]
+    for c in range(1, n):
+        e[c] = x_start[c] - x_start[c - 1]
+    de = np.zeros(n)
+    e_next = np.empty(n)  # where a phase writes its end state
+    de_next = np.empty(n)
+    work = new_workspace(n)
     # Balls released touching (a gap of zero) start with their contact active and unloaded
     # (force zero either way): left inactive, the compression wave of the first impact reaches
     # it as a tangency of high order (eta ~ -(t - t0)^6 for the fourth contact), which rounding
@@ -309,6 +430,9 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
     t = 0.0
     apexes = np.empty((8, 3))
     n_apex = 0
+    heights = np.empty(n)  # at the phase's start, summed from the overlaps
+    speeds = np.empty(n)
+    apex_passed = np.zeros(n, dtype=np.bool_)  # a lower ball's, since its last contact switch
     top_apexes = 0
     contacts = np.empty((16, 3))
     n_contacts = 0
@@ -329,17 +453,53 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
                 if active[c]:
                     bits += 1 << c
             phases[n_phases, 0], phases[n_phases, 1] = t, bits
-            phases[n_phases, 2 : 2 + n] = x
-            phases[n_phases, 2 + n :] = v
+            phases[n_phases, 2 : 2 + n] = e
+            phases[n_phases, 2 + n :] = de
             n_phases += 1
-        horizon, horizon_ball = t_end - t, -1
+        height = speed = 0.0
         for ball in range(n):
-            free = not active[ball] and (ball == n - 1 or not active[ball + 1])
-            if free and 0.0 < v[ball] < horizon:
-                horizon, horizon_ball = v[ball], ball  # a free ball's apex is v away
-        event, index, tau, x, v = advance_phase(
-            t, x, v, active, horizon, horizon_ball, store, masses, zeta, entered_by, carried, pair
+            height += e[ball]
+            speed += de[ball]
+            heights[ball], speeds[ball] = height, speed
+        # The top ball's apex ends a phase (its height is measured there); a lower ball's is
+        # read from its parabola once the phase has passed it, not a phase of its own
+        # (docs/performance.md, "What grows with N").
+        horizon, horizon_ball = t_end - t, -1
+        if not active[n - 1] and 0.0 < speeds[n - 1] < horizon:
+            horizon, horizon_ball = speeds[n - 1], n - 1  # a free ball's apex is v away
+        event, index, tau = advance_phase(
+            t,
+            e,
+            de,
+            e_next,
+            de_next,
+            active,
+            horizon,
+            horizon_ball,
+            store,
+            masses,
+            zeta,
+            entered_by,
+            carried,
+            pair,
+            work,
         )
+        e, e_next = e_next, e  # the phase's end is the next one's start
+        de, de_next = de_next, de
+        phase_apexes = n_apex
+        for ball in range(n - 1):
+            free = not active[ball] and not active[ball + 1]
+            rise = speeds[ball]
+            if free and not apex_passed[ball] and 0.0 < rise <= tau:
+                apex_passed[ball] = True
+                apexes = _room_for_one(apexes, n_apex)
+                row = n_apex  # in order of time among this phase's apexes
+                while row > phase_apexes and apexes[row - 1, 1] > t + rise:
+                    apexes[row] = apexes[row - 1]
+                    row -= 1
+                apexes[row, 0], apexes[row, 1] = ball, t + rise
+                apexes[row, 2] = heights[ball] + 0.5 * rise * rise
+                n_apex += 1
         # A state that leaves a grounded cluster of several contacts carries the rounding of its
         # closed form about the static rest (see twoball.kernels.runs.run).
         grounded_top = 0
@@ -362,16 +522,18 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
                 if top_apexes == 0:
                     first[index] += 1
             active[index] = not active[index]
+            apex_passed[index] = False
+            if index >= 1:
+                apex_passed[index - 1] = False
         elif event == EVENT_APEX:
-            v[index] = 0.0
+            de[index] -= de.sum()  # the top ball stops there: its velocity to zero
             apexes = _room_for_one(apexes, n_apex)
-            apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, x[index]
+            apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, e.sum()
             n_apex += 1
-            if index == n - 1:
-                top_apexes += 1
-                if top_apexes == apexes_wanted:
-                    status = STATUS_DONE
-                    break
+            top_apexes += 1
+            if top_apexes == apexes_wanted:
+                status = STATUS_DONE
+                break
         elif event == EVENT_TIME:
             status = STATUS_DONE
             break
@@ -407,19 +569,15 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
 @njit
 def sample(phases, times, masses, zeta):
     """Exact heights, velocities and contact forces at the given times from the recorded
-    phases: arrays (len(times), N) each."""
+    phases (their relative states: :func:`run`): arrays (len(times), N) each."""
     n = masses.size
     store = new_clusters(n)
     heights = np.empty((times.size, n))
     speeds = np.empty((times.size, n))
     forces = np.zeros((times.size, n))
-    x = np.empty(n)
-    v = np.empty(n)
-    a = np.empty(n)
-    shape_z = np.zeros((n, 2 * n))
-    shape_w = np.zeros((n, 2 * n))
-    mode_z = np.zeros((n, 2 * n))
-    mode_w = np.zeros((n, 2 * n))
+    work = new_workspace(n)
+    e = np.empty(n)  # the relative state at each time, which sampling does not read
+    de = np.empty(n)
     active = np.zeros(n, dtype=np.bool_)
     current = -1
     phase = _phase(active, phases[0, 2 : 2 + n], phases[0, 2 + n :], store, masses, zeta)
@@ -434,12 +592,44 @@ def sample(phases, times, masses, zeta):
             )
             current = index
         tau = times[s] - phases[index, 0]
-        _evaluate(tau, phase, store, n, x, v, a, shape_z, shape_w, mode_z, mode_w)
+        _evaluate_arrays(
+            tau,
+            phase.count,
+            phase.cid,
+            phase.lo,
+            phase.hi,
+            phase.grounded,
+            phase.centre,
+            phase.modes,
+            store.contacts,
+            store.blocks,
+            store.x,
+            store.shape,
+            store.offset,
+            store.eta_rest,
+            phases[index, 2 : 2 + n],
+            phases[index, 2 + n :],
+            work.x,
+            work.v,
+            work.a,
+            work.shape_z,
+            work.shape_w,
+            work.mode_z,
+            work.mode_w,
+            e,
+            de,
+            work.change_z,
+            work.size_change,
+            work.size_value,
+            work.shift_x,
+            work.shift_v,
+        )
+        x, v = work.x, work.v
         heights[s] = x
         speeds[s] = v
         for c in range(n):
             if active[c]:
-                eta = x[c] - (x[c - 1] if c >= 1 else 0.0)
+                eta = x[c] - (x[c - 1] if c >= 1 else 0.0)  # sampled: to the heights' rounding
                 deta = v[c] - (v[c - 1] if c >= 1 else 0.0)
                 forces[s, c] = max(-(eta + 2.0 * zeta[c] * deta), 0.0)
     return heights, speeds, forces
