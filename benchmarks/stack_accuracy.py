@@ -15,11 +15,13 @@ from __future__ import annotations
 import argparse
 import csv
 import time
+from dataclasses import asdict
 from pathlib import Path
 
 from perfdoc import write_section  # benchmarks/ is on the path of a script run from it
 
 from twoball.studies import stack_truth
+from twoball.studies.stack_comparison import stack_against
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 CSV = DOCS / "stack_vs_truth.csv"
@@ -54,13 +56,12 @@ def main() -> None:
             "height": repr(case["height"]),
             **reference,
         }
-        row.update(stack_truth.against(case, reference))
-        cond = stack_truth.conditioning(case)
-        row["cond_h1"], row["cond_h2"] = float(cond[0]), float(cond[1])
+        compared = stack_against(case, reference, stack_truth.conditioning(case))
+        row.update(asdict(compared))
         row["ratio"] = max(row["rel_err_h1"] / row["cond_h1"], row["rel_err_h2"] / row["cond_h2"])
         spread = stack_truth.ulp_spread(case)
         row["ulp_spread_h1"], row["ulp_spread_h2"] = float(spread[0]), float(spread[1])
-        row["within"] = stack_truth.within(row)
+        row["within"] = compared.within()
         rows.append(row)
         print(
             f"{i:2d} N={row['balls']} eps={case['eps']:.3f} H={case['height']:.3g}: "
