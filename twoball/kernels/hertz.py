@@ -35,7 +35,7 @@ from twoball.kernels.codes import STATUS_DONE, STATUS_FAILED, STATUS_PHASES, STA
 from twoball.kernels.runs import _room_for_one
 
 MAX_STEPS = 300_000  # a run that cannot end fails within seconds (a step takes ~3 us)
-RTOL = 1e-14  # local error of w (and w') per step, relative to the contact's scale
+RTOL = 1e-15  # local error of w (and w') per step, relative to the contact's scale
 PROBES = 8  # dense-output points per step where the clamp is looked for
 AHEAD = 4.0  # steps certified at once
 
@@ -136,6 +136,17 @@ def _overlaps(x, v, eta, deta) -> None:
 
 
 @njit
+def _tick(t, t_low, s):
+    """The clock t + t_low moved on by s: a compensated sum (Knuth's two-sum), so that a run of
+    thousands of steps keeps the time to an ulp rather than losing one at every step."""
+    total = t + s
+    moved = total - t
+    t_low += (t - (total - moved)) + (s - moved)
+    high = total + t_low
+    return high, t_low - (high - total)
+
+
+@njit
 def _rounding(x, deta, t, c) -> float:
     """The rounding of eta_c: 16 ulp of the heights plus eta' times 16 ulp of the clock."""
     heights = 1.0
@@ -191,14 +202,13 @@ def _local_forces(masses, lam, eta, deta, active, span, force_bound, both, towar
 
 
 @njit
-def certified_step(masses, lam, x, v, t, force_bound, active, wanted, work) -> float:
+def certified_step(masses, lam, x, eta, deta, t, force_bound, active, wanted, work) -> float:
     """A step over which no overlap changes sign unseen (twoball.stacks.hertz._certified_step): from
     the run's force bounds, then doubled while the forces bounded over the step certify it.
     ``wanted`` (the integrator's next step) is tried first: if certified, it is the answer.
-    ``work``: (5, N) scratch; its row 2 is left holding bounds on |eta''| valid over the step
+    ``work``: (3, N) scratch; its row 0 is left holding bounds on |eta''| valid over the step
     returned (those of the last bounds tried, over that step or a longer span)."""
-    eta, deta, both, towards, local = work[0], work[1], work[2], work[3], work[4]
-    _overlaps(x, v, eta, deta)
+    both, towards, local = work[0], work[1], work[2]
     if wanted < math.inf:
         _local_forces(masses, lam, eta, deta, active, wanted, force_bound, both, towards, local)
         _phase_bounds(masses, local, active, both, towards)
@@ -261,19 +271,17 @@ def _first_fall(a, b, c) -> float:
 
 
 @njit
-def _next_in_flight(lam, x, v, horizon):
+def _next_in_flight(lam, eta, deta, v, horizon):
     """(time, kind, index) of the next touch, re-push or apex with every ball in free flight:
     roots of quadratics (exact)."""
-    n = x.size
+    n = v.size
     best, kind, index = horizon, K_TIME, -1
     for c in range(n):
-        eta = x[c] - (x[c - 1] if c >= 1 else 0.0)
-        deta = v[c] - (v[c - 1] if c >= 1 else 0.0)
-        root = _first_fall(-0.5 if c == 0 else 0.0, deta, eta)
+        root = _first_fall(-0.5 if c == 0 else 0.0, deta[c], eta[c])
         if root < best:
             best, kind, index = root, K_SWITCH, c
     # a floor contact clamped while still compressed pushes again once ball 0 slows below 1/lam
-    if x[0] < 0.0 and lam[0] > 0.0:
+    if eta[0] < 0.0 and lam[0] > 0.0:
         again = v[0] - 1.0 / lam[0]
         if 0.0 < again < best:
             best, kind, index = again, K_SWITCH, 0
@@ -313,6 +321,24 @@ def _state_at(s, x0, v0, z, x, v) -> None:
 
 
 @njit
+def _advance(s, z, x, v, eta, deta) -> None:
+    """Move the carried state on by s from a step's start, w, w' = z there: each height and
+    velocity by its change, and each overlap and its rate by theirs (eta += D v s + D w, minus
+    s^2 / 2 for the floor), never as a difference of heights of order H, which would round eta
+    to an ulp of H at every step."""
+    n = x.size
+    for c in range(n):
+        eta[c] += deta[c] * s + (z[c] - (z[c - 1] if c >= 1 else 0.0))
+        deta[c] += z[n + c] - (z[n + c - 1] if c >= 1 else 0.0)
+        if c == 0:
+            eta[c] -= 0.5 * s * s
+            deta[c] -= s
+    for j in range(n):
+        x[j] += v[j] * s - 0.5 * s * s + z[j]
+        v[j] += z[n + j] - s
+
+
+@njit
 def _dense(F, s, h, z) -> None:
     """z = (w, w') at s in [0, h] from the step's dense output F (DOP853's interpolant)."""
     u = s / h
@@ -343,15 +369,14 @@ def _switch_values(lam, active, s, z, eta0, deta0, out) -> None:
 
 
 @njit
-def _due(masses, lam, x, v, t, active, fresh, at_start, accel, forces) -> int:
+def _due(masses, lam, x, overlaps, rates, t, active, fresh, at_start, accel, forces) -> int:
     """The first contact whose switch is here (at its root to rounding and moving through it,
     or past it), -1 if none (twoball.stacks.hertz._switching)."""
     n = masses.size
     heights = 1.0 + np.abs(x).sum()
     for c in range(n):
         forces[c] = 0.0
-        eta = x[c] - (x[c - 1] if c >= 1 else 0.0)
-        deta = v[c] - (v[c - 1] if c >= 1 else 0.0)
+        eta, deta = overlaps[c], rates[c]
         if active[c] and eta < 0.0:
             forces[c] = _power(-eta) * max(1.0 - lam[c] * deta, 0.0)
     for j in range(n):
@@ -359,8 +384,7 @@ def _due(masses, lam, x, v, t, active, fresh, at_start, accel, forces) -> int:
     for c in range(n):
         if at_start and fresh[c]:
             continue  # it has just switched
-        eta = x[c] - (x[c - 1] if c >= 1 else 0.0)
-        deta = v[c] - (v[c - 1] if c >= 1 else 0.0)
+        eta, deta = overlaps[c], rates[c]
         g = lam[c] * deta - 1.0
         if eta >= g:
             value, rate = eta, deta
@@ -421,13 +445,35 @@ def _bisect(lam, active, F, h, eta0, deta0, c, low, high, t, z, values) -> float
 
 
 @njit
-def contact_phase(
-    masses, lam, x, v, t, active, force_bound, t_end, steps, fresh, watch_rest, times,
-    samples, next_sample, atol, h_abs, level,
-):  # fmt: skip
-    """Integrate a phase with a contact active to its first event (see the module).
+def _dop853_step(h, stages, z_new, dz, eta0, deta0, masses, lam, active, forces) -> None:
+    """One DOP853 step of w, w' from zero (scipy's rk_step), stages[0] given: the stages, the
+    new z = (w, w') into ``z_new`` and the last stage (at h, for the error and the next step)."""
+    m = z_new.size
+    for stage in range(1, _STAGES):
+        for i in range(m):
+            total = 0.0
+            for k in range(stage):
+                total += stages[k, i] * _A[stage, k]
+            dz[i] = total * h
+        _rhs(_C[stage] * h, dz, stages[stage], eta0, deta0, masses, lam, active, forces)
+    for i in range(m):
+        total = 0.0
+        for k in range(_STAGES):
+            total += stages[k, i] * _B[k]
+        z_new[i] = h * total
+    _rhs(h, z_new, stages[_STAGES], eta0, deta0, masses, lam, active, forces)
 
-    Returns (kind, index, t, x, v, steps, next_sample, h_abs): kind K_FAILED when a step falls
+
+@njit
+def contact_phase(
+    masses, lam, x, v, eta, deta, t, t_low, active, force_bound, t_end, steps, fresh,
+    watch_rest, times, samples, next_sample, atol, h_abs, level,
+):  # fmt: skip
+    """Integrate a phase with a contact active to its first event (see the module), moving the
+    heights ``x``, velocities ``v``, overlaps ``eta`` and their rates ``deta`` on in place, the
+    clock as t + t_low (:func:`_tick`).
+
+    Returns (kind, index, t, t_low, steps, next_sample, h_abs): kind K_FAILED when a step falls
     below the spacing of the clock (beyond the domain double precision carries)."""
     n = masses.size
     m = 2 * n
@@ -438,31 +484,37 @@ def contact_phase(
     eta0, deta0 = np.empty(n), np.empty(n)
     before, after, previous, now = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     scratch = np.empty(n)
-    work = np.empty((5, n))
+    work = np.empty((3, n))
     x_old, v_old = np.empty(n), np.empty(n)
     watched = np.zeros(n, dtype=np.bool_)
     for j in range(n):
         watched[j] = not active[j] and not (j + 1 < n and active[j + 1]) and v[j] > 0.0
-    x, v = x.copy(), v.copy()
     at_start = True
+    last = False  # stages[_STAGES] holds the forces at this step's start (first same as last)
     h_last = 0.0  # the last accepted step
     certified = -math.inf  # no overlap reaches its root unseen before this time
     bounds = np.empty(n)  # |eta''| <= bounds until then
     while steps < MAX_STEPS:
-        c = _due(masses, lam, x, v, t, active, fresh, at_start, accel, forces)
+        c = _due(masses, lam, x, eta, deta, t, active, fresh, at_start, accel, forces)
         if c >= 0:
-            return K_SWITCH, c, t, x, v, steps, next_sample, h_abs
+            return K_SWITCH, c, t, t_low, steps, next_sample, h_abs
         at_start = False
         if t + h_abs > certified:
             # a certified span holds for every step inside it (no overlap can reach its root
             # unseen there), so certify a few steps ahead at once
-            span = certified_step(masses, lam, x, v, t, force_bound, active, AHEAD * h_abs, work)
+            span = certified_step(
+                masses, lam, x, eta, deta, t, force_bound, active, AHEAD * h_abs, work
+            )
             certified = t + span
-            bounds[:] = work[2]
+            bounds[:] = work[0]
         max_step = certified - t
-        _overlaps(x, v, eta0, deta0)
-        z[:] = 0.0
-        _rhs(0.0, z, stages[0], eta0, deta0, masses, lam, active, forces)
+        eta0[:], deta0[:] = eta, deta
+        if last:
+            stages[0, :n] = 0.0
+            stages[0, n:] = stages[_STAGES, n:]
+        else:
+            z[:] = 0.0
+            _rhs(0.0, z, stages[0], eta0, deta0, masses, lam, active, forces)
         # one DOP853 step (scipy's rk_step and error estimate), w and w' from zero
         rejected = False
         while True:
@@ -471,21 +523,9 @@ def contact_phase(
                 h = t_end - t
             if h < 10.0 * (np.nextafter(t, np.inf) - t):
                 if h == t_end - t:  # the end, closer than a step can go
-                    return K_TIME, -1, t_end, x, v, steps, next_sample, h_abs
-                return K_FAILED, -1, t, x, v, steps, next_sample, h_abs
-            for stage in range(1, _STAGES):
-                for i in range(m):
-                    total = 0.0
-                    for k in range(stage):
-                        total += stages[k, i] * _A[stage, k]
-                    dz[i] = total * h
-                _rhs(_C[stage] * h, dz, stages[stage], eta0, deta0, masses, lam, active, forces)
-            for i in range(m):
-                total = 0.0
-                for k in range(_STAGES):
-                    total += stages[k, i] * _B[k]
-                z_new[i] = h * total
-            _rhs(h, z_new, stages[_STAGES], eta0, deta0, masses, lam, active, forces)
+                    return K_TIME, -1, t_end, 0.0, steps, next_sample, h_abs
+                return K_FAILED, -1, t, t_low, steps, next_sample, h_abs
+            _dop853_step(h, stages, z_new, dz, eta0, deta0, masses, lam, active, forces)
             err5, err3 = 0.0, 0.0
             for i in range(m):
                 scale = atol[i] + RTOL * abs(z_new[i])
@@ -512,6 +552,7 @@ def contact_phase(
         steps += 1
         # the events in the step: each switching function at the end (and, for the clamp, at
         # probes of the dense output); each watched ball's apex, exact (w = 0 for it)
+        z[:] = 0.0
         _switch_values(lam, active, 0.0, z, eta0, deta0, before)
         _switch_values(lam, active, h, z_new, eta0, deta0, after)
         damped = _clamp_possible(lam, deta0, h, bounds)
@@ -566,20 +607,21 @@ def contact_phase(
         for j in range(n):
             if watched[j] and 0.0 < v[j] <= h and (v[j] < root or kind == K_TIME):
                 root, kind, index = v[j], K_APEX, j
-        t_old = t
-        if kind == K_TIME:
+        t_old = t + t_low
+        x_old[:], v_old[:] = x, v
+        if kind == K_TIME or root == h:
             z[:] = z_new
-            t = t + h
         else:
-            _dense(F, root, h, z)
-            t = t + root
+            # the state at the event from a step of its own (eighth order), not from the dense
+            # output (seventh): every switch and apex would otherwise add the interpolant's error
+            _dop853_step(root, stages, z, dz, eta0, deta0, masses, lam, active, forces)
             if kind == K_APEX:
                 z[index], z[n + index] = 0.0, 0.0
-        x_old[:], v_old[:] = x, v
-        _state_at(t - t_old if kind == K_TIME else root, x_old, v_old, z, x, v)
+        _advance(root, z, x, v, eta, deta)
+        t, t_low = _tick(t, t_low, root)
+        last = kind == K_TIME
         if dense:
-            stop = t
-            while next_sample < times.size and times[next_sample] <= stop:
+            while next_sample < times.size and times[next_sample] <= t:
                 if times[next_sample] >= t_old:
                     s = times[next_sample] - t_old
                     _dense(F, s, h, dz)
@@ -588,12 +630,12 @@ def contact_phase(
                     _sample_forces(row, lam, active)
                 next_sample += 1
         if kind != K_TIME:
-            return kind, index, t, x, v, steps, next_sample, h_abs
+            return kind, index, t, t_low, steps, next_sample, h_abs
         if t >= t_end:
-            return K_TIME, -1, t, x, v, steps, next_sample, h_abs
+            return K_TIME, -1, t, t_low, steps, next_sample, h_abs
         if watch_rest and settled(masses, x, v, level):
-            return K_REST, -1, t, x, v, steps, next_sample, h_abs
-    return K_STEPS, -1, t, x, v, steps, next_sample, h_abs
+            return K_REST, -1, t, t_low, steps, next_sample, h_abs
+    return K_STEPS, -1, t, t_low, steps, next_sample, h_abs
 
 
 @njit
@@ -604,6 +646,8 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
     end) rows, contacts before the top ball's first apex, samples (times, 3N))."""
     n = masses.size
     x, v = x_start.copy(), np.zeros(n)
+    eta, deta = np.empty(n), np.empty(n)
+    _overlaps(x, v, eta, deta)
     force_bound = force_bounds(masses, lam, energy(masses, x, v))
     level = rest_level(masses)
     weights = _weights(masses)
@@ -623,23 +667,22 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
     next_sample = 0
     status = STATUS_PHASES
     steps = 0
-    t = 0.0
+    t, t_low = 0.0, 0.0  # the clock, t + t_low (_tick)
     switched_at = 0.0
     resting = False
     h_abs = math.inf
     while steps < MAX_STEPS:
         if not active.any():
-            tau, kind, index = _next_in_flight(lam, x, v, t_end - t)
+            tau, kind, index = _next_in_flight(lam, eta, deta, v, t_end - t)
             next_sample = _record(times, samples, next_sample, t, t + tau, x, v, lam, active)
-            for j in range(n):
-                x[j] += v[j] * tau - 0.5 * tau * tau
-                v[j] -= tau
-            t += tau
+            z = np.zeros(2 * n)
+            _advance(tau, z, x, v, eta, deta)
+            t, t_low = _tick(t, t_low, tau)
             steps += 1
         else:
-            kind, index, t, x, v, steps, next_sample, h_abs = contact_phase(
-                masses, lam, x, v, t, active, force_bound, t_end, steps, fresh, not resting,
-                times, samples, next_sample, atol, h_abs, level,
+            kind, index, t, t_low, steps, next_sample, h_abs = contact_phase(
+                masses, lam, x, v, eta, deta, t, t_low, active, force_bound, t_end, steps, fresh,
+                not resting, times, samples, next_sample, atol, h_abs, level,
             )  # fmt: skip
             steps += 1  # a phase counts, so that a run always ends
         if kind == K_TIME or (resting and next_sample == times.size):
