@@ -38,6 +38,7 @@ MAX_STEPS = 300_000  # a run that cannot end fails within seconds (a step takes 
 RTOL = 1e-15  # local error of w (and w') per step, relative to the contact's scale
 PROBES = 8  # dense-output points per step where the clamp is looked for
 AHEAD = 4.0  # steps certified at once
+APPROACH = 0.8  # towards a release, steps shrink as (time left to it)^APPROACH
 
 _STAGES = _dop853.N_STAGES
 _A = np.ascontiguousarray(_dop853.A[:_STAGES, :_STAGES])
@@ -137,13 +138,25 @@ def _overlaps(x, v, eta, deta) -> None:
 
 @njit
 def _tick(t, t_low, s):
-    """The clock t + t_low moved on by s: a compensated sum (Knuth's two-sum), so that a run of
-    thousands of steps keeps the time to an ulp rather than losing one at every step."""
+    """t + t_low moved on by s, a compensated sum (Knuth's two-sum): the clock, or a carried
+    quantity, kept to an ulp over thousands of steps rather than losing one at every step."""
     total = t + s
     moved = total - t
     t_low += (t - (total - moved)) + (s - moved)
     high = total + t_low
     return high, t_low - (high - total)
+
+
+@njit
+def _product(a, b):
+    """a b as p + e exactly (Dekker's two-product)."""
+    p = a * b
+    a_high = a * 134217729.0
+    a_high -= a_high - a
+    b_high = b * 134217729.0
+    b_high -= b_high - b
+    a_low, b_low = a - a_high, b - b_high
+    return p, ((a_high * b_high - p) + a_high * b_low + a_low * b_high) + a_low * b_low
 
 
 @njit
@@ -321,21 +334,35 @@ def _state_at(s, x0, v0, z, x, v) -> None:
 
 
 @njit
-def _advance(s, z, x, v, eta, deta) -> None:
-    """Move the carried state on by s from a step's start, w, w' = z there: each height and
-    velocity by its change, and each overlap and its rate by theirs (eta += D v s + D w, minus
-    s^2 / 2 for the floor), never as a difference of heights of order H, which would round eta
-    to an ulp of H at every step."""
-    n = x.size
-    for c in range(n):
-        eta[c] += deta[c] * s + (z[c] - (z[c - 1] if c >= 1 else 0.0))
-        deta[c] += z[n + c] - (z[n + c - 1] if c >= 1 else 0.0)
-        if c == 0:
-            eta[c] -= 0.5 * s * s
-            deta[c] -= s
+def _advance(s, z, state, low) -> None:
+    """Move the carried state (rows: heights x, velocities v, overlaps eta, their rates eta'),
+    each as state + low (:func:`_tick`), on by s from a step's start, w, w' = z there: each by
+    its change (x += v s - s^2/2 + w, eta += eta' s + D w, minus s^2/2 for the floor), products
+    exact. The overlaps are never differences of heights of order H, which would round eta to
+    an ulp of H at every step, and nothing loses an ulp of itself at every step or flight (over
+    thousands, heights of 1e6 drifted from their overlaps by 1e-8)."""
+    n = state.shape[1]
+    half, half_low = _product(0.5 * s, s)
     for j in range(n):
-        x[j] += v[j] * s - 0.5 * s * s + z[j]
-        v[j] += z[n + j] - s
+        # x_j += v_j s - s^2/2 + w_j
+        moved, moved_low = _product(state[1, j] + low[1, j], s)
+        high, part = _tick(state[0, j], low[0, j] + moved_low - half_low, moved)
+        high, part = _tick(high, part, -half)
+        state[0, j], low[0, j] = _tick(high, part, z[j])
+        # v_j += w_j' - s
+        high, part = _tick(state[1, j], low[1, j], -s)
+        state[1, j], low[1, j] = _tick(high, part, z[n + j])
+        # eta_c += eta_c' s + w_c - w_(c-1), minus s^2/2 for the floor
+        moved, moved_low = _product(state[3, j] + low[3, j], s)
+        high, part = _tick(state[2, j], low[2, j] + moved_low, moved)
+        if j == 0:
+            high, part = _tick(high, part - half_low, -half)
+        state[2, j], low[2, j] = _tick(high, part, z[j] - (z[j - 1] if j >= 1 else 0.0))
+        # eta_c' += w_c' - w_(c-1)', minus s for the floor
+        high, part = state[3, j], low[3, j]
+        if j == 0:
+            high, part = _tick(high, part, -s)
+        state[3, j], low[3, j] = _tick(high, part, z[n + j] - (z[n + j - 1] if j >= 1 else 0.0))
 
 
 @njit
@@ -466,12 +493,11 @@ def _dop853_step(h, stages, z_new, dz, eta0, deta0, masses, lam, active, forces)
 
 @njit
 def contact_phase(
-    masses, lam, x, v, eta, deta, t, t_low, active, force_bound, t_end, steps, fresh,
-    watch_rest, times, samples, next_sample, atol, h_abs, level,
+    masses, lam, state, low, t, t_low, active, force_bound, t_end, steps, fresh, watch_rest,
+    times, samples, next_sample, atol, h_abs, level,
 ):  # fmt: skip
     """Integrate a phase with a contact active to its first event (see the module), moving the
-    heights ``x``, velocities ``v``, overlaps ``eta`` and their rates ``deta`` on in place, the
-    clock as t + t_low (:func:`_tick`).
+    carried state + low on in place (:func:`_advance`), the clock as t + t_low (:func:`_tick`).
 
     Returns (kind, index, t, t_low, steps, next_sample, h_abs): kind K_FAILED when a step falls
     below the spacing of the clock (beyond the domain double precision carries)."""
@@ -485,13 +511,14 @@ def contact_phase(
     before, after, previous, now = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     scratch = np.empty(n)
     work = np.empty((3, n))
+    full = state + low  # the carried state, rounded: x, v, eta, eta' (views below)
+    x, v, eta, deta = full[0], full[1], full[2], full[3]
     x_old, v_old = np.empty(n), np.empty(n)
     watched = np.zeros(n, dtype=np.bool_)
     for j in range(n):
         watched[j] = not active[j] and not (j + 1 < n and active[j + 1]) and v[j] > 0.0
     at_start = True
     last = False  # stages[_STAGES] holds the forces at this step's start (first same as last)
-    h_last = 0.0  # the last accepted step
     certified = -math.inf  # no overlap reaches its root unseen before this time
     bounds = np.empty(n)  # |eta''| <= bounds until then
     while steps < MAX_STEPS:
@@ -517,6 +544,7 @@ def contact_phase(
             _rhs(0.0, z, stages[0], eta0, deta0, masses, lam, active, forces)
         # one DOP853 step (scipy's rk_step and error estimate), w and w' from zero
         rejected = False
+        h_tried, norm_tried = 0.0, 0.0  # the last rejected try
         while True:
             h = min(h_abs, max_step)
             if t + h > t_end:
@@ -540,14 +568,27 @@ def contact_phase(
                 norm = h * err5 / math.sqrt((err5 + 0.01 * err3) * m)
             if norm < 1.0:
                 factor = MAX_FACTOR if norm == 0.0 else min(MAX_FACTOR, SAFETY * norm**-0.125)
-                if rejected and h < h_last:
-                    # shrinking towards a release, where the error grows faster than the
-                    # controller's h^8 predicts: keep shrinking (a third fewer rejected steps)
-                    factor = min(factor, h / h_last)
-                h_last = h
-                h_abs = h * factor
+                approach = 1.0
+                for c in range(n):
+                    if active[c] and eta0[c] < 0.0 < deta0[c] and -eta0[c] > deta0[c] * h:
+                        # towards a release the force, delta^(3/2), is ever less smooth and the
+                        # error grows faster than the controller's h^8 predicts: shrink the
+                        # steps with the time left to it, estimated at the rate (a third of
+                        # the rejected steps)
+                        ahead = -eta0[c] / deta0[c]
+                        approach *= (1.0 - h / ahead) ** APPROACH
+                h_abs = h * factor * max(approach, MIN_FACTOR)
                 break
-            h_abs = h * max(MIN_FACTOR, SAFETY * norm**-0.125)
+            if rejected and h < h_tried and norm < norm_tried:
+                # rejected twice: the error's order in h measured by the two tries (after a
+                # touch the force grows as s^(3/2) from the step's start, the error as about
+                # h^(7/2), and shrinking by h^8's rule took a dozen tries)
+                order = min(max(math.log(norm_tried / norm) / math.log(h_tried / h), 2.0), 8.0)
+                shrink = max(SAFETY * norm ** (-1.0 / order), MIN_FACTOR**4)
+            else:
+                shrink = max(MIN_FACTOR, SAFETY * norm**-0.125)
+            h_tried, norm_tried = h, norm
+            h_abs = h * shrink
             rejected = True
         steps += 1
         # the events in the step: each switching function at the end (and, for the clamp, at
@@ -584,7 +625,7 @@ def contact_phase(
         root, kind, index = h, K_TIME, -1
         if crossed or damped:
             previous[:] = before
-            low = 0.0
+            since = 0.0
             probes = PROBES + 1 if damped else 1
             for probe in range(1, probes + 1):
                 s = h * probe / probes
@@ -597,13 +638,13 @@ def contact_phase(
                 for c in range(n):
                     if previous[c] >= 0.0 and now[c] < 0.0:
                         found = True
-                        when = _bisect(lam, active, F, h, eta0, deta0, c, low, s, t, z, scratch)
+                        when = _bisect(lam, active, F, h, eta0, deta0, c, since, s, t, z, scratch)
                         if when < root or kind == K_TIME:
                             root, kind, index = when, K_SWITCH, c
                 if found:
                     break
                 previous[:] = now
-                low = s
+                since = s
         for j in range(n):
             if watched[j] and 0.0 < v[j] <= h and (v[j] < root or kind == K_TIME):
                 root, kind, index = v[j], K_APEX, j
@@ -617,7 +658,8 @@ def contact_phase(
             _dop853_step(root, stages, z, dz, eta0, deta0, masses, lam, active, forces)
             if kind == K_APEX:
                 z[index], z[n + index] = 0.0, 0.0
-        _advance(root, z, x, v, eta, deta)
+        _advance(root, z, state, low)
+        full[:] = state + low
         t, t_low = _tick(t, t_low, root)
         last = kind == K_TIME
         if dense:
@@ -645,8 +687,9 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
     (empty: none). Returns (status, end time, apexes (ball, t, h) rows, contact (contact, start,
     end) rows, contacts before the top ball's first apex, samples (times, 3N))."""
     n = masses.size
-    x, v = x_start.copy(), np.zeros(n)
-    eta, deta = np.empty(n), np.empty(n)
+    state, low = np.zeros((4, n)), np.zeros((4, n))  # x, v, eta, eta', each as state + low
+    x, v, eta, deta = state[0], state[1], state[2], state[3]  # views of the larger part
+    x[:] = x_start
     _overlaps(x, v, eta, deta)
     force_bound = force_bounds(masses, lam, energy(masses, x, v))
     level = rest_level(masses)
@@ -673,15 +716,18 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
     h_abs = math.inf
     while steps < MAX_STEPS:
         if not active.any():
-            tau, kind, index = _next_in_flight(lam, eta, deta, v, t_end - t)
-            next_sample = _record(times, samples, next_sample, t, t + tau, x, v, lam, active)
-            z = np.zeros(2 * n)
-            _advance(tau, z, x, v, eta, deta)
-            t, t_low = _tick(t, t_low, tau)
+            full = state + low
+            tau, kind, index = _next_in_flight(lam, full[2], full[3], full[1], t_end - t)
+            t_next, t_low = _tick(t, t_low, tau)
+            next_sample = _record(
+                times, samples, next_sample, t, t_next, full[0], full[1], lam, active
+            )
+            _advance(tau, np.zeros(2 * n), state, low)
+            t = t_next
             steps += 1
         else:
             kind, index, t, t_low, steps, next_sample, h_abs = contact_phase(
-                masses, lam, x, v, eta, deta, t, t_low, active, force_bound, t_end, steps, fresh,
+                masses, lam, state, low, t, t_low, active, force_bound, t_end, steps, fresh,
                 not resting, times, samples, next_sample, atol, h_abs, level,
             )  # fmt: skip
             steps += 1  # a phase counts, so that a run always ends
@@ -700,9 +746,13 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
         else:
             fresh[:] = False
         if kind == K_APEX:
-            v[index] = 0.0
+            v[index], low[1, index] = 0.0, 0.0
             apexes = _room_for_one(apexes, n_apex)
-            apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, x[index]
+            apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = (
+                index,
+                t,
+                x[index] + low[0, index],
+            )
             n_apex += 1
             if index == n - 1:
                 top_apexes += 1
