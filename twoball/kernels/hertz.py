@@ -334,13 +334,14 @@ def _state_at(s, x0, v0, z, x, v) -> None:
 
 
 @njit
-def _advance(s, z, state, low) -> None:
+def _advance(s, z, state, low, full) -> None:
     """Move the carried state (rows: heights x, velocities v, overlaps eta, their rates eta'),
     each as state + low (:func:`_tick`), on by s from a step's start, w, w' = z there: each by
     its change (x += v s - s^2/2 + w, eta += eta' s + D w, minus s^2/2 for the floor), products
     exact. The overlaps are never differences of heights of order H, which would round eta to
     an ulp of H at every step, and nothing loses an ulp of itself at every step or flight (over
-    thousands, heights of 1e6 drifted from their overlaps by 1e-8)."""
+    thousands, heights of 1e6 drifted from their overlaps by 1e-8). ``full``: their sums,
+    rounded."""
     n = state.shape[1]
     half, half_low = _product(0.5 * s, s)
     for j in range(n):
@@ -363,6 +364,8 @@ def _advance(s, z, state, low) -> None:
         if j == 0:
             high, part = _tick(high, part, -s)
         state[3, j], low[3, j] = _tick(high, part, z[n + j] - (z[n + j - 1] if j >= 1 else 0.0))
+        for row in range(4):
+            full[row, j] = state[row, j] + low[row, j]
 
 
 @njit
@@ -400,7 +403,9 @@ def _due(masses, lam, x, overlaps, rates, t, active, fresh, at_start, accel, for
     """The first contact whose switch is here (at its root to rounding and moving through it,
     or past it), -1 if none (twoball.stacks.hertz._switching)."""
     n = masses.size
-    heights = 1.0 + np.abs(x).sum()
+    heights = 1.0
+    for j in range(n):
+        heights += abs(x[j])
     for c in range(n):
         forces[c] = 0.0
         eta, deta = overlaps[c], rates[c]
@@ -493,11 +498,12 @@ def _dop853_step(h, stages, z_new, dz, eta0, deta0, masses, lam, active, forces)
 
 @njit
 def contact_phase(
-    masses, lam, state, low, t, t_low, active, force_bound, t_end, steps, fresh, watch_rest,
+    masses, lam, state, low, full, t, t_low, active, force_bound, t_end, steps, fresh, watch_rest,
     times, samples, next_sample, atol, h_abs, level,
 ):  # fmt: skip
     """Integrate a phase with a contact active to its first event (see the module), moving the
-    carried state + low on in place (:func:`_advance`), the clock as t + t_low (:func:`_tick`).
+    carried state + low (and ``full``, their sum) on in place (:func:`_advance`), the clock as
+    t + t_low (:func:`_tick`).
 
     Returns (kind, index, t, t_low, steps, next_sample, h_abs): kind K_FAILED when a step falls
     below the spacing of the clock (beyond the domain double precision carries)."""
@@ -511,7 +517,6 @@ def contact_phase(
     before, after, previous, now = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     scratch = np.empty(n)
     work = np.empty((3, n))
-    full = state + low  # the carried state, rounded: x, v, eta, eta' (views below)
     x, v, eta, deta = full[0], full[1], full[2], full[3]
     x_old, v_old = np.empty(n), np.empty(n)
     watched = np.zeros(n, dtype=np.bool_)
@@ -658,8 +663,7 @@ def contact_phase(
             _dop853_step(root, stages, z, dz, eta0, deta0, masses, lam, active, forces)
             if kind == K_APEX:
                 z[index], z[n + index] = 0.0, 0.0
-        _advance(root, z, state, low)
-        full[:] = state + low
+        _advance(root, z, state, low, full)
         t, t_low = _tick(t, t_low, root)
         last = kind == K_TIME
         if dense:
@@ -688,9 +692,11 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
     end) rows, contacts before the top ball's first apex, samples (times, 3N))."""
     n = masses.size
     state, low = np.zeros((4, n)), np.zeros((4, n))  # x, v, eta, eta', each as state + low
+    full, zeros = np.zeros((4, n)), np.zeros(2 * n)  # state + low, rounded; no w in flight
     x, v, eta, deta = state[0], state[1], state[2], state[3]  # views of the larger part
     x[:] = x_start
     _overlaps(x, v, eta, deta)
+    full[:] = state
     force_bound = force_bounds(masses, lam, energy(masses, x, v))
     level = rest_level(masses)
     weights = _weights(masses)
@@ -716,18 +722,17 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
     h_abs = math.inf
     while steps < MAX_STEPS:
         if not active.any():
-            full = state + low
             tau, kind, index = _next_in_flight(lam, full[2], full[3], full[1], t_end - t)
             t_next, t_low = _tick(t, t_low, tau)
             next_sample = _record(
                 times, samples, next_sample, t, t_next, full[0], full[1], lam, active
             )
-            _advance(tau, np.zeros(2 * n), state, low)
+            _advance(tau, zeros, state, low, full)
             t = t_next
             steps += 1
         else:
             kind, index, t, t_low, steps, next_sample, h_abs = contact_phase(
-                masses, lam, state, low, t, t_low, active, force_bound, t_end, steps, fresh,
+                masses, lam, state, low, full, t, t_low, active, force_bound, t_end, steps, fresh,
                 not resting, times, samples, next_sample, atol, h_abs, level,
             )  # fmt: skip
             steps += 1  # a phase counts, so that a run always ends
@@ -746,7 +751,7 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
         else:
             fresh[:] = False
         if kind == K_APEX:
-            v[index], low[1, index] = 0.0, 0.0
+            v[index], low[1, index], full[1, index] = 0.0, 0.0, 0.0
             apexes = _room_for_one(apexes, n_apex)
             apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = (
                 index,
