@@ -399,6 +399,18 @@ def _switch_values(lam, active, s, z, eta0, deta0, out) -> None:
 
 
 @njit
+def _accelerations(masses, lam, overlaps, rates, active, forces, accel) -> None:
+    """Each ball's acceleration (into ``accel``) from the active contacts' forces."""
+    n = masses.size
+    for c in range(n):
+        forces[c] = 0.0
+        if active[c] and overlaps[c] < 0.0:
+            forces[c] = _power(-overlaps[c]) * max(1.0 - lam[c] * rates[c], 0.0)
+    for j in range(n):
+        accel[j] = -1.0 + (forces[j] - (forces[j + 1] if j + 1 < n else 0.0)) / masses[j]
+
+
+@njit
 def _due(masses, lam, x, overlaps, rates, t, active, fresh, at_start, accel, forces) -> int:
     """The first contact whose switch is here (at its root to rounding and moving through it,
     or past it), -1 if none (twoball.stacks.hertz._switching)."""
@@ -406,13 +418,7 @@ def _due(masses, lam, x, overlaps, rates, t, active, fresh, at_start, accel, for
     heights = 1.0
     for j in range(n):
         heights += abs(x[j])
-    for c in range(n):
-        forces[c] = 0.0
-        eta, deta = overlaps[c], rates[c]
-        if active[c] and eta < 0.0:
-            forces[c] = _power(-eta) * max(1.0 - lam[c] * deta, 0.0)
-    for j in range(n):
-        accel[j] = -1.0 + (forces[j] - (forces[j + 1] if j + 1 < n else 0.0)) / masses[j]
+    accelerated = False  # the accelerations, needed only at a clamp reached to rounding
     for c in range(n):
         if at_start and fresh[c]:
             continue  # it has just switched
@@ -422,8 +428,12 @@ def _due(masses, lam, x, overlaps, rates, t, active, fresh, at_start, accel, for
             value, rate = eta, deta
             rounding = 16e-16 * (heights + abs(deta) * (1.0 + abs(t)))
         else:
-            value, rate = g, lam[c] * (accel[c] - (accel[c - 1] if c >= 1 else 0.0))
-            rounding = 1e-12
+            value, rate, rounding = g, 0.0, 1e-12
+            if abs(value) <= rounding:
+                if not accelerated:
+                    _accelerations(masses, lam, overlaps, rates, active, forces, accel)
+                    accelerated = True
+                rate = lam[c] * (accel[c] - (accel[c - 1] if c >= 1 else 0.0))
         if active[c]:
             value, rate = -value, -rate
         if value < -rounding or (value <= rounding and rate < 0.0):
