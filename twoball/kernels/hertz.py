@@ -3,16 +3,20 @@ Hertz force"): the method of :mod:`twoball.stacks.hertz` in numba, with a differ
 
 Free flight is exact (parabolas; touches, clamps and apexes are roots of quadratics). A phase
 with a contact active is integrated by DOP853 (the coefficients of Hairer's and scipy's, seventh
-order dense output), compiled here, with two changes that make it accurate to ~1e-13 where
-scipy's was off by up to 1e-6 (docs/accuracy.md, "The Hertz stack"):
+order dense output), compiled here, with changes that make it accurate to ~1e-14 in h1 where
+scipy's was off by up to 1e-6 in h2 (docs/accuracy.md, "The Hertz stack"):
 
 - **Each step integrates the contact forces' effect only.** From a step's start (x0, v0), every
   height is x0 + v0 s - s^2/2 + w(s), and the integrator carries w, w' from zero, with
-  w_j'' = (f_j - f_(j+1)) / m_j. The overlaps are eta = D x0 + D v0 s - [floor] s^2/2 + D w,
-  never the difference of two large heights rebuilt at every stage; a ball in free flight has
-  w = 0 exactly, so its apex is exact (s = v0).
+  w_j'' = (f_j - f_(j+1)) / m_j; a ball in free flight has w = 0 exactly, so its apex is exact
+  (s = v0).
 - **The error is measured on that w against the contact's own scale** (rtol :data:`RTOL`, atol
   rtol times the largest compression and speed the energy allows), not on heights of order H.
+- **Nothing is rounded to an ulp of H at every step** (:func:`_advance`): the overlaps eta and
+  their rates are carried from step to step, never rebuilt as differences of heights, and every
+  carried quantity and the clock is a compensated sum moved on with exact products.
+- **The state at an event is a step's own**: a switch or an apex is located on the dense output,
+  and the state there taken from a step to it (eighth order), not from the interpolant.
 
 No touch or release is stepped over: the certified steps of :mod:`twoball.stacks.hertz` (the energy,
 which never rises, bounds every force; with the contacts active in a phase that bounds eta''
