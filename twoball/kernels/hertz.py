@@ -339,13 +339,10 @@ def _state_at(s, x0, v0, z, x, v) -> None:
 
 @njit
 def _advance(s, z, state, low, full) -> None:
-    """Move the carried state (rows: heights x, velocities v, overlaps eta, their rates eta'),
-    each as state + low (:func:`_tick`), on by s from a step's start, w, w' = z there: each by
-    its change (x += v s - s^2/2 + w, eta += eta' s + D w, minus s^2/2 for the floor), products
-    exact. The overlaps are never differences of heights of order H, which would round eta to
-    an ulp of H at every step, and nothing loses an ulp of itself at every step or flight (over
-    thousands, heights of 1e6 drifted from their overlaps by 1e-8). ``full``: their sums,
-    rounded."""
+    """Move the carried state (rows x, v, eta, eta', each as state + low, :func:`_tick`; ``full``
+    their rounded sums) on by s from a step's start, w, w' = z there, each by its change, products
+    exact: eta never rebuilt from heights of order H, nothing losing an ulp of itself per step
+    (over thousands of steps, heights of 1e6 had drifted from their overlaps by 1e-8)."""
     n = state.shape[1]
     half, half_low = _product(0.5 * s, s)
     for j in range(n):
@@ -767,11 +764,8 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
         if kind == K_APEX:
             v[index], low[1, index], full[1, index] = 0.0, 0.0, 0.0
             apexes = _room_for_one(apexes, n_apex)
-            apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = (
-                index,
-                t,
-                x[index] + low[0, index],
-            )
+            apexes[n_apex, 0], apexes[n_apex, 1] = index, t
+            apexes[n_apex, 2] = x[index] + low[0, index]
             n_apex += 1
             if index == n - 1:
                 top_apexes += 1
