@@ -79,19 +79,21 @@ def test_energy_never_rises():
 
 @pytest.mark.parametrize(("ratios", "height"), [([0.3], 1e4), ([0.2, 0.2], 1e5)])
 def test_elastic_contacts_conserve_energy(ratios, height):
-    """Sampled through every contact to the second apex: measured 1e-12 and 2e-11 (the DOP853
-    reference method: 3e-9 and 3e-7)."""
+    """Sampled through every contact to the second apex: measured 2e-13 and 9e-13 (the DOP853
+    reference method: 3e-9 and 3e-7; heights of 1e6 rounded step by step, before the compiled
+    path carried them as compensated sums: 2e-10)."""
     first = simulate_stack(ratios, 1.0, 0.5, force="hertz", height=height)
     sampled = simulate_stack(ratios, 1.0, 0.5, force="hertz", height=height, t_eval=_times(first))
     energy = _energy(sampled)
-    assert np.ptp(energy) <= 1e-10 * energy[0]
+    assert np.ptp(energy) <= 5e-12 * energy[0]
 
 
 @pytest.mark.parametrize("height", [1e2, 5e4, 1e5])
 def test_a_lone_elastic_floor_contact_gives_back_the_energy(height):
     """Ball 0's energy before and after its first floor contact, alone (ball 1 meets it only
-    after it has left the floor): measured 1e-13 (the DOP853 reference method: 5e-11 to 1e-10,
-    the error that put h2 off)."""
+    after it has left the floor): measured 1e-15 to 6e-15, ten to forty ulps of the energy, the
+    rounding of the two samples (the DOP853 reference method: 5e-11 to 1e-10, the error that put
+    h2 off)."""
     first = simulate_stack([0.3], 1.0, 5.0, force="hertz", height=height, until="first")
     floor = next(c for c in first.contacts if c.contact == 0)
     ball = next(c for c in first.contacts if c.contact == 1)
@@ -102,7 +104,7 @@ def test_a_lone_elastic_floor_contact_gives_back_the_energy(height):
     )
     x, v = sampled.trajectory.x[:, 0], sampled.trajectory.v[:, 0]
     energy = 0.5 * v**2 + x
-    assert abs(energy[1] - energy[0]) <= 2e-12 * energy[0]
+    assert abs(energy[1] - energy[0]) <= 2e-14 * energy[0]
 
 
 @pytest.mark.parametrize(
@@ -312,8 +314,8 @@ def _case(row: dict) -> dict:
 def test_the_compiled_path_against_the_30_digit_reference():
     """Every drop of docs/hertz_vs_truth.csv (docs/accuracy.md, "The Hertz stack"), the solver as
     it is now against the stored reference values: equal contact counts and h1 within the rule
-    (1e-10 or ten times its conditioning) on all; h2 within it on all but the eight drops the
-    table lists as outside, and on those within 1e-9 or 1e4 times its conditioning (2.2e3
+    (1e-10 or ten times its conditioning) on all; h2 within it on all but the three drops the
+    table lists as outside, and on those within 1e-9 or 1e3 times its conditioning (80
     measured), so that a regression shows."""
     from twoball.studies import hertz_truth
 
@@ -328,8 +330,8 @@ def test_the_compiled_path_against_the_30_digit_reference():
         assert hertz_truth.within({**row, "rel_err_h2": 0.0}), (stored, row)  # h1
         if not hertz_truth.within(row):
             outside += 1
-            assert row["rel_err_h2"] <= max(1e-9, 1e4 * row["cond_h2"]), (stored, row)
-    assert outside <= 8
+            assert row["rel_err_h2"] <= max(1e-9, 1e3 * row["cond_h2"]), (stored, row)
+    assert outside <= 3
 
 
 def test_the_hertz_rule_refuses_what_it_should():

@@ -3,16 +3,20 @@ Hertz force"): the method of :mod:`twoball.stacks.hertz` in numba, with a differ
 
 Free flight is exact (parabolas; touches, clamps and apexes are roots of quadratics). A phase
 with a contact active is integrated by DOP853 (the coefficients of Hairer's and scipy's, seventh
-order dense output), compiled here, with two changes that make it accurate to ~1e-13 where
-scipy's was off by up to 1e-6 (docs/accuracy.md, "The Hertz stack"):
+order dense output), compiled here, with changes that make it accurate to ~1e-14 in h1 where
+scipy's was off by up to 1e-6 in h2 (docs/accuracy.md, "The Hertz stack"):
 
 - **Each step integrates the contact forces' effect only.** From a step's start (x0, v0), every
   height is x0 + v0 s - s^2/2 + w(s), and the integrator carries w, w' from zero, with
-  w_j'' = (f_j - f_(j+1)) / m_j. The overlaps are eta = D x0 + D v0 s - [floor] s^2/2 + D w,
-  never the difference of two large heights rebuilt at every stage; a ball in free flight has
-  w = 0 exactly, so its apex is exact (s = v0).
+  w_j'' = (f_j - f_(j+1)) / m_j; a ball in free flight has w = 0 exactly, so its apex is exact
+  (s = v0).
 - **The error is measured on that w against the contact's own scale** (rtol :data:`RTOL`, atol
   rtol times the largest compression and speed the energy allows), not on heights of order H.
+- **Nothing is rounded to an ulp of H at every step** (:func:`_advance`): the overlaps eta and
+  their rates are carried from step to step, never rebuilt as differences of heights, and every
+  carried quantity and the clock is a compensated sum moved on with exact products.
+- **The state at an event is a step's own**: a switch or an apex is located on the dense output,
+  and the state there taken from a step to it (eighth order), not from the interpolant.
 
 No touch or release is stepped over: the certified steps of :mod:`twoball.stacks.hertz` (the energy,
 which never rises, bounds every force; with the contacts active in a phase that bounds eta''
@@ -35,9 +39,10 @@ from twoball.kernels.codes import STATUS_DONE, STATUS_FAILED, STATUS_PHASES, STA
 from twoball.kernels.runs import _room_for_one
 
 MAX_STEPS = 300_000  # a run that cannot end fails within seconds (a step takes ~3 us)
-RTOL = 1e-14  # local error of w (and w') per step, relative to the contact's scale
+RTOL = 1e-15  # local error of w (and w') per step, relative to the contact's scale
 PROBES = 8  # dense-output points per step where the clamp is looked for
 AHEAD = 4.0  # steps certified at once
+APPROACH = 0.8  # towards a release, steps shrink as (time left to it)^APPROACH
 
 _STAGES = _dop853.N_STAGES
 _A = np.ascontiguousarray(_dop853.A[:_STAGES, :_STAGES])
@@ -136,6 +141,29 @@ def _overlaps(x, v, eta, deta) -> None:
 
 
 @njit
+def _tick(t, t_low, s):
+    """t + t_low moved on by s, a compensated sum (Knuth's two-sum): the clock, or a carried
+    quantity, kept to an ulp over thousands of steps rather than losing one at every step."""
+    total = t + s
+    moved = total - t
+    t_low += (t - (total - moved)) + (s - moved)
+    high = total + t_low
+    return high, t_low - (high - total)
+
+
+@njit
+def _product(a, b):
+    """a b as p + e exactly (Dekker's two-product)."""
+    p = a * b
+    a_high = a * 134217729.0
+    a_high -= a_high - a
+    b_high = b * 134217729.0
+    b_high -= b_high - b
+    a_low, b_low = a - a_high, b - b_high
+    return p, ((a_high * b_high - p) + a_high * b_low + a_low * b_high) + a_low * b_low
+
+
+@njit
 def _rounding(x, deta, t, c) -> float:
     """The rounding of eta_c: 16 ulp of the heights plus eta' times 16 ulp of the clock."""
     heights = 1.0
@@ -191,14 +219,13 @@ def _local_forces(masses, lam, eta, deta, active, span, force_bound, both, towar
 
 
 @njit
-def certified_step(masses, lam, x, v, t, force_bound, active, wanted, work) -> float:
+def certified_step(masses, lam, x, eta, deta, t, force_bound, active, wanted, work) -> float:
     """A step over which no overlap changes sign unseen (twoball.stacks.hertz._certified_step): from
     the run's force bounds, then doubled while the forces bounded over the step certify it.
     ``wanted`` (the integrator's next step) is tried first: if certified, it is the answer.
-    ``work``: (5, N) scratch; its row 2 is left holding bounds on |eta''| valid over the step
+    ``work``: (3, N) scratch; its row 0 is left holding bounds on |eta''| valid over the step
     returned (those of the last bounds tried, over that step or a longer span)."""
-    eta, deta, both, towards, local = work[0], work[1], work[2], work[3], work[4]
-    _overlaps(x, v, eta, deta)
+    both, towards, local = work[0], work[1], work[2]
     if wanted < math.inf:
         _local_forces(masses, lam, eta, deta, active, wanted, force_bound, both, towards, local)
         _phase_bounds(masses, local, active, both, towards)
@@ -261,19 +288,17 @@ def _first_fall(a, b, c) -> float:
 
 
 @njit
-def _next_in_flight(lam, x, v, horizon):
+def _next_in_flight(lam, eta, deta, v, horizon):
     """(time, kind, index) of the next touch, re-push or apex with every ball in free flight:
     roots of quadratics (exact)."""
-    n = x.size
+    n = v.size
     best, kind, index = horizon, K_TIME, -1
     for c in range(n):
-        eta = x[c] - (x[c - 1] if c >= 1 else 0.0)
-        deta = v[c] - (v[c - 1] if c >= 1 else 0.0)
-        root = _first_fall(-0.5 if c == 0 else 0.0, deta, eta)
+        root = _first_fall(-0.5 if c == 0 else 0.0, deta[c], eta[c])
         if root < best:
             best, kind, index = root, K_SWITCH, c
     # a floor contact clamped while still compressed pushes again once ball 0 slows below 1/lam
-    if x[0] < 0.0 and lam[0] > 0.0:
+    if eta[0] < 0.0 and lam[0] > 0.0:
         again = v[0] - 1.0 / lam[0]
         if 0.0 < again < best:
             best, kind, index = again, K_SWITCH, 0
@@ -313,6 +338,38 @@ def _state_at(s, x0, v0, z, x, v) -> None:
 
 
 @njit
+def _advance(s, z, state, low, full) -> None:
+    """Move the carried state (rows x, v, eta, eta', each as state + low, :func:`_tick`; ``full``
+    their rounded sums) on by s from a step's start, w, w' = z there, each by its change, products
+    exact: eta never rebuilt from heights of order H, nothing losing an ulp of itself per step
+    (over thousands of steps, heights of 1e6 had drifted from their overlaps by 1e-8)."""
+    n = state.shape[1]
+    half, half_low = _product(0.5 * s, s)
+    for j in range(n):
+        # x_j += v_j s - s^2/2 + w_j
+        moved, moved_low = _product(state[1, j] + low[1, j], s)
+        high, part = _tick(state[0, j], low[0, j] + moved_low - half_low, moved)
+        high, part = _tick(high, part, -half)
+        state[0, j], low[0, j] = _tick(high, part, z[j])
+        # v_j += w_j' - s
+        high, part = _tick(state[1, j], low[1, j], -s)
+        state[1, j], low[1, j] = _tick(high, part, z[n + j])
+        # eta_c += eta_c' s + w_c - w_(c-1), minus s^2/2 for the floor
+        moved, moved_low = _product(state[3, j] + low[3, j], s)
+        high, part = _tick(state[2, j], low[2, j] + moved_low, moved)
+        if j == 0:
+            high, part = _tick(high, part - half_low, -half)
+        state[2, j], low[2, j] = _tick(high, part, z[j] - (z[j - 1] if j >= 1 else 0.0))
+        # eta_c' += w_c' - w_(c-1)', minus s for the floor
+        high, part = state[3, j], low[3, j]
+        if j == 0:
+            high, part = _tick(high, part, -s)
+        state[3, j], low[3, j] = _tick(high, part, z[n + j] - (z[n + j - 1] if j >= 1 else 0.0))
+        for row in range(4):
+            full[row, j] = state[row, j] + low[row, j]
+
+
+@njit
 def _dense(F, s, h, z) -> None:
     """z = (w, w') at s in [0, h] from the step's dense output F (DOP853's interpolant)."""
     u = s / h
@@ -343,31 +400,41 @@ def _switch_values(lam, active, s, z, eta0, deta0, out) -> None:
 
 
 @njit
-def _due(masses, lam, x, v, t, active, fresh, at_start, accel, forces) -> int:
+def _accelerations(masses, lam, overlaps, rates, active, forces, accel) -> None:
+    """Each ball's acceleration (into ``accel``) from the active contacts' forces."""
+    n = masses.size
+    for c in range(n):
+        forces[c] = 0.0
+        if active[c] and overlaps[c] < 0.0:
+            forces[c] = _power(-overlaps[c]) * max(1.0 - lam[c] * rates[c], 0.0)
+    for j in range(n):
+        accel[j] = -1.0 + (forces[j] - (forces[j + 1] if j + 1 < n else 0.0)) / masses[j]
+
+
+@njit
+def _due(masses, lam, x, overlaps, rates, t, active, fresh, at_start, accel, forces) -> int:
     """The first contact whose switch is here (at its root to rounding and moving through it,
     or past it), -1 if none (twoball.stacks.hertz._switching)."""
     n = masses.size
-    heights = 1.0 + np.abs(x).sum()
-    for c in range(n):
-        forces[c] = 0.0
-        eta = x[c] - (x[c - 1] if c >= 1 else 0.0)
-        deta = v[c] - (v[c - 1] if c >= 1 else 0.0)
-        if active[c] and eta < 0.0:
-            forces[c] = _power(-eta) * max(1.0 - lam[c] * deta, 0.0)
+    heights = 1.0
     for j in range(n):
-        accel[j] = -1.0 + (forces[j] - (forces[j + 1] if j + 1 < n else 0.0)) / masses[j]
+        heights += abs(x[j])
+    accelerated = False  # the accelerations, needed only at a clamp reached to rounding
     for c in range(n):
         if at_start and fresh[c]:
             continue  # it has just switched
-        eta = x[c] - (x[c - 1] if c >= 1 else 0.0)
-        deta = v[c] - (v[c - 1] if c >= 1 else 0.0)
+        eta, deta = overlaps[c], rates[c]
         g = lam[c] * deta - 1.0
         if eta >= g:
             value, rate = eta, deta
             rounding = 16e-16 * (heights + abs(deta) * (1.0 + abs(t)))
         else:
-            value, rate = g, lam[c] * (accel[c] - (accel[c - 1] if c >= 1 else 0.0))
-            rounding = 1e-12
+            value, rate, rounding = g, 0.0, 1e-12
+            if abs(value) <= rounding:
+                if not accelerated:
+                    _accelerations(masses, lam, overlaps, rates, active, forces, accel)
+                    accelerated = True
+                rate = lam[c] * (accel[c] - (accel[c - 1] if c >= 1 else 0.0))
         if active[c]:
             value, rate = -value, -rate
         if value < -rounding or (value <= rounding and rate < 0.0):
@@ -421,13 +488,35 @@ def _bisect(lam, active, F, h, eta0, deta0, c, low, high, t, z, values) -> float
 
 
 @njit
-def contact_phase(
-    masses, lam, x, v, t, active, force_bound, t_end, steps, fresh, watch_rest, times,
-    samples, next_sample, atol, h_abs, level,
-):  # fmt: skip
-    """Integrate a phase with a contact active to its first event (see the module).
+def _dop853_step(h, stages, z_new, dz, eta0, deta0, masses, lam, active, forces) -> None:
+    """One DOP853 step of w, w' from zero (scipy's rk_step), stages[0] given: the stages, the
+    new z = (w, w') into ``z_new`` and the last stage (at h, for the error and the next step)."""
+    m = z_new.size
+    for stage in range(1, _STAGES):
+        for i in range(m):
+            total = 0.0
+            for k in range(stage):
+                total += stages[k, i] * _A[stage, k]
+            dz[i] = total * h
+        _rhs(_C[stage] * h, dz, stages[stage], eta0, deta0, masses, lam, active, forces)
+    for i in range(m):
+        total = 0.0
+        for k in range(_STAGES):
+            total += stages[k, i] * _B[k]
+        z_new[i] = h * total
+    _rhs(h, z_new, stages[_STAGES], eta0, deta0, masses, lam, active, forces)
 
-    Returns (kind, index, t, x, v, steps, next_sample, h_abs): kind K_FAILED when a step falls
+
+@njit
+def contact_phase(
+    masses, lam, state, low, full, t, t_low, active, force_bound, t_end, steps, fresh, watch_rest,
+    times, samples, next_sample, atol, h_abs, level,
+):  # fmt: skip
+    """Integrate a phase with a contact active to its first event (see the module), moving the
+    carried state + low (and ``full``, their sum) on in place (:func:`_advance`), the clock as
+    t + t_low (:func:`_tick`).
+
+    Returns (kind, index, t, t_low, steps, next_sample, h_abs): kind K_FAILED when a step falls
     below the spacing of the clock (beyond the domain double precision carries)."""
     n = masses.size
     m = 2 * n
@@ -438,54 +527,49 @@ def contact_phase(
     eta0, deta0 = np.empty(n), np.empty(n)
     before, after, previous, now = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     scratch = np.empty(n)
-    work = np.empty((5, n))
+    work = np.empty((3, n))
+    x, v, eta, deta = full[0], full[1], full[2], full[3]
     x_old, v_old = np.empty(n), np.empty(n)
     watched = np.zeros(n, dtype=np.bool_)
     for j in range(n):
         watched[j] = not active[j] and not (j + 1 < n and active[j + 1]) and v[j] > 0.0
-    x, v = x.copy(), v.copy()
     at_start = True
-    h_last = 0.0  # the last accepted step
+    last = False  # stages[_STAGES] holds the forces at this step's start (first same as last)
     certified = -math.inf  # no overlap reaches its root unseen before this time
     bounds = np.empty(n)  # |eta''| <= bounds until then
     while steps < MAX_STEPS:
-        c = _due(masses, lam, x, v, t, active, fresh, at_start, accel, forces)
+        c = _due(masses, lam, x, eta, deta, t, active, fresh, at_start, accel, forces)
         if c >= 0:
-            return K_SWITCH, c, t, x, v, steps, next_sample, h_abs
+            return K_SWITCH, c, t, t_low, steps, next_sample, h_abs
         at_start = False
         if t + h_abs > certified:
             # a certified span holds for every step inside it (no overlap can reach its root
             # unseen there), so certify a few steps ahead at once
-            span = certified_step(masses, lam, x, v, t, force_bound, active, AHEAD * h_abs, work)
+            span = certified_step(
+                masses, lam, x, eta, deta, t, force_bound, active, AHEAD * h_abs, work
+            )
             certified = t + span
-            bounds[:] = work[2]
+            bounds[:] = work[0]
         max_step = certified - t
-        _overlaps(x, v, eta0, deta0)
-        z[:] = 0.0
-        _rhs(0.0, z, stages[0], eta0, deta0, masses, lam, active, forces)
+        eta0[:], deta0[:] = eta, deta
+        if last:
+            stages[0, :n] = 0.0
+            stages[0, n:] = stages[_STAGES, n:]
+        else:
+            z[:] = 0.0
+            _rhs(0.0, z, stages[0], eta0, deta0, masses, lam, active, forces)
         # one DOP853 step (scipy's rk_step and error estimate), w and w' from zero
         rejected = False
+        h_tried, norm_tried = 0.0, 0.0  # the last rejected try
         while True:
             h = min(h_abs, max_step)
             if t + h > t_end:
                 h = t_end - t
             if h < 10.0 * (np.nextafter(t, np.inf) - t):
                 if h == t_end - t:  # the end, closer than a step can go
-                    return K_TIME, -1, t_end, x, v, steps, next_sample, h_abs
-                return K_FAILED, -1, t, x, v, steps, next_sample, h_abs
-            for stage in range(1, _STAGES):
-                for i in range(m):
-                    total = 0.0
-                    for k in range(stage):
-                        total += stages[k, i] * _A[stage, k]
-                    dz[i] = total * h
-                _rhs(_C[stage] * h, dz, stages[stage], eta0, deta0, masses, lam, active, forces)
-            for i in range(m):
-                total = 0.0
-                for k in range(_STAGES):
-                    total += stages[k, i] * _B[k]
-                z_new[i] = h * total
-            _rhs(h, z_new, stages[_STAGES], eta0, deta0, masses, lam, active, forces)
+                    return K_TIME, -1, t_end, 0.0, steps, next_sample, h_abs
+                return K_FAILED, -1, t, t_low, steps, next_sample, h_abs
+            _dop853_step(h, stages, z_new, dz, eta0, deta0, masses, lam, active, forces)
             err5, err3 = 0.0, 0.0
             for i in range(m):
                 scale = atol[i] + RTOL * abs(z_new[i])
@@ -500,18 +584,32 @@ def contact_phase(
                 norm = h * err5 / math.sqrt((err5 + 0.01 * err3) * m)
             if norm < 1.0:
                 factor = MAX_FACTOR if norm == 0.0 else min(MAX_FACTOR, SAFETY * norm**-0.125)
-                if rejected and h < h_last:
-                    # shrinking towards a release, where the error grows faster than the
-                    # controller's h^8 predicts: keep shrinking (a third fewer rejected steps)
-                    factor = min(factor, h / h_last)
-                h_last = h
-                h_abs = h * factor
+                approach = 1.0
+                for c in range(n):
+                    if active[c] and eta0[c] < 0.0 < deta0[c] and -eta0[c] > deta0[c] * h:
+                        # towards a release the force, delta^(3/2), is ever less smooth and the
+                        # error grows faster than the controller's h^8 predicts: shrink the
+                        # steps with the time left to it, estimated at the rate (a third of
+                        # the rejected steps)
+                        ahead = -eta0[c] / deta0[c]
+                        approach *= (1.0 - h / ahead) ** APPROACH
+                h_abs = h * factor * max(approach, MIN_FACTOR)
                 break
-            h_abs = h * max(MIN_FACTOR, SAFETY * norm**-0.125)
+            if rejected and h < h_tried and norm < norm_tried:
+                # rejected twice: the error's order in h measured by the two tries (after a
+                # touch the force grows as s^(3/2) from the step's start, the error as about
+                # h^(7/2), and shrinking by h^8's rule took a dozen tries)
+                order = min(max(math.log(norm_tried / norm) / math.log(h_tried / h), 2.0), 8.0)
+                shrink = max(SAFETY * norm ** (-1.0 / order), MIN_FACTOR**4)
+            else:
+                shrink = max(MIN_FACTOR, SAFETY * norm**-0.125)
+            h_tried, norm_tried = h, norm
+            h_abs = h * shrink
             rejected = True
         steps += 1
         # the events in the step: each switching function at the end (and, for the clamp, at
         # probes of the dense output); each watched ball's apex, exact (w = 0 for it)
+        z[:] = 0.0
         _switch_values(lam, active, 0.0, z, eta0, deta0, before)
         _switch_values(lam, active, h, z_new, eta0, deta0, after)
         damped = _clamp_possible(lam, deta0, h, bounds)
@@ -543,7 +641,7 @@ def contact_phase(
         root, kind, index = h, K_TIME, -1
         if crossed or damped:
             previous[:] = before
-            low = 0.0
+            since = 0.0
             probes = PROBES + 1 if damped else 1
             for probe in range(1, probes + 1):
                 s = h * probe / probes
@@ -556,30 +654,31 @@ def contact_phase(
                 for c in range(n):
                     if previous[c] >= 0.0 and now[c] < 0.0:
                         found = True
-                        when = _bisect(lam, active, F, h, eta0, deta0, c, low, s, t, z, scratch)
+                        when = _bisect(lam, active, F, h, eta0, deta0, c, since, s, t, z, scratch)
                         if when < root or kind == K_TIME:
                             root, kind, index = when, K_SWITCH, c
                 if found:
                     break
                 previous[:] = now
-                low = s
+                since = s
         for j in range(n):
             if watched[j] and 0.0 < v[j] <= h and (v[j] < root or kind == K_TIME):
                 root, kind, index = v[j], K_APEX, j
-        t_old = t
-        if kind == K_TIME:
+        t_old = t + t_low
+        x_old[:], v_old[:] = x, v
+        if kind == K_TIME or root == h:
             z[:] = z_new
-            t = t + h
         else:
-            _dense(F, root, h, z)
-            t = t + root
+            # the state at the event from a step of its own (eighth order), not from the dense
+            # output (seventh): every switch and apex would otherwise add the interpolant's error
+            _dop853_step(root, stages, z, dz, eta0, deta0, masses, lam, active, forces)
             if kind == K_APEX:
                 z[index], z[n + index] = 0.0, 0.0
-        x_old[:], v_old[:] = x, v
-        _state_at(t - t_old if kind == K_TIME else root, x_old, v_old, z, x, v)
+        _advance(root, z, state, low, full)
+        t, t_low = _tick(t, t_low, root)
+        last = kind == K_TIME
         if dense:
-            stop = t
-            while next_sample < times.size and times[next_sample] <= stop:
+            while next_sample < times.size and times[next_sample] <= t:
                 if times[next_sample] >= t_old:
                     s = times[next_sample] - t_old
                     _dense(F, s, h, dz)
@@ -588,12 +687,12 @@ def contact_phase(
                     _sample_forces(row, lam, active)
                 next_sample += 1
         if kind != K_TIME:
-            return kind, index, t, x, v, steps, next_sample, h_abs
+            return kind, index, t, t_low, steps, next_sample, h_abs
         if t >= t_end:
-            return K_TIME, -1, t, x, v, steps, next_sample, h_abs
+            return K_TIME, -1, t, t_low, steps, next_sample, h_abs
         if watch_rest and settled(masses, x, v, level):
-            return K_REST, -1, t, x, v, steps, next_sample, h_abs
-    return K_STEPS, -1, t, x, v, steps, next_sample, h_abs
+            return K_REST, -1, t, t_low, steps, next_sample, h_abs
+    return K_STEPS, -1, t, t_low, steps, next_sample, h_abs
 
 
 @njit
@@ -603,7 +702,12 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
     (empty: none). Returns (status, end time, apexes (ball, t, h) rows, contact (contact, start,
     end) rows, contacts before the top ball's first apex, samples (times, 3N))."""
     n = masses.size
-    x, v = x_start.copy(), np.zeros(n)
+    state, low = np.zeros((4, n)), np.zeros((4, n))  # x, v, eta, eta', each as state + low
+    full, zeros = np.zeros((4, n)), np.zeros(2 * n)  # state + low, rounded; no w in flight
+    x, v, eta, deta = state[0], state[1], state[2], state[3]  # views of the larger part
+    x[:] = x_start
+    _overlaps(x, v, eta, deta)
+    full[:] = state
     force_bound = force_bounds(masses, lam, energy(masses, x, v))
     level = rest_level(masses)
     weights = _weights(masses)
@@ -623,23 +727,24 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
     next_sample = 0
     status = STATUS_PHASES
     steps = 0
-    t = 0.0
+    t, t_low = 0.0, 0.0  # the clock, t + t_low (_tick)
     switched_at = 0.0
     resting = False
     h_abs = math.inf
     while steps < MAX_STEPS:
         if not active.any():
-            tau, kind, index = _next_in_flight(lam, x, v, t_end - t)
-            next_sample = _record(times, samples, next_sample, t, t + tau, x, v, lam, active)
-            for j in range(n):
-                x[j] += v[j] * tau - 0.5 * tau * tau
-                v[j] -= tau
-            t += tau
+            tau, kind, index = _next_in_flight(lam, full[2], full[3], full[1], t_end - t)
+            t_next, t_low = _tick(t, t_low, tau)
+            next_sample = _record(
+                times, samples, next_sample, t, t_next, full[0], full[1], lam, active
+            )
+            _advance(tau, zeros, state, low, full)
+            t = t_next
             steps += 1
         else:
-            kind, index, t, x, v, steps, next_sample, h_abs = contact_phase(
-                masses, lam, x, v, t, active, force_bound, t_end, steps, fresh, not resting,
-                times, samples, next_sample, atol, h_abs, level,
+            kind, index, t, t_low, steps, next_sample, h_abs = contact_phase(
+                masses, lam, state, low, full, t, t_low, active, force_bound, t_end, steps, fresh,
+                not resting, times, samples, next_sample, atol, h_abs, level,
             )  # fmt: skip
             steps += 1  # a phase counts, so that a run always ends
         if kind == K_TIME or (resting and next_sample == times.size):
@@ -657,9 +762,10 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
         else:
             fresh[:] = False
         if kind == K_APEX:
-            v[index] = 0.0
+            v[index], low[1, index], full[1, index] = 0.0, 0.0, 0.0
             apexes = _room_for_one(apexes, n_apex)
-            apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, x[index]
+            apexes[n_apex, 0], apexes[n_apex, 1] = index, t
+            apexes[n_apex, 2] = x[index] + low[0, index]
             n_apex += 1
             if index == n - 1:
                 top_apexes += 1
