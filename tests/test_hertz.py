@@ -4,6 +4,7 @@ independent integration, energy, and the textbook limit."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -317,52 +318,54 @@ def test_the_compiled_path_against_the_30_digit_reference():
     (1e-10 or ten times its conditioning) on all; h2 within it on all but the three drops the
     table lists as outside, and on those within 1e-9 or 1e3 times its conditioning (80
     measured), so that a regression shows."""
-    from twoball.studies import hertz_truth
+    from twoball.studies.hertz_truth import TOLERANCE_H
+    from twoball.studies.stack_comparison import stack_against
 
     rows = _stored_references()
     assert len(rows) >= 20 and {int(r["balls"]) for r in rows} == {2, 3, 4}
     assert any(float(r["eps"]) == 1.0 for r in rows)
     outside = 0
     for stored in rows:
-        row = hertz_truth.against(_case(stored), stored)
-        row["cond_h1"], row["cond_h2"] = float(stored["cond_h1"]), float(stored["cond_h2"])
-        assert row["contacts_first"] == row["contacts_first_truth"], (stored, row)
-        assert hertz_truth.within({**row, "rel_err_h2": 0.0}), (stored, row)  # h1
-        if not hertz_truth.within(row):
+        conditioning = (float(stored["cond_h1"]), float(stored["cond_h2"]))
+        row = stack_against(_case(stored), stored, conditioning, force="hertz")
+        assert row.contacts_first == row.contacts_first_truth, (stored, row)
+        assert replace(row, rel_err_h2=0.0).within(floor=TOLERANCE_H), (stored, row)  # h1
+        if not row.within(floor=TOLERANCE_H):
             outside += 1
-            assert row["rel_err_h2"] <= max(1e-9, 1e3 * row["cond_h2"]), (stored, row)
+            assert row.rel_err_h2 <= max(1e-9, 1e3 * row.cond_h2), (stored, row)
     assert outside <= 3
 
 
 def test_the_hertz_rule_refuses_what_it_should():
-    from twoball.studies.hertz_truth import within
+    from twoball.studies.hertz_truth import TOLERANCE_H
+    from twoball.studies.stack_comparison import StackComparison
 
-    row = {
-        "contacts_first": "2 1",
-        "contacts_first_truth": "2 1",
-        "rel_err_h1": 1e-13,
-        "rel_err_h2": 9e-11,
-        "cond_h1": 1e-15,
-        "cond_h2": 1e-15,
-    }
-    assert within(row)
-    assert not within({**row, "rel_err_h2": 1.1e-10})
-    assert within({**row, "rel_err_h2": 1.1e-10, "cond_h2": 2e-11})  # ten times conditioning
-    assert not within({**row, "contacts_first": "3 1"})
+    row = StackComparison("2 1", "2 1", 1e-13, 9e-11, cond_h1=1e-15, cond_h2=1e-15)
+    assert row.within(floor=TOLERANCE_H)
+    assert not replace(row, rel_err_h2=1.1e-10).within(floor=TOLERANCE_H)
+    ten_times = replace(row, rel_err_h2=1.1e-10, cond_h2=2e-11)  # ten times its conditioning
+    assert ten_times.within(floor=TOLERANCE_H)
+    assert not replace(row, contacts_first="3 1").within(floor=TOLERANCE_H)
 
 
 @pytest.mark.slow  # about 5 s
 def test_one_reference_value_recomputed():
-    """The 30-digit reference (twoball.studies.hertz_truth) recomputes a stored drop to 20
-    digits."""
+    """The 30-digit reference (twoball.studies.hertz_truth) recomputes a stored elastic drop to
+    20 digits, and a damped one to 1e-12: a damped contact's lam is calibrated by scipy's root
+    finder (twoball/stacks/hertz_contact.py), whose last digits differ between machines and
+    libraries (here h1 moved by 1.7e-14 with them), so the reference's input, not its
+    arithmetic, differs there."""
     import mpmath
 
     from twoball.studies import hertz_truth
 
     pairs = [r for r in _stored_references() if r["balls"] == "2"]
-    stored = min(pairs, key=lambda r: float(r["height"]))
-    fresh = hertz_truth.reference(_case(stored))
-    assert fresh["contacts_first_truth"] == stored["contacts_first_truth"]
-    with mpmath.workdps(40):
-        for name in ("h1_truth", "h2_truth"):
-            assert abs(mpmath.mpf(fresh[name]) / mpmath.mpf(stored[name]) - 1) < 1e-20
+    elastic = min((r for r in pairs if r["eps"] == "1.0"), key=lambda r: float(r["height"]))
+    damped = min((r for r in pairs if r["eps"] != "1.0"), key=lambda r: float(r["height"]))
+    for stored, tolerance in ((elastic, 1e-20), (damped, 1e-12)):
+        fresh = hertz_truth.reference(_case(stored))
+        assert fresh["contacts_first_truth"] == stored["contacts_first_truth"]
+        with mpmath.workdps(40):
+            for name in ("h1_truth", "h2_truth"):
+                error = abs(mpmath.mpf(fresh[name]) / mpmath.mpf(stored[name]) - 1)
+                assert error < tolerance, (stored["eps"], name, error)

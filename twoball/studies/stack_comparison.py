@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import mpmath
 
-CONDITIONING_FACTOR = 10.0  # h1 and h2 within this many times their conditioning
+from twoball.studies.conditioning import CONDITIONING_FACTOR  # the two-ball rule's, as here
 
 
 @dataclass(frozen=True)
