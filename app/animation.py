@@ -25,13 +25,20 @@ from bokeh.models import ColumnDataSource, CustomJS, Span, Title
 # Panel's player sends its frame number to the server at every frame (about 1.5 ms of server CPU
 # each, 37 ms a second for each student playing). Once a page has a drop's frames, a playing
 # player's frames stay in the page (setv without sync; the callbacks that draw still run), and
-# the server hears where it stopped (value_throttled, at the pause or the last frame). Where
-# Panel's player lacks what this replaces (a later Panel), the player syncs as before.
+# the server hears where it stopped (value_throttled, at the pause or the last frame). Play at
+# the last frame starts again from the first (Panel's did nothing there, which a teacher took
+# for a broken player). Where Panel's player lacks what this replaces (a later Panel), the
+# player syncs as before.
 LOCAL_PLAY_JS = """
 function install_local_play(view) {
   if (view.twoball_local_play || !view.set_frame || !view.pause_animation
-      || !view.update_title_and_value) return;
+      || !view.play_animation || !view.update_title_and_value) return;
   const set_frame = view.set_frame, pause_animation = view.pause_animation;
+  const play_animation = view.play_animation;
+  view.play_animation = function () {  // from the start again when at the end
+    if (this.model.value >= this.model.end) this.set_frame(this.model.start);
+    play_animation.call(this);
+  };
   view.set_frame = function (frame, throttled = true) {
     const frames = this.model.twoball_frames;
     if (this.timer == null || frames == null || frames.data.t.length == 0)

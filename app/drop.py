@@ -44,6 +44,11 @@ FLIGHT_FRAMES = 240  # evenly spread over the drop
 # (The solver's own plotting grid, 2001 points and 17 a phase, made 57 kB to send a move.)
 PLOTTED = 400
 COLLISION_FRAMES = 90  # added through each collision: slow motion there
+# ... and through all of them together at most: a two-ball drop's four collisions get 90 each;
+# a stack's dozens share them (at 90 each an eight-ball stack had 5 368 frames, 3.5 minutes of
+# play, and nothing visibly moved in its first 7 s)
+SLOW_FRAMES = 360
+MIN_COLLISION_FRAMES = 10
 # Okabe-Ito blue and vermillion: told apart with every common colour-vision deficiency
 LOWER, UPPER = "#0072B2", "#D55E00"
 BALL_RADIUS = 0.06  # of the plot's height: the lower ball as drawn
@@ -83,12 +88,16 @@ def underneath(fig, added: list) -> list:
 
 
 def frame_times(end: float, contacts: list[twoball.ContactInterval]) -> np.ndarray:
-    """The times of the animation's frames: even in flight, dense through each collision."""
+    """The times of the animation's frames: even in flight, dense through each collision
+    (:data:`COLLISION_FRAMES` each, :data:`SLOW_FRAMES` shared by all at most)."""
+    groups = [group for group in collisions(contacts) if group[0].start < end]
+    through_each = max(
+        MIN_COLLISION_FRAMES, min(COLLISION_FRAMES, SLOW_FRAMES // len(groups or [0]))
+    )
     times = [np.linspace(0.0, end, FLIGHT_FRAMES)]
-    for group in collisions(contacts):
+    for group in groups:
         start, stop = group[0].start, max(c.end for c in group)
-        if start < end:
-            times.append(np.linspace(start, min(stop, end), COLLISION_FRAMES))
+        times.append(np.linspace(start, min(stop, end), through_each))
     return np.unique(np.concatenate(times))
 
 

@@ -194,7 +194,7 @@ class StackScene(Scene):
         s = self.state
         values, message = contact_eps(s.stack_eps_contacts, s.balls)
         self.eps_message.object = "" if message is None else (
-            f"**eps per contact:** {message}. Using eps = {s.stack_eps:g} for every contact."
+            f"**eps per contact:** {plain(message)}. Using eps = {s.stack_eps:g} for every contact."
         )  # fmt: skip
         self.eps_message.visible = message is not None
         return s.stack_eps if values is None else values

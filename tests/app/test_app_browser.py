@@ -383,3 +383,24 @@ def test_a_drag_stays_in_the_page_until_the_release(browser, app_server, artifac
         assert errors == []
     finally:
         context.close()
+
+
+def test_play_at_the_last_frame_plays_from_the_first(browser, app_server, artifacts):
+    """Scrubbed to the end, play starts the animation again from its first frame (Panel's
+    player stayed on the last frame, and a teacher took it for broken)."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?{PAPER}")
+    try:
+        frame = page.locator("input[type=range]").last
+        page.locator("button.last").first.click()
+        page.wait_for_timeout(800)
+        last = int(frame.input_value())
+        assert last > 100
+        page.locator("button.play").first.click()
+        page.wait_for_timeout(1200)
+        playing = int(frame.input_value())
+        assert 0 < playing < last / 2, (playing, last)
+        page.locator("button.pause").first.click()
+        assert errors == []
+    finally:
+        context.close()

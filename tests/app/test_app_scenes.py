@@ -570,3 +570,43 @@ def test_a_frame_s_caption_has_four_digits_as_javascript_writes_them(time, capti
     from app.animation import time_caption
 
     assert time_caption(time, "tau") == caption
+
+
+def test_html_typed_as_eps_per_contact_is_shown_as_text():
+    """A stack's eps per contact typed as HTML is quoted in its message, not rendered: no bold,
+    no image loaded (a new user's <img src=x onerror=...> made the page request x)."""
+    from html import unescape
+
+    from bokeh.document import Document as BokehDocument
+
+    explorer = rendered({"scene": "stack"})
+    scene = explorer.scenes["stack"]
+    explorer.state.stack_eps_contacts = "<b>x</b>, <img src=x onerror=alert(1)>"
+    scene.current()
+    assert scene.eps_message.visible
+    html = unescape(scene.eps_message.get_root(BokehDocument()).text)  # (escaped to be sent)
+    assert "<b>" not in html and "<img" not in html, html
+    assert "&lt;b&gt;x" in html, html
+
+
+def test_a_tall_stack_s_animation_plays_in_well_under_a_minute():
+    """Eight balls: dozens of collisions share the slow-motion frames (each still at least ten
+    frames inside it), so the animation lasts well under a minute at 25 frames a second (at 90
+    frames a collision it had 5 368 frames, 3.5 minutes); a two-ball drop keeps 90 a collision."""
+    from app.collisions import collisions
+    from app.drop import COLLISION_FRAMES, FLIGHT_FRAMES, MIN_COLLISION_FRAMES, SLOW_FRAMES
+
+    explorer = rendered({"scene": "stack", "N": "8", "ratio": "0.3"})
+    scene = explorer.scenes["stack"]
+    groups = [g for g in collisions(scene.result.contacts) if g[0].start < scene.result.end_time]
+    assert len(groups) * COLLISION_FRAMES > SLOW_FRAMES  # (the case this is about)
+    assert scene.times.size <= FLIGHT_FRAMES + max(SLOW_FRAMES, MIN_COLLISION_FRAMES * len(groups))
+    assert scene.times.size / 25 < 40
+    for group in groups:
+        start, stop = group[0].start, max(c.end for c in group)
+        inside = np.count_nonzero((scene.times >= start) & (scene.times <= stop))
+        assert inside >= MIN_COLLISION_FRAMES
+    drop = rendered({}).scenes["drop"]
+    for group in collisions(drop.result.contacts):
+        start, stop = group[0].start, max(c.end for c in group)
+        assert np.count_nonzero((drop.times >= start) & (drop.times <= stop)) >= COLLISION_FRAMES
