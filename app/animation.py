@@ -72,7 +72,7 @@ const drawn = balls.data;
 balls.setv({data: {...drawn, y: drawn.r.map((_, b) => data["y" + b][at])}}, {sync: false});
 cursor.setv({location: data.t[at]}, {sync: false});
 const time = String(Number(data.t[at].toPrecision(4)));  // as time_caption writes it
-title.setv({text: `t = ${time} ${unit}` + (data.slow[at] ? "  slow motion" : "")}, {sync: false});
+title.setv({text: `t = ${time} ${unit}` + (data.slow[at] ? " (slow)" : "")}, {sync: false});
 if (trail != null && trail_lines.length > 0 && trail_lines[0].visible) {
   const shown = {t: Array.from(data.t.slice(0, at + 1))};
   drawn.r.forEach((radius, b) => {
@@ -94,7 +94,7 @@ def time_caption(time: float, unit: str, slow: bool = False) -> str:
         exact = exact.quantize(Decimal(1).scaleb(exact.adjusted() - 3), rounding=ROUND_HALF_UP)
     shown = float(exact)
     text = str(int(shown)) if shown.is_integer() else repr(shown)
-    return f"t = {text} {unit}" + ("  slow motion" if slow else "")
+    return f"t = {text} {unit}" + (" (slow)" if slow else "")  # (the stage is 220 px wide)
 
 
 class Animation:

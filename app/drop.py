@@ -55,7 +55,7 @@ BALL_RADIUS = 0.06  # of the plot's height: the lower ball as drawn
 PLAYER_HELP = (
     "Animation: press play (the triangle). Frames are spaced evenly in time during the flight "
     "and many more are spent on each collision: **slow motion through the collision**, "
-    "the time is shown above the balls."
+    "the time is shown above the balls, with (slow) there."
 )
 
 
@@ -145,6 +145,7 @@ def stage():
     return fig
 
 
+STACKED = "each ball on those below"  # the stage's heights (its y axis says so)
 PROJECTOR_PLOT_HEIGHT = 290  # presentation mode (scene.py): plots and player within 720 px
 
 
@@ -292,8 +293,10 @@ class DropScene(Scene):
         self.heights.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
         room = high / (1 - 4 * BALL_RADIUS)  # the balls drawn on top of their heights fit
         self.animation.y_range.update(start=low, end=room, reset_start=low, reset_end=room)
-        for fig in (self.heights, self.animation):
-            fig.yaxis.axis_label = units.length_label
+        self.heights.yaxis.axis_label = units.length_label
+        # the stage's heights are the stack's: each ball drawn on top of those below it (a
+        # new user compared its numbers with the heights plot's, and they differ by the balls)
+        self.animation.yaxis.axis_label = f"{units.length_label}, {STACKED}"
         self.heights.xaxis.axis_label = units.time_label
         self._animate(units)
 

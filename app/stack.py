@@ -30,7 +30,7 @@ from twoball.units import number_text
 
 from .animation import Animation, FramePlayer
 from .controls import ReleasedIntSlider, ReleasedSlider, plain
-from .drop import balls_glyph, frame_times, height_axis, stage, underneath
+from .drop import STACKED, balls_glyph, frame_times, height_axis, stage, underneath
 from .scene import Scene, answers_pending, draw, on_screen, readable
 from .state import contact_eps
 
@@ -185,6 +185,7 @@ class StackScene(Scene):
 
     def _animation_figure(self):
         fig = stage()
+        fig.yaxis.axis_label = f"height X, {STACKED}"
         draw(fig, balls_glyph(), self.balls_drawn)
         return fig
 
