@@ -188,6 +188,19 @@ class Animation:
         self.frames.data = {"t": [], "slow": [], "y0": []}
 
 
+# the scenes' players: 25 frames a second, once through, at most 520 px wide
+PLAYER_DEFAULTS = dict(
+    label="Animation",
+    start=0,
+    value=0,
+    interval=40,
+    loop_policy="once",
+    show_loop_controls=False,
+    sizing_mode="stretch_width",
+    max_width=520,
+)
+
+
 class FramePlayer(pn.widgets.Player):
     """Panel's player, each of whose frames is drawn in the browser by an
     :class:`Animation`, given its model when the model is made; its first move after a new
@@ -195,7 +208,7 @@ class FramePlayer(pn.widgets.Player):
     (a playing page does not send each frame: :data:`LOCAL_PLAY_JS`)."""
 
     def __init__(self, animation: Animation, **params):
-        super().__init__(**params)
+        super().__init__(**{**PLAYER_DEFAULTS, **params})
         self._on_frame = animation.on_frame
         self.param.watch(lambda _: animation.send_frames(), "value")
 

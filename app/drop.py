@@ -186,18 +186,7 @@ class DropScene(Scene):
         self.animation = self._animation_figure()
         # played in the browser (app/animation.py)
         self.animated = Animation(self.balls, self.cursor, self.animation.title, self.trail)
-        self.player = FramePlayer(
-            self.animated,
-            label="Animation",
-            start=0,
-            end=FLIGHT_FRAMES - 1,
-            value=0,
-            interval=40,
-            loop_policy="once",
-            show_loop_controls=False,
-            sizing_mode="stretch_width",
-            max_width=520,
-        )
+        self.player = FramePlayer(self.animated, end=FLIGHT_FRAMES - 1)
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # 1280x720: under the header, tabs and summary, the player

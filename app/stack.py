@@ -123,18 +123,7 @@ class StackScene(Scene):
         self.animation = self._animation_figure()
         # played in the browser (app/animation.py)
         self.animated = Animation(self.balls_drawn, self.cursor, self.animation.title)
-        self.player = FramePlayer(
-            self.animated,
-            label="Animation",
-            start=0,
-            end=1,
-            value=0,
-            interval=40,
-            loop_policy="once",
-            show_loop_controls=False,
-            sizing_mode="stretch_width",
-            max_width=520,
-        )
+        self.player = FramePlayer(self.animated, end=1)
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # plots and player within 720 px (scene.py)
