@@ -63,6 +63,13 @@ def test_run_statistics_are_on_the_result():
     assert reference.stats.phases >= 2 and reference.stats.steps > reference.stats.phases
     stack = twoball.simulate_stack([0.01], 0.9, 0.01)
     assert stack.stats.phases >= len(stack.contacts) > 0
+    for method in ("compiled", "DOP853"):  # the Hertz force: each contact takes several steps
+        hertz = twoball.simulate_stack([0.2], 0.9, 0.2, force="hertz", method=method)
+        assert hertz.stats.steps > 3 * len(hertz.contacts) > 0, (method, hertz.stats)
+        further = twoball.simulate_stack(
+            [0.2], 0.9, 0.2, force="hertz", method=method, until=2 * hertz.end_time
+        )
+        assert further.stats.steps > hertz.stats.steps
 
 
 # What Result and StackResult share (twoball.observables.Measured): the same names, the same types

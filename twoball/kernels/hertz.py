@@ -700,7 +700,8 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
     """Run a Hertz stack from rest at heights ``x_start`` until the top ball's
     ``apexes_wanted``-th apex, ``t_end`` or a proven rest, sampling at the sorted ``times``
     (empty: none). Returns (status, end time, apexes (ball, t, h) rows, contact (contact, start,
-    end) rows, contacts before the top ball's first apex, samples (times, 3N))."""
+    end) rows, contacts before the top ball's first apex, samples (times, 3N), steps (the
+    integrator's, and one a free-flight phase, as the budget MAX_STEPS counts them))."""
     n = masses.size
     state, low = np.zeros((4, n)), np.zeros((4, n))  # x, v, eta, eta', each as state + low
     full, zeros = np.zeros((4, n)), np.zeros(2 * n)  # state + low, rounded; no w in flight
@@ -796,4 +797,4 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
             contacts[n_contacts, 0], contacts[n_contacts, 1] = c, opened[c]
             contacts[n_contacts, 2] = t
             n_contacts += 1
-    return status, t, apexes[:n_apex].copy(), contacts[:n_contacts].copy(), first, samples
+    return status, t, apexes[:n_apex].copy(), contacts[:n_contacts].copy(), first, samples, steps

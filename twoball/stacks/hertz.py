@@ -58,7 +58,7 @@ from twoball.kernels.codes import (
     EVENT_SWITCH,
     EVENT_TIME,
 )
-from twoball.observables import ContactInterval
+from twoball.observables import ContactInterval, RunStats
 from twoball.stacks.hertz_contact import calibration_speeds, damping_factor, floor_contact_time
 from twoball.stacks.model import StackResult, StackTrajectory, release_heights
 
@@ -178,7 +178,8 @@ def solve(
     t_eval: np.ndarray | None = None,
 ):
     """Run a Hertz stack from rest; returns (status, end time, apexes (ball, t, h) rows, contact
-    (contact, start, end) rows, contacts before the top ball's first apex, samples or None)."""
+    (contact, start, end) rows, contacts before the top ball's first apex, samples or None,
+    steps as MAX_STEPS counts them)."""
     n = len(masses)
     speeds = calibration_speeds(masses, eps, height)
     lam = np.array([damping_factor(float(e)) for e in eps]) / speeds
@@ -288,7 +289,7 @@ def solve(
     for c in range(n):
         if active[c]:
             contacts.append((c, float(opened[c]), t))
-    return status, t, apexes, contacts, first, samples
+    return status, t, apexes, contacts, first, samples, steps
 
 
 def _next_in_flight(stack: _Stack, y: np.ndarray, horizon: float) -> tuple[float, int, int]:
@@ -486,12 +487,12 @@ def solve_compiled(
     lam = np.array([damping_factor(float(e)) for e in eps])
     lam /= calibration_speeds(hertz_stack.masses, eps, stack.height)
     sorted_times = np.empty(0) if times is None else np.sort(np.asarray(times, dtype=float))
-    code, end, apex_rows, contact_rows, first, samples = hertz_kernel.run(
+    code, end, apex_rows, contact_rows, first, samples, steps = hertz_kernel.run(
         hertz_stack.masses, lam, hertz_stack.x_start, apexes_wanted, t_end, sorted_times
     )
     apexes = [(int(b), float(w), float(h)) for b, w, h in apex_rows]
     contacts = [(int(c), float(a), float(b)) for c, a, b in contact_rows]
-    run = (Status(code), float(end), apexes, contacts, first, samples)
+    run = (Status(code), float(end), apexes, contacts, first, samples, int(steps))
     return _result(hertz_stack, "compiled", times, *run)
 
 
@@ -519,9 +520,10 @@ def _in_hertz_units(stack) -> tuple:
 
 
 def _result(
-    stack, method: str, times, status, end, apexes, contacts, first, samples
+    stack, method: str, times, status, end, apexes, contacts, first, samples, steps
 ) -> StackResult:
-    """A run's rows as a :class:`~twoball.stacks.model.StackResult`."""
+    """A run's rows as a :class:`~twoball.stacks.model.StackResult`; its statistics are the
+    run's steps (the integrator's, and one a free-flight phase)."""
     per_ball: list[list[tuple[float, float]]] = [[] for _ in range(stack.balls)]
     for ball, when, where in apexes:
         per_ball[ball].append((when, where))
@@ -541,4 +543,5 @@ def _result(
         end_time=end,
         status=status,
         trajectory=trajectory,
+        stats=RunStats(steps=steps),
     )
