@@ -55,7 +55,8 @@ BALL_RADIUS = 0.06  # of the plot's height: the lower ball as drawn
 PLAYER_HELP = (
     "Animation: press play (the triangle). Frames are spaced evenly in time during the flight "
     "and many more are spent on each collision: **slow motion through the collision**, "
-    "the time is shown above the balls, with (slow) there."
+    "the time is shown above the balls, with (slow) there. The balls are drawn stacked, each on "
+    "those below it, so the stage's heights are the stack's, not each ball's height X."
 )
 
 
@@ -145,7 +146,7 @@ def stage():
     return fig
 
 
-STACKED = "each ball on those below"  # the stage's heights (its y axis says so)
+STACKED = "stacked"  # the stage's heights are the stack's (PLAYER_HELP says how), as its axis says
 PROJECTOR_PLOT_HEIGHT = 290  # presentation mode (scene.py): plots and player within 720 px
 
 

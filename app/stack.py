@@ -46,13 +46,16 @@ CAPTION_HELP = (
     "Each ball is *ratio* times as heavy as the one below it. The dotted green line is the "
     "textbook chain of independent collisions (floor first, then each pair in turn): for three "
     "elastic balls with a very light top ball, 49 times the drop height. Press play: the "
-    "animation slows down through each collision. The sliders in the side panel belong to the "
+    "animation slows down through each collision, and draws the balls stacked, each on those "
+    "below it. The sliders in the side panel belong to the "
     "two-ball scenes; the stack has its own, above, and shares only the drop height H "
     "(advanced). Heights here are always dimensionless."
 )
 
 
-PROJECTOR_PLOT_HEIGHT = 350  # presentation mode (scene.py): plots and player in 720 px
+PROJECTOR_PLOT_HEIGHT = 310  # presentation mode (scene.py): plots and player in 720 px, with
+# room to spare (at 350 the player's buttons ended at 715 px, and a touch screen's taller
+# buttons were cut)
 
 
 class StackScene(Scene):

@@ -262,6 +262,8 @@ def test_presentation_mode_shows_each_scene_on_one_screen(
         assert len(players) == (scene in ("drop", "stack")), players  # the animation's
         shown = [(round(c["right"]), round(c["bottom"])) for c in plots + sliders + players]
         assert all(r <= width and b <= height for r, b in shown), shown
+        # the player's buttons with room to spare (a touch screen draws them taller)
+        assert all(b["bottom"] <= height - 20 for b in players), players
         assert page.evaluate("parseFloat(getComputedStyle(document.body).fontSize)") >= 18
         shots = artifacts / "projector"
         shots.mkdir(exist_ok=True)
