@@ -77,15 +77,16 @@ class StackScene(Scene):
         self.times = np.zeros(1)
         state = self.state.param
         # on a projector the sliders stand in a column beside the plots (layout), with short
-        # names: their 20 px titles do not wrap
-        ratio = "mass ratio (each ball / the one below)"
+        # names: their 20 px titles do not wrap; elsewhere the long title gets the width its
+        # value needs (at 240 px it ran into the next slider's: '...below): 0.20eps: 0.90')
+        ratio, ratio_width = "mass ratio (each ball / the one below)", 320
         if self.state.presentation:
-            ratio = "mass ratio"
+            ratio, ratio_width = "mass ratio", 240
         self.widgets = pn.FlexBox(  # wraps: side by side on a wide screen, stacked on a phone
             # each recomputes the stack on release only (not at every step of a drag)
             ReleasedIntSlider.from_param(state.balls, name="balls N", width=240, throttled=True),
             ReleasedSlider.from_param(
-                state.stack_ratio, name=ratio, step=0.01, width=240, throttled=True
+                state.stack_ratio, name=ratio, step=0.01, width=ratio_width, throttled=True
             ),
             ReleasedSlider.from_param(
                 state.stack_eps, name="eps", step=0.01, width=240, throttled=True
