@@ -128,11 +128,13 @@ class Animation:
         )
         self.frames.js_on_change("data", self.on_frame)
         self._unsent: tuple | None = None  # (the drop's frames, sent when asked: send_frames)
+        self._trail_lines: list = []
 
     def draw_trails_with(self, lines: list) -> None:
         """Draw the trail (into its renderers ``lines``) as the animation plays, and at once
         when they are shown."""
         self.on_frame.args = {**self.on_frame.args, "trail_lines": lines}
+        self._trail_lines = lines
         for line in lines:
             line.js_on_change("visible", self.on_frame)
 
@@ -165,7 +167,9 @@ class Animation:
         self.cursor.location = float(shown[at])
         self.title.text = time_caption(float(shown[at]), unit, bool(slow[at]))
         self._unsent = (shown, frames, slow, unit)
-        if len(self.frames.data["t"]):  # the last drop's, which would be drawn if played now
+        if any(line.visible for line in self._trail_lines):  # the trail is drawn from them
+            self.send_frames()
+        elif len(self.frames.data["t"]):  # the last drop's, which would be drawn if played now
             self.frames.data = {"t": [], "slow": [], "y0": []}
 
     def send_frames(self) -> None:

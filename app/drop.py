@@ -381,6 +381,8 @@ class DropScene(Scene):
             self._add_trail_lines()
         for line in self._trail_lines or []:
             line.visible = event.new
+        if event.new:  # drawn from the frames, at once (a new user saw them only on play)
+            self.animated.send_frames()
 
     def _csv(self) -> io.StringIO:
         """The drop on screen for a worksheet (app/worksheet.py)."""

@@ -484,6 +484,26 @@ def test_trails_are_drawn_under_the_balls_when_first_asked_for():
     assert len(scene.animation.renderers) == before + 2
 
 
+def test_trails_asked_for_while_paused_have_their_frames_at_once():
+    """The trail is drawn from the frames: asking for it sends them without the player moving
+    (a new user saw trails only once play resumed), and while it is shown a new drop's frames
+    go at once too (else its last drop's trail stayed on screen)."""
+    explorer = rendered()
+    scene = explorer.scenes["drop"]
+    assert len(scene.animated.frames.data["t"]) == 0  # (not sent: nobody played)
+    scene.trails.value = True
+    first = np.asarray(scene.animated.frames.data["y1"]).copy()
+    assert first.size == scene.times.size
+    explorer.state.eps = 0.8
+    scene.current()
+    second = np.asarray(scene.animated.frames.data["y1"])
+    assert second.size == scene.times.size and not np.array_equal(second[: first.size], first)
+    scene.trails.value = False
+    explorer.state.eps = 0.7
+    scene.current()
+    assert len(scene.animated.frames.data["t"]) == 0  # hidden: back to sending when played
+
+
 def move_player(player, frame: int) -> None:
     """The player moved to ``frame`` as a browser's first move does: its value and
     value_throttled (which Panel keeps constant on the server's side)."""
