@@ -220,8 +220,8 @@ class MapScene(Scene):
             label="Colour by", options={variable_label(v): v for v in SHOWN}, value=self.variable
         )
         self.choice.link(self, value="variable")
-        self.force = pn.widgets.RadioButtonGroup.from_param(
-            self.state.param.map_force, name="force", width=160
+        self.force = pn.widgets.RadioButtonGroup.from_param(  # (no tooltip: see app/stack.py)
+            self.state.param.map_force, name="force", width=160, description=None
         )
         self.download = pn.widgets.FileDownload(  # written when clicked
             callback=self._csv, filename="map.csv", label="Download this map (CSV)", embed=False

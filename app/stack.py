@@ -94,7 +94,10 @@ class StackScene(Scene):
             ReleasedSlider.from_param(
                 state.stack_gap, name="gap td/tau_f", step=0.05, width=240, throttled=True
             ),
-            pn.widgets.RadioButtonGroup.from_param(state.force, name="force", width=200),
+            # (no tooltip from the parameter's doc: to the buttons' right, a phone cut it off)
+            pn.widgets.RadioButtonGroup.from_param(
+                state.force, name="force", width=200, description=None
+            ),
             flex_wrap="wrap",
             sizing_mode="stretch_width",
         )
