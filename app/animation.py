@@ -97,6 +97,11 @@ def time_caption(time: float, unit: str, slow: bool = False) -> str:
     return f"t = {text} {unit}" + (" (slow)" if slow else "")  # (the stage is 220 px wide)
 
 
+def no_frames() -> dict:
+    """A frames source's data with no frame (and the columns of one ball)."""
+    return {"t": [], "slow": [], "y0": []}
+
+
 class Animation:
     """The frames of a scene's animation and what draws them in the browser.
 
@@ -111,7 +116,7 @@ class Animation:
         title: Title,
         trail: ColumnDataSource | None = None,
     ):
-        self.frames = ColumnDataSource({"t": [], "slow": [], "y0": []})
+        self.frames = ColumnDataSource(no_frames())
         self.balls, self.cursor, self.title = balls, cursor, title
         self.on_frame = CustomJS(
             args=dict(
@@ -170,7 +175,7 @@ class Animation:
         if any(line.visible for line in self._trail_lines):  # the trail is drawn from them
             self.send_frames()
         elif len(self.frames.data["t"]):  # the last drop's, which would be drawn if played now
-            self.frames.data = {"t": [], "slow": [], "y0": []}
+            self.frames.data = no_frames()
 
     def send_frames(self) -> None:
         """Send the drop's frames to the browser, if they are not there yet."""
@@ -189,7 +194,7 @@ class Animation:
         """No frames and no balls (a refused drop)."""
         self._unsent = None
         self.balls.data = {"x": [], "y": [], "r": [], "color": []}
-        self.frames.data = {"t": [], "slow": [], "y0": []}
+        self.frames.data = no_frames()
 
 
 # the scenes' players: 25 frames a second, once through, at most 520 px wide

@@ -74,6 +74,7 @@ class StackScene(Scene):
     def __init__(self, **params):
         super().__init__(**params)
         self.result: StackResult | None = None
+        self._run: tuple[tuple, dict] = ((), {})  # simulate_stack's arguments, options (update)
         self.times = np.zeros(1)
         state = self.state.param
         # on a projector the sliders stand in a column beside the plots (layout), with short
@@ -197,14 +198,11 @@ class StackScene(Scene):
         self.eps_message.visible = message is not None
         return s.stack_eps if values is None else values
 
-    def _arguments(self) -> tuple[tuple, dict]:
-        """simulate_stack's arguments and options for the stack on screen."""
+    def update(self) -> None:
         s = self.state
         arguments = ([s.stack_ratio] * (s.balls - 1), self.contact_eps(), s.stack_gap)
-        return arguments, {"height": s.height, "force": s.force, "throw": False}
-
-    def update(self) -> None:
-        arguments, options = self._arguments()
+        options = {"height": s.height, "force": s.force, "throw": False}
+        self._run = (arguments, options)  # (the animation's frames are a run of their own)
         try:
             first = simulate_stack(*arguments, **options)  # apexes and contacts only
         except ParameterError as error:  # e.g. six balls, each 0.01 of the one below: 1e-10
@@ -276,7 +274,7 @@ class StackScene(Scene):
         frame = min(self.player.value_throttled, self.times.size - 1)
         tr = r.trajectory
         now = [np.interp(self.times[frame], tr.t, tr.x[:, b]) for b in range(r.stack.balls)]
-        arguments, options = self._arguments()
+        arguments, options = self._run
 
         def frames() -> list[np.ndarray]:
             run = simulate_stack(*arguments, **options, until=r.end_time, t_eval=self.times)
