@@ -113,6 +113,14 @@ async def settled(pid: int, quiet: float = 0.5, timeout: float = 120.0) -> None:
         last = now
 
 
+async def idle_rate(pid: int) -> float:
+    """The server's CPU seconds a second with the sessions open and nothing asked of it, over
+    :data:`IDLE_SECONDS`: taken off what a part measures."""
+    start = cpu_seconds(pid)
+    await asyncio.sleep(IDLE_SECONDS)
+    return (cpu_seconds(pid) - start) / IDLE_SECONDS
+
+
 async def moving(url: str, count: int, seconds: float, every: float, pid: int, slider: str) -> dict:
     """``count`` sessions, each moving the slider titled ``slider`` every ``every`` s for
     ``seconds`` s, through ten values inside its range."""
@@ -123,9 +131,7 @@ async def moving(url: str, count: int, seconds: float, every: float, pid: int, s
     rss_open = rss_mb(pid)
     latencies: list[float] = []
     missing = 0
-    idle_start = cpu_seconds(pid)
-    await asyncio.sleep(IDLE_SECONDS)  # what the server spends with these sessions open, idle
-    idle_rate = (cpu_seconds(pid) - idle_start) / IDLE_SECONDS
+    idle = await idle_rate(pid)
     cpu_start, started = cpu_seconds(pid), time.monotonic()
 
     async def student(index: int, client: PageClient) -> None:
@@ -148,7 +154,7 @@ async def moving(url: str, count: int, seconds: float, every: float, pid: int, s
                 latencies.append(latency)
 
     await asyncio.gather(*(student(i, c) for i, c in enumerate(clients)))
-    cpu = cpu_seconds(pid) - cpu_start - idle_rate * (time.monotonic() - started)
+    cpu = cpu_seconds(pid) - cpu_start - idle * (time.monotonic() - started)
     moves = len(latencies) + missing
     errors = sum(len(c.errors) for c in clients)
     for client in clients:
@@ -173,9 +179,7 @@ async def playing(url: str, count: int, seconds: float, pid: int) -> dict:
     for client in clients:
         await client.open(timeout=120)
     await settled(pid)
-    idle_start = cpu_seconds(pid)
-    await asyncio.sleep(IDLE_SECONDS)
-    idle_rate = (cpu_seconds(pid) - idle_start) / IDLE_SECONDS
+    idle = await idle_rate(pid)
     received = [client.received() for client in clients]
     cpu_start, started = cpu_seconds(pid), time.monotonic()
 
@@ -206,7 +210,7 @@ async def playing(url: str, count: int, seconds: float, pid: int) -> dict:
     frames = sum(await asyncio.gather(*(student(c) for c in clients)))
     elapsed = time.monotonic() - started
     await asyncio.sleep(1.0)  # the last frames' answers
-    cpu = cpu_seconds(pid) - cpu_start - idle_rate * elapsed
+    cpu = cpu_seconds(pid) - cpu_start - idle * elapsed
     sent_back = sum(c.received() - r for c, r in zip(clients, received, strict=True))
     errors = sum(len(c.errors) for c in clients)
     await _close(clients)

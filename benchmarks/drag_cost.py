@@ -22,31 +22,28 @@ import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / "tools"))
+sys.path.insert(0, str(REPO / "tools"))  # (benchmarks/ is on the path: app_load)
 
-from appdriver import cpu_seconds, free_port, serve, wait_until_served  # noqa: E402
+from app_load import idle_rate, start_server, twoball_serve  # noqa: E402
+from appdriver import cpu_seconds, free_port  # noqa: E402
 from bokehclient import PageClient  # noqa: E402
 
 STEP_SECONDS = 0.02
 
 
-async def measure(url: str, pid: int, log: Path, steps: int) -> float:
+async def measure(url: str, pid: int, steps: int) -> float:
     """ms of server CPU per drag step."""
-    while log.read_text().count("compiled kernels in use") < 1:
-        await asyncio.sleep(0.5)
     client = PageClient(url)
     await client.open()
     await asyncio.sleep(4.0)  # the page's scene and URL settled
     slider = client.slider("eps (restitution)")
-    idle_start = cpu_seconds(pid)
-    await asyncio.sleep(3.0)
-    idle_rate = (cpu_seconds(pid) - idle_start) / 3.0
+    idle = await idle_rate(pid)
     started, cpu_start = time.monotonic(), cpu_seconds(pid)
     for step in range(steps):
         await client.set(slider, "value", 0.5 + 0.4 * (step % 40) / 40)
         await asyncio.sleep(STEP_SECONDS)
     await asyncio.sleep(1.0)
-    cpu = cpu_seconds(pid) - cpu_start - idle_rate * (time.monotonic() - started)
+    cpu = cpu_seconds(pid) - cpu_start - idle * (time.monotonic() - started)
     await client.close()
     return 1e3 * cpu / steps
 
@@ -57,14 +54,10 @@ def main() -> None:
     args = parser.parse_args()
     port = free_port()
     with tempfile.TemporaryDirectory() as folder:
-        log = Path(folder) / "serve.log"
-        twoball = str(Path(sys.executable).parent / "twoball")
-        command = [twoball, "serve", "--address", "127.0.0.1", "--port", str(port)]
-        process = serve([*command, "--num-procs", "1"], log)
+        process = start_server(twoball_serve(port, 1), port, Path(folder) / "serve.log", 1, True)
         try:
-            wait_until_served(f"http://127.0.0.1:{port}/liveness", process, timeout=300)
             url = f"http://127.0.0.1:{port}/app?scene=drop"
-            per_step = asyncio.run(measure(url, process.pid, log, args.steps))
+            per_step = asyncio.run(measure(url, process.pid, args.steps))
         finally:
             os.killpg(process.pid, signal.SIGTERM)
             process.wait(timeout=30)
