@@ -177,9 +177,8 @@ class PageClient:
     async def move(self, slider_id: str, value: float) -> float:
         """Move a slider as a browser does when it is released; returns when it was sent."""
         for attr in ("value", "value_throttled"):
-            event = {"kind": "ModelChanged", "model": {"id": slider_id}, "attr": attr, "new": value}
-            await self._send("PATCH-DOC", {"events": [event]})
-        return time.monotonic()
+            sent = await self.set(slider_id, attr, value)
+        return sent
 
     async def set(self, model_id: str, attr: str, value: object) -> float:
         """Change one attribute of a model as the browser does (e.g. a player's ``value`` at
