@@ -143,6 +143,15 @@ class Controls(Built):
         )
         self._show_state()
         self.show_messages(messages or [])
+        self.two_ball = pn.Column(
+            self.preset,
+            self.preset_source,
+            self.units,
+            *self.sliders.values(),
+            sizing_mode="stretch_width",
+        )
+        self.scene_controls = pn.Column(sizing_mode="stretch_width")
+        self.meanings = pn.pane.Markdown(MEANINGS, sizing_mode="stretch_width")
 
     @staticmethod
     def _log_slider(label: str, name: str) -> pn.widgets.FloatSlider:
@@ -285,11 +294,19 @@ class Controls(Built):
         advanced.param.watch(opened, "collapsed")
         return pn.Column(
             self.message,
-            self.preset,
-            self.preset_source,
-            self.units,
-            *self.sliders.values(),
+            self.two_ball,
+            self.scene_controls,
             advanced,
-            pn.pane.Markdown(MEANINGS, sizing_mode="stretch_width"),
+            self.meanings,
             sizing_mode="stretch_width",
         )
+
+    def show_scene_controls(self, own: pn.viewable.Viewable | None) -> None:
+        """Show a scene's own controls (:meth:`Scene.own_controls`) instead of the two-ball
+        sliders, their preset and meanings, which do not drive it (the Stack scene showed two
+        'eps' sliders, one of them doing nothing there); None shows the two-ball ones."""
+        if own is not None and own not in self.scene_controls.objects:
+            self.scene_controls.append(own)
+        for shown in self.scene_controls.objects:
+            shown.visible = shown is own
+        self.two_ball.visible = self.meanings.visible = own is None

@@ -146,6 +146,22 @@ def stage():
     return fig
 
 
+# an apex below 0 is real (docs/model.md: 0 is where the upper ball just touches the lower one
+# resting unsquashed on the floor); said so, it no longer reads as a missing bounce
+BELOW_ZERO = (
+    " (below 0: the top ball barely left the ball under it, which was still pressed into the floor)"
+)
+
+
+def below_zero(height: float | None) -> str:
+    """Why an apex is negative, for a summary (empty for an apex at or above 0)."""
+    return BELOW_ZERO if height is not None and height < 0 else ""
+
+
+# the heights figure's own style in a wrapping row: at least 340 px beside the stage, which
+# wraps below it only on a narrow screen (the pane's styles never reach the figure, whose
+# 100 % width then always pushed the stage below it: on a laptop out of sight)
+BESIDE_STYLES = {"flex": "1 1 340px", "min-width": "0"}
 STACKED = "stacked"  # the stage's heights are the stack's (PLAYER_HELP says how), as its axis says
 PROJECTOR_PLOT_HEIGHT = 290  # presentation mode (scene.py): plots and player within 720 px
 
@@ -408,9 +424,11 @@ class DropScene(Scene):
             second = f"no second bounce ({r.reason})"
             verdict = ""
         else:
-            second = f"h2 = {units.height(r.h2)}, h2/h1 = {r.h2_over_h1:.4f}"
+            second = f"h2 = {units.height(r.h2)}{below_zero(r.h2)}, h2/h1 = {r.h2_over_h1:.4f}"
             verdict = "**delayed rebound** (h2 > h1)" if r.delayed_rebound else "no delayed rebound"
-        first = "no first bounce" if r.h1 is None else f"h1 = {units.height(r.h1)}"
+        first = (
+            "no first bounce" if r.h1 is None else f"h1 = {units.height(r.h1)}{below_zero(r.h1)}"
+        )
         return (
             f"{first}, {second}; {verdict}  \n"
             f"ICM apex (dotted green): {units.height(r.h_icm)}; upper ball released at "
@@ -420,9 +438,8 @@ class DropScene(Scene):
 
     def layout(self) -> pn.viewable.Viewable:
         self._draw()
-        heights = pn.pane.Bokeh(
-            self.heights, sizing_mode="stretch_width", styles={"flex": "1 1 340px"}
-        )
+        self.heights.styles = BESIDE_STYLES
+        heights = pn.pane.Bokeh(self.heights, sizing_mode="stretch_width")
         if self.state.presentation:  # a projector is wide: side by side, never wrapped
             plots = pn.Row(heights, pn.pane.Bokeh(self.animation), sizing_mode="stretch_width")
         else:  # side by side on a wide screen, stacked on a phone
@@ -444,6 +461,11 @@ class DropScene(Scene):
                 flex_wrap="wrap",
                 sizing_mode="stretch_width",
             ),
-            pn.pane.Markdown(PLAYER_HELP, sizing_mode="stretch_width"),
+            # (on a projector the teacher says it: the room sees the scene without scrolling)
+            *(
+                []
+                if self.state.presentation
+                else [pn.pane.Markdown(PLAYER_HELP, sizing_mode="stretch_width")]
+            ),
             sizing_mode="stretch_width",
         )

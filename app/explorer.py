@@ -75,7 +75,9 @@ class Explorer(Built):
         self.cover = alert(alert_type="info", sizing_mode="stretch_width")
         self.stage = self.lesson.stage()  # on a projector the question covers the scene
         self._cover()
-        self.scene(self.state.scene).active = True
+        shown = self.scene(self.state.scene)
+        self.controls.show_scene_controls(shown.own_controls())
+        shown.active = True
 
     def scene(self, name: str) -> Scene:
         """The scene ``name``, built (and put into its tab) the first time it is asked for."""
@@ -111,7 +113,7 @@ class Explorer(Built):
 
     @param.depends("state.scene", watch=True)
     def _scene_chosen(self) -> None:
-        self.scene(self.state.scene)
+        self.controls.show_scene_controls(self.scene(self.state.scene).own_controls())
         for name, scene in self.scenes.items():
             scene.active = name == self.state.scene
         self.tabs.active = SCENES.index(self.state.scene)

@@ -132,6 +132,11 @@ class Scene(Built):
     def update(self) -> None:
         raise NotImplementedError
 
+    def own_controls(self) -> pn.viewable.Viewable | None:
+        """The scene's own sliders, shown in the sidebar in place of the two-ball ones while
+        the scene is on screen; None for a scene the two-ball sliders drive."""
+        return None
+
 
 # A change the server has not answered yet: a slider's release marks the page (a class on its
 # body: the plots dim and a banner says so, PAGE_CSS in explorer.py) until the scene's data

@@ -30,7 +30,16 @@ from twoball.units import number_text
 
 from .animation import Animation, FramePlayer
 from .controls import ReleasedIntSlider, ReleasedSlider, plain
-from .drop import STACKED, balls_glyph, frame_times, height_axis, stage, underneath
+from .drop import (
+    BESIDE_STYLES,
+    STACKED,
+    balls_glyph,
+    below_zero,
+    frame_times,
+    height_axis,
+    stage,
+    underneath,
+)
 from .scene import Scene, answers_pending, draw, on_screen, readable
 from .state import contact_eps
 
@@ -47,9 +56,8 @@ CAPTION_HELP = (
     "textbook chain of independent collisions (floor first, then each pair in turn): for three "
     "elastic balls with a very light top ball, 49 times the drop height. Press play: the "
     "animation slows down through each collision, and draws the balls stacked, each on those "
-    "below it. The sliders in the side panel belong to the "
-    "two-ball scenes; the stack has its own, above, and shares only the drop height H "
-    "(advanced). Heights here are always dimensionless."
+    "below it. The stack's sliders are in the side panel, in place of the two-ball ones; it "
+    "shares their drop height H (advanced). Heights here are always dimensionless."
 )
 
 
@@ -77,29 +85,34 @@ class StackScene(Scene):
         self._run: tuple[tuple, dict] = ((), {})  # simulate_stack's arguments, options (update)
         self.times = np.zeros(1)
         state = self.state.param
-        # on a projector the sliders stand in a column beside the plots (layout), with short
-        # names: their 20 px titles do not wrap; elsewhere the long title gets the width its
-        # value needs (at 240 px it ran into the next slider's: '...below): 0.20eps: 0.90')
-        ratio, ratio_width = "mass ratio (each ball / the one below)", 320
-        if self.state.presentation:
-            ratio, ratio_width = "mass ratio", 240
-        self.widgets = pn.FlexBox(  # wraps: side by side on a wide screen, stacked on a phone
+        # in the sidebar, in place of the two-ball sliders (own_controls), one under the other
+        ratio = "mass ratio" if self.state.presentation else "mass ratio (ball / ball below)"
+        self.widgets = pn.Column(
             # each recomputes the stack on release only (not at every step of a drag)
-            ReleasedIntSlider.from_param(state.balls, name="balls N", width=240, throttled=True),
-            ReleasedSlider.from_param(
-                state.stack_ratio, name=ratio, step=0.01, width=ratio_width, throttled=True
+            ReleasedIntSlider.from_param(
+                state.balls, name="balls N", throttled=True, sizing_mode="stretch_width"
             ),
             ReleasedSlider.from_param(
-                state.stack_eps, name="eps", step=0.01, width=240, throttled=True
+                state.stack_ratio,
+                name=ratio,
+                step=0.01,
+                throttled=True,
+                sizing_mode="stretch_width",
             ),
             ReleasedSlider.from_param(
-                state.stack_gap, name="gap td/tau_f", step=0.05, width=240, throttled=True
+                state.stack_eps, name="eps", step=0.01, throttled=True, sizing_mode="stretch_width"
+            ),
+            ReleasedSlider.from_param(
+                state.stack_gap,
+                name="gap td/tau_f",
+                step=0.05,
+                throttled=True,
+                sizing_mode="stretch_width",
             ),
             # (no tooltip from the parameter's doc: to the buttons' right, a phone cut it off)
             pn.widgets.RadioButtonGroup.from_param(
                 state.force, name="force", width=200, description=None
             ),
-            flex_wrap="wrap",
             sizing_mode="stretch_width",
         )
         # eps per contact, under "advanced" (collapsed: the one eps slider is the lesson's)
@@ -117,6 +130,7 @@ class StackScene(Scene):
             collapsed=True,
             sizing_mode="stretch_width",
         )
+        self._controls: pn.Column | None = None  # (own_controls)
         self.summary = pn.pane.Markdown(sizing_mode="stretch_width")
         self.curves = ColumnDataSource({"t": []})
         self._lines: list = []  # a line per ball drawn so far (:meth:`_add_lines`)
@@ -298,11 +312,13 @@ class StackScene(Scene):
         icm = icm_chain(r.stack)[-1]
         drop = r.stack.x_start[-1]
         first = "no first bounce" if r.h1 is None else (
-            f"the top ball rises to **h1 = {number_text(r.h1)}**, {r.h1 / drop:.3g} times its drop "
-            "height"
+            f"the top ball rises to **h1 = {number_text(r.h1)}**{below_zero(r.h1)}, "
+            f"{r.h1 / drop:.3g} times its drop height"
         )  # fmt: skip
         second = (
-            "" if r.h2 is None else f"; then h2 = {number_text(r.h2)} (h2/h1 = {r.h2 / r.h1:.3f})"
+            ""
+            if r.h2 is None
+            else f"; then h2 = {number_text(r.h2)}{below_zero(r.h2)} (h2/h1 = {r.h2 / r.h1:.3f})"
         )
         counts = ", ".join(
             ("floor" if c == 0 else f"{c}-{c + 1}") + f": {k}"
@@ -318,32 +334,20 @@ class StackScene(Scene):
             f"Contacts before h1 (floor, then each pair): {counts}."
         )
 
+    def own_controls(self) -> pn.viewable.Viewable:
+        """The stack's sliders, its force and its eps per contact, for the sidebar."""
+        if self._controls is None:
+            self._controls = pn.Column(self.widgets, self.advanced, sizing_mode="stretch_width")
+        return self._controls
+
     def layout(self) -> pn.viewable.Viewable:
         self._draw()
-        heights = pn.pane.Bokeh(
-            self.heights, sizing_mode="stretch_width", styles={"flex": "1 1 340px"}
-        )
+        self.heights.styles = BESIDE_STYLES
+        heights = pn.pane.Bokeh(self.heights, sizing_mode="stretch_width")
         animation = pn.pane.Bokeh(self.animation)
+        if self.state.presentation:  # a projector is wide: side by side, never wrapped
+            plots = pn.Row(heights, animation, sizing_mode="stretch_width")
+        else:  # side by side on a wide screen, stacked on a phone
+            plots = pn.FlexBox(heights, animation, sizing_mode="stretch_width", flex_wrap="wrap")
         caption = pn.pane.Markdown(CAPTION_HELP, sizing_mode="stretch_width")
-        if self.state.presentation:
-            plots = pn.Row(
-                pn.Column(
-                    pn.Row(heights, animation, sizing_mode="stretch_width"),
-                    self.player,
-                    sizing_mode="stretch_width",
-                ),
-                pn.Column(self.widgets, self.advanced, width=250),
-                sizing_mode="stretch_width",
-            )
-            return pn.Column(self.summary, plots, caption, sizing_mode="stretch_width")
-        # side by side on a wide screen, stacked on a phone
-        plots = pn.FlexBox(heights, animation, sizing_mode="stretch_width", flex_wrap="wrap")
-        return pn.Column(
-            self.widgets,
-            self.advanced,
-            self.summary,
-            plots,
-            self.player,
-            caption,
-            sizing_mode="stretch_width",
-        )
+        return pn.Column(self.summary, plots, self.player, caption, sizing_mode="stretch_width")

@@ -273,6 +273,37 @@ def test_presentation_mode_shows_each_scene_on_one_screen(
         context.close()
 
 
+@pytest.mark.parametrize("scene", ["drop", "stack"])
+def test_a_laptop_shows_the_plots_the_balls_and_the_player_without_scrolling(
+    browser, app_server, artifacts, scene
+):
+    """At 1366x768 (a laptop, not presentation mode) the animation stands beside the heights
+    plot, not below it (it did: the figure's full width pushed it out of sight), and the
+    player's buttons are on screen; the sidebar holds the scene's own sliders."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?scene={scene}", viewport=(1366, 768))
+    try:
+        page.wait_for_timeout(800)
+        plots = [
+            c for c in deep_query(page, "canvas")
+            if c["visible"] and c["width"] > 100 and c["height"] > 100
+        ]  # fmt: skip
+        animation = min(plots, key=lambda c: c["width"])
+        heights = max(plots, key=lambda c: c["width"])
+        assert animation["left"] >= heights["right"] - 1, (animation, heights)  # beside it
+        assert abs(animation["top"] - heights["top"]) < 5, (animation, heights)
+        assert max(animation["bottom"], heights["bottom"]) <= 768
+        players = [b for b in deep_query(page, "button.play") if b["visible"]]
+        assert len(players) == 1 and players[0]["bottom"] <= 768, players
+        sidebar = page.locator("#sidebar")
+        assert sidebar.get_by_text("balls N:").is_visible() == (scene == "stack")
+        assert sidebar.get_by_text("mu = m2/m1 (log scale):").is_visible() == (scene == "drop")
+        page.screenshot(path=artifacts / f"laptop_{scene}.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
 def test_a_long_query_string_gets_the_page_and_a_short_message(browser, app_server, artifacts):
     """Defect 12: 40 kB of query (a bad eps of 10 000 digits and an unknown key) opens the page
     with one message that quotes the bad value cut short, and the URL kept in step. (Panel's

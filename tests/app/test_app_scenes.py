@@ -630,3 +630,37 @@ def test_a_tall_stack_s_animation_plays_in_well_under_a_minute():
     for group in collisions(drop.result.contacts):
         start, stop = group[0].start, max(c.end for c in group)
         assert np.count_nonzero((drop.times >= start) & (drop.times <= stop)) >= COLLISION_FRAMES
+
+
+def test_the_sidebar_shows_the_sliders_of_the_scene_on_screen():
+    """The Stack scene's own sliders replace the two-ball ones in the sidebar while it is on
+    screen (two 'eps' sliders, one doing nothing there, confused a new user), and come back
+    with any other scene."""
+    explorer = rendered()
+    controls = explorer.controls
+    assert controls.two_ball.visible and controls.meanings.visible
+    explorer.state.scene = "stack"
+    own = explorer.scenes["stack"].own_controls()
+    assert own in controls.scene_controls.objects and own.visible
+    assert not controls.two_ball.visible and not controls.meanings.visible
+    explorer.state.balls = 4  # the sliders there drive the stack
+    assert "4 balls" in explorer.scenes["stack"].summary.object
+    explorer.state.scene = "map"
+    assert controls.two_ball.visible and controls.meanings.visible and not own.visible
+    opened = rendered({"scene": "stack"})  # a page opened on the stack
+    assert not opened.controls.two_ball.visible
+    assert opened.scenes["stack"].own_controls().visible
+
+
+def test_an_apex_below_zero_is_explained_not_shown_as_a_missing_bounce():
+    """At eps = 0.01, mu = 1e-4, tau_d/tau_f = 10 the upper ball's first apex is at X2 < 0: a
+    real apex in free flight (its velocity 0, no ball force) while the lower ball is still
+    pressed into the floor (X1 < 0, floor force on); the summary says so."""
+    scene = rendered({"eps": "0.01", "mu": "0.0001", "tau_ratio": "10"}).scenes["drop"]
+    drop = twoball.simulate(0.01, 1e-4, 10.0, dense_output=True)
+    at_apex = drop.evaluate([drop.t1])
+    assert drop.h1 < 0 and at_apex.f12[0] == 0 and abs(at_apex.v2[0]) < 1e-12
+    assert at_apex.x1[0] < 0 and at_apex.f01[0] > 0  # the lower ball in the floor
+    assert scene.result.h1 == drop.h1
+    assert "below 0: the top ball barely left the ball under it" in scene.summary.object
+    assert "below 0" not in rendered(PAPER).scenes["drop"].summary.object
