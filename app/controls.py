@@ -62,6 +62,10 @@ class Released:
     """
 
     _debounce = 0
+    # Panel counts every change from a browser as the server process's "busy" time (a param
+    # change with watchers, twice a move: ~1 ms); that count serves its busy spinner, which
+    # the page does without (explorer.py), so a release is not counted
+    _busy__ignore = ["value", "value_throttled"]
 
     def _get_model(self, doc, root=None, parent=None, comm=None):
         model = super()._get_model(doc, root, parent, comm)

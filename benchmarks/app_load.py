@@ -190,7 +190,7 @@ async def playing(url: str, count: int, seconds: float, pid: int) -> dict:
         player = next(i for i, m in client.models.items() if m["name"].endswith("Player"))
         end = client.models[player]["attributes"]["end"]
         asked = len(client.patches)
-        await client.set(player, "direction", 1)
+        await client.set(player, {"direction": 1})
         frame = played = 0
         while time.monotonic() - started < seconds:
             frame = frame + 1 if frame < end else 0
@@ -199,12 +199,12 @@ async def playing(url: str, count: int, seconds: float, pid: int) -> dict:
                 for patch in client.patches[asked:]
                 for event in patch.events
             ):  # (the frames not yet here)
-                await client.set(player, "value", frame)
-                await client.set(player, "value_throttled", frame)
+                await client.set(player, {"value": frame})  # (two messages, as Panel's
+                await client.set(player, {"value_throttled": frame})  # player sends them)
             played += 1
             await asyncio.sleep(FRAME_SECONDS)
-        await client.set(player, "direction", 0)
-        await client.set(player, "value_throttled", frame)
+        await client.set(player, {"direction": 0})
+        await client.set(player, {"value_throttled": frame})
         return played
 
     frames = sum(await asyncio.gather(*(student(c) for c in clients)))

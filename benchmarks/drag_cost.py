@@ -40,7 +40,7 @@ async def measure(url: str, pid: int, steps: int) -> float:
     idle = await idle_rate(pid)
     started, cpu_start = time.monotonic(), cpu_seconds(pid)
     for step in range(steps):
-        await client.set(slider, "value", 0.5 + 0.4 * (step % 40) / 40)
+        await client.set(slider, {"value": 0.5 + 0.4 * (step % 40) / 40})
         await asyncio.sleep(STEP_SECONDS)
     await asyncio.sleep(1.0)
     cpu = cpu_seconds(pid) - cpu_start - idle * (time.monotonic() - started)

@@ -3,7 +3,7 @@ websocket that speaks Bokeh's protocol (what BokehJS sends and receives), on loo
 
 A :class:`PageClient` opens a session as a browser does (GET the page, read its session token,
 connect the websocket, pull the document, say it is drawn), finds a slider by its title and
-moves it as a browser does on release (a PATCH-DOC setting ``value``, then one setting
+moves it as a browser does on release (one PATCH-DOC setting ``value`` and
 ``value_throttled``), and records when each message from the server arrives. No rendering:
 many sessions fit in one process. Used by benchmarks/app_load.py and the app's tests
 (tests/app/test_app_serve.py).
@@ -175,16 +175,19 @@ class PageClient:
         return self.find("Slider", title=title)
 
     async def move(self, slider_id: str, value: float) -> float:
-        """Move a slider as a browser does when it is released; returns when it was sent."""
-        for attr in ("value", "value_throttled"):
-            sent = await self.set(slider_id, attr, value)
-        return sent
+        """Move a slider as a browser does when it is released: one message setting ``value``
+        and ``value_throttled`` (BokehJS's slider sets both in one ``setv``, which it sends as
+        one PATCH-DOC of two events); returns when it was sent."""
+        return await self.set(slider_id, {"value": value, "value_throttled": value})
 
-    async def set(self, model_id: str, attr: str, value: object) -> float:
-        """Change one attribute of a model as the browser does (e.g. a player's ``value`` at
-        each frame); returns when it was sent."""
-        event = {"kind": "ModelChanged", "model": {"id": model_id}, "attr": attr, "new": value}
-        await self._send("PATCH-DOC", {"events": [event]})
+    async def set(self, model_id: str, changes: dict[str, object]) -> float:
+        """Change attributes of a model in one message, as the browser does (e.g. a player's
+        ``value`` at each frame); returns when it was sent."""
+        events = [
+            {"kind": "ModelChanged", "model": {"id": model_id}, "attr": attr, "new": value}
+            for attr, value in changes.items()
+        ]
+        await self._send("PATCH-DOC", {"events": events})
         return time.monotonic()
 
     def value(self, model_id: str, attr: str) -> object:
