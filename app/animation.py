@@ -4,7 +4,7 @@ A scene's frames are sent once per drop, when its player first moves
 (:meth:`Animation.send_frames`): a ColumnDataSource with each frame's time as shown ``t``,
 whether it is in slow motion ``slow`` and each ball's centre as drawn ``y<b>`` (ball ``b`` from
 the bottom); the balls' radii and colours stay in the drawn balls' source. The player's frame
-number picks a frame in the browser (:data:`FRAME_JS`), and the balls, the time cursor on the
+number picks a frame in the browser (app/static/animation.js), and the balls, the time cursor on the
 heights and the caption change there alone (Bokeh's ``setv(..., {sync: false})``: nothing is
 sent back). Drawn on the server, a frame cost 3 ms of server CPU, 71 ms a second for each
 student playing, so a class pressing play at once saturated two cores (docs/performance.md,
@@ -22,72 +22,18 @@ import numpy as np
 import panel as pn
 from bokeh.models import ColumnDataSource, CustomJS, Span, Title
 
-# Panel's player sends its frame number to the server at every frame (about 1.5 ms of server CPU
-# each, 37 ms a second for each student playing). Once a page has a drop's frames, a playing
-# player's frames stay in the page (setv without sync; the callbacks that draw still run), and
-# the server hears where it stopped (value_throttled, at the pause or the last frame). Play at
-# the last frame starts again from the first (Panel's did nothing there, which a teacher took
-# for a broken player). Where Panel's player lacks what this replaces (a later Panel), the
-# player syncs as before.
-LOCAL_PLAY_JS = """
-function install_local_play(view) {
-  if (view.twoball_local_play || !view.set_frame || !view.pause_animation
-      || !view.play_animation || !view.update_title_and_value) return;
-  const set_frame = view.set_frame, pause_animation = view.pause_animation;
-  const play_animation = view.play_animation;
-  view.play_animation = function () {  // from the start again when at the end
-    if (this.model.value >= this.model.end) this.set_frame(this.model.start);
-    play_animation.call(this);
-  };
-  view.set_frame = function (frame, throttled = true) {
-    const frames = this.model.twoball_frames;
-    if (this.timer == null || frames == null || frames.data.t.length == 0)
-      return set_frame.call(this, frame, throttled);
-    this.model.setv({value: frame}, {sync: false});
-    this.update_title_and_value();
-    if (this.sliderEl.value != String(frame)) this.sliderEl.value = String(frame);
-  };
-  view.pause_animation = function () {
-    pause_animation.call(this);
-    if (this.model.value_throttled !== this.model.value)
-      this.model.value_throttled = this.model.value;
-  };
-  view.twoball_local_play = true;
-}
-"""
-
-# args: frames, balls (the drawn balls' source: its radii and colours stay, its centres change),
-# cursor (a Span), title (the stage's Title), unit (of time, in the caption), trail (a source,
-# or null) and trail_lines (its renderers), player (the Player's model, set when it is made)
-FRAME_JS = """
-if (player != null) {
-  player.twoball_frames = frames;
-  install_local_play(player.default_view.prototype);
-}
-const data = frames.data;
-const frame_count = data.t.length;
-if (frame_count == 0 || player == null) return;
-const at = Math.max(0, Math.min(player.value, frame_count - 1));
-const drawn = balls.data;
-balls.setv({data: {...drawn, y: drawn.r.map((_, b) => data["y" + b][at])}}, {sync: false});
-cursor.setv({location: data.t[at]}, {sync: false});
-const time = String(Number(data.t[at].toPrecision(4)));  // as time_caption writes it
-title.setv({text: `t = ${time} ${unit}` + (data.slow[at] ? " (slow)" : "")}, {sync: false});
-if (trail != null && trail_lines.length > 0 && trail_lines[0].visible) {
-  const shown = {t: Array.from(data.t.slice(0, at + 1))};
-  drawn.r.forEach((radius, b) => {
-    const centres = data["y" + b];
-    shown["top" + b] = shown.t.map((_, i) => centres[i] + radius);
-  });
-  trail.setv({data: shown}, {sync: false});
-}
-"""
+# What draws a frame in the page, app/static/animation.js (loaded with the page, app/main.py):
+# also what keeps a playing player's frame number there (about 3 kB that every page's document
+# carried when it was the callback's own code)
+DRAW_FRAME_JS = (
+    "twoballDrawFrame({frames, balls, cursor, title, unit, trail, trail_lines, player});"
+)
 
 
 def time_caption(time: float, unit: str, slow: bool = False) -> str:
-    """A frame's caption as :data:`FRAME_JS` writes it: four significant digits, a tie rounded
-    up (JavaScript's toPrecision; Python's formats round it to even), no trailing zeros (the
-    two languages' shortest forms differ only below 1e-4 and above 1e16, never an
+    """A frame's caption as app/static/animation.js writes it: four significant digits, a tie
+    rounded up (JavaScript's toPrecision; Python's formats round it to even), no trailing zeros
+    (the two languages' shortest forms differ only below 1e-4 and above 1e16, never an
     animation's times)."""
     exact = Decimal(time)
     if exact != 0:
@@ -129,7 +75,7 @@ class Animation:
                 trail_lines=[],
                 player=None,
             ),
-            code=LOCAL_PLAY_JS + FRAME_JS,
+            code=DRAW_FRAME_JS,
         )
         self.frames.js_on_change("data", self.on_frame)
         self._unsent: tuple | None = None  # (the drop's frames, sent when asked: send_frames)
@@ -214,7 +160,7 @@ class FramePlayer(pn.widgets.Player):
     """Panel's player, each of whose frames is drawn in the browser by an
     :class:`Animation`, given its model when the model is made; its first move after a new
     drop has the drop's frames sent. Where it stands on the server is ``value_throttled``
-    (a playing page does not send each frame: :data:`LOCAL_PLAY_JS`)."""
+    (a playing page does not send each frame: app/static/animation.js)."""
 
     def __init__(self, animation: Animation, **params):
         super().__init__(**{**PLAYER_DEFAULTS, **params})

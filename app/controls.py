@@ -35,17 +35,17 @@ def plain(text: str) -> str:
 
 
 MEANINGS = """
-**eps**: how bouncy each contact is (1: no energy lost, 0: no bounce at all).
+**eps**: how bouncy each contact is (1: no energy lost, 0: no bounce).
 
-**mu = m2/m1**: how much lighter the upper ball is (0.01: a hundred times lighter).
+**mu = m2/m1**: how much lighter the upper ball is (0.01: a hundred times).
 
-**tau_d/tau_f**: how far apart the balls are at release: the time the gap takes to close,
-over the duration of one floor contact (0.01: nearly touching).
+**tau_d/tau_f**: how far apart the balls start: the time the gap takes to close, over one
+floor contact's duration (0.01: nearly touching).
 
 **H**: the drop height in units of the lower ball's squash under its own weight, m1 g / k.
 
-**ICM** (dotted green line): the textbook prediction, one contact after the other (floor, then
-ball): up to 9 times the drop height for elastic balls and a very light upper ball.
+**ICM** (dotted green line): the textbook prediction, one contact after the other (floor,
+then ball): up to 9 times the drop height for elastic balls and a very light upper ball.
 """
 
 
@@ -69,7 +69,7 @@ class Released:
 
     def _get_model(self, doc, root=None, parent=None, comm=None):
         model = super()._get_model(doc, root, parent, comm)
-        model.js_on_change("value_throttled", CustomJS(code=PENDING_JS))
+        model.js_on_change("value_throttled", CustomJS(code=PENDING_JS))  # (app/static)
         return model
 
 
@@ -149,7 +149,6 @@ class Controls(Built):
         self.show_messages(messages or [])
         self.two_ball = pn.Column(
             self.preset,
-            self.preset_source,
             self.units,
             *self.sliders.values(),
             sizing_mode="stretch_width",
@@ -175,6 +174,9 @@ class Controls(Built):
             shown = messages if (box is self.typed_message) == typed else []
             box.object = "\n\n".join(plain(m) for m in shown)
             box.visible = bool(shown)
+        page = self._layout
+        if self.message.visible and page is not None and self.message not in page.objects:
+            page.insert(0, self.message)  # (joins the page when first needed: layout)
 
     def _slider_moved(self, name: str, value: float) -> None:
         """A slider released by the user: the messages go, and a log slider sets its value
@@ -197,6 +199,8 @@ class Controls(Built):
             self._set_preset(preset)
         finally:
             self._applying_preset = False
+        if self.preset_source not in self.two_ball.objects:  # (joins the page when first used)
+            self.two_ball.insert(1, self.preset_source)
         self.preset_source.object = (
             f"Drop from {presets.DEFAULT_DROP_METRES:g} m. Sources: {preset.source}"
         )
@@ -296,8 +300,10 @@ class Controls(Built):
                 advanced.objects = [self.height, self.eps12, self.typed_message]
 
         advanced.param.watch(opened, "collapsed")
+        # the URL's message box joins the page when it first has something to say
+        # (show_messages): empty in every page's first document, it cost 0.6 kB
         return pn.Column(
-            self.message,
+            *([self.message] if self.message.visible else []),
             self.two_ball,
             self.scene_controls,
             advanced,

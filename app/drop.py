@@ -53,10 +53,8 @@ MIN_COLLISION_FRAMES = 10
 LOWER, UPPER = "#0072B2", "#D55E00"
 BALL_RADIUS = 0.06  # of the plot's height: the lower ball as drawn
 PLAYER_HELP = (
-    "Animation: press play (the triangle). Frames are spaced evenly in time during the flight "
-    "and many more are spent on each collision: **slow motion through the collision**, "
-    "the time is shown above the balls, with (slow) there. The balls are drawn stacked, each on "
-    "those below it, so the stage's heights are the stack's, not each ball's height X."
+    "Press play (the triangle): each collision is shown in **slow motion**, marked (slow). The "
+    "balls are drawn stacked, so the stage's heights are the stack's, not each ball's X."
 )
 
 

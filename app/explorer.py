@@ -109,6 +109,9 @@ class Explorer(Built):
         elif covered:  # (its text is sent only to a page that follows the lesson)
             self.cover.object = COVER_TEXT
         self.cover.visible = covered and not self.state.presentation
+        page = self._layout
+        if self.cover.visible and page is not None and self.cover not in page.objects:
+            page.insert(0, self.cover)  # (joins the page when first needed: layout)
         self.tabs.visible = not covered
 
     @param.depends("state.scene", watch=True)
@@ -175,8 +178,10 @@ class Explorer(Built):
     def layout(self) -> pn.viewable.Viewable:
         """The scenes under their lesson cover (the controls go into the page's sidebar,
         :meth:`page`)."""
+        # the lesson's cover joins the page when a step first covers the scene (_cover): an
+        # empty pane in every page's first document cost it 0.6 kB
         projected = self.state.presentation
-        parts = [self.stage] if projected else [self.cover]
+        parts = [self.stage] if projected else [self.cover] if self.cover.visible else []
         return pn.Column(*parts, self.tabs, sizing_mode="stretch_width")
 
     def page(self) -> pn.template.BootstrapTemplate:

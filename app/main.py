@@ -11,7 +11,9 @@ from .scene import send_without_delay
 # app/static/ (Bokeh serves it): history.js, Back and Forward rebuild the page from the URL they
 # go to (the URL follows the state; nothing told the server when it went back); keys.js, a
 # presentation clicker's keys drive the lesson; a11y.js, names and a focus ring the widgets lack;
-# drag.js, a slider's drag stays in the page until its release
+# drag.js, a slider's drag stays in the page until its release; animation.js, the animations
+# drawn in the page (app/animation.py); pending.js, a page waiting for its change's answer
+# (app/scene.py)
 pn.extension(
     notifications=False,
     js_files={
@@ -19,6 +21,8 @@ pn.extension(
         "keys": "app/static/keys.js",
         "a11y": "app/static/a11y.js",
         "drag": "app/static/drag.js",
+        "animation": "app/static/animation.js",
+        "pending": "app/static/pending.js",
     },
 )
 

@@ -142,13 +142,10 @@ class Scene(Built):
 # body: the plots dim and a banner says so, PAGE_CSS in explorer.py) until the scene's data
 # arrive, all in the browser (nothing sent back). With a class moving sliders at once the server
 # may be seconds behind; stale plots must not look current. A change that brings no new data
-# (e.g. a value the slider already had) clears it after 30 s.
-PENDING_JS = """
-document.body.classList.add("twoball-pending");
-clearTimeout(window.twoballPending);
-window.twoballPending = setTimeout(() => document.body.classList.remove("twoball-pending"), 30000);
-"""
-ANSWERED_JS = 'document.body.classList.remove("twoball-pending");'
+# (e.g. a value the slider already had) clears it after 30 s. The functions are in
+# app/static/pending.js, loaded once with the page (app/main.py), not in every document.
+PENDING_JS = "twoballPending();"
+ANSWERED_JS = "twoballAnswered();"
 
 
 def answers_pending(source) -> None:

@@ -137,7 +137,7 @@ def test_tab_switches_keep_plots_rescaling(browser, app_server, artifacts):
         assert balls["r"][1] < balls["r"][0]
         titles = page.evaluate(TITLES_JS)
         assert any(re.match(r"t = 0 s", t) for t in titles), titles  # the time with its unit
-        page.get_by_text("slow motion through the collision").wait_for()
+        page.get_by_text("each collision is shown in slow motion", exact=False).wait_for()
         assert errors == []
     finally:
         context.close()
