@@ -86,18 +86,27 @@ def underneath(fig, added: list) -> list:
     return added
 
 
-def frame_times(end: float, contacts: list[twoball.ContactInterval]) -> np.ndarray:
-    """The times of the animation's frames: even in flight, dense through each collision
-    (:data:`COLLISION_FRAMES` each, :data:`SLOW_FRAMES` shared by all at most)."""
+def frame_times(
+    end: float, contacts: list[twoball.ContactInterval]
+) -> tuple[np.ndarray, np.ndarray]:
+    """The times of the animation's frames, even in flight and dense through each collision
+    (:data:`COLLISION_FRAMES` each, :data:`SLOW_FRAMES` shared by all at most), and which of
+    them lie within a collision (slow motion, said so in the caption)."""
     groups = [group for group in collisions(contacts) if group[0].start < end]
     through_each = max(
         MIN_COLLISION_FRAMES, min(COLLISION_FRAMES, SLOW_FRAMES // len(groups or [0]))
     )
-    times = [np.linspace(0.0, end, FLIGHT_FRAMES)]
-    for group in groups:
-        start, stop = group[0].start, max(c.end for c in group)
-        times.append(np.linspace(start, min(stop, end), through_each))
-    return np.unique(np.concatenate(times))
+    windows = [(group[0].start, min(max(c.end for c in group), end)) for group in groups]
+    times = np.unique(
+        np.concatenate(
+            [np.linspace(0.0, end, FLIGHT_FRAMES)]
+            + [np.linspace(start, stop, through_each) for start, stop in windows]
+        )
+    )
+    slow = np.zeros(times.size, dtype=bool)
+    for start, stop in windows:
+        slow |= (start <= times) & (times <= stop)
+    return times, slow
 
 
 def plotted_times(result: twoball.Result) -> np.ndarray:
@@ -176,6 +185,7 @@ class DropScene(Scene):
         self.trail = ColumnDataSource({"t": [], "top0": [], "top1": []})
         self.cursor = Span(dimension="height", location=0.0, line_color="black", line_width=1)
         self.times = np.zeros(1)
+        self.slow = np.zeros(1, dtype=bool)  # (frames in slow motion: frame_times)
         self.plotted: twoball.Trajectory | None = None  # the drop at the plotted times
         self.trails = pn.widgets.Checkbox(label="trails (the path of each ball's top)")
         self.trails.param.watch(self._show_trails, "value")
@@ -263,7 +273,7 @@ class DropScene(Scene):
         )  # fmt: skip
         self.summary.object = self._summary_text()
         self.plotted = self.result.evaluate(plotted_times(self.result))
-        self.times = frame_times(self.result.end_time, self.result.contacts)
+        self.times, self.slow = frame_times(self.result.end_time, self.result.contacts)
         self.player.end = len(self.times) - 1
 
     @param.depends("revision", watch=True)
@@ -373,10 +383,6 @@ class DropScene(Scene):
             at = r.evaluate(times)
             return [at.x1 * units.length + r1, at.x2 * units.length + 2 * r1 + r2]
 
-        windows = [(g[0].start, max(c.end for c in g)) for g in collisions(r.contacts)]
-        slow = np.zeros(self.times.size, dtype=bool)
-        for start, end in windows:
-            slow |= (start <= self.times) & (self.times <= end)
         frame = min(self.player.value_throttled, self.times.size - 1)
         self.animated.show(
             self.times * units.time,
@@ -386,7 +392,7 @@ class DropScene(Scene):
             [LOWER, UPPER],
             at=frame,
             unit="s" if units.time != 1.0 else "tau",
-            slow=slow,
+            slow=self.slow,
         )
 
     def _show_trails(self, event: param.parameterized.Event) -> None:

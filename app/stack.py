@@ -84,6 +84,7 @@ class StackScene(Scene):
         self.result: StackResult | None = None
         self._run: tuple[tuple, dict] = ((), {})  # simulate_stack's arguments, options (update)
         self.times = np.zeros(1)
+        self.slow = np.zeros(1, dtype=bool)  # (frames in slow motion: frame_times)
         state = self.state.param
         # in the sidebar, in place of the two-ball sliders (own_controls), one under the other
         ratio = "mass ratio" if self.state.presentation else "mass ratio (ball / ball below)"
@@ -237,7 +238,7 @@ class StackScene(Scene):
         self.result.apexes = first.apexes  # the run to a time stops at the same place
         self.result.status = first.status
         self.summary.object = self._summary_text()
-        self.times = frame_times(first.end_time, first.contacts)  # the animation's
+        self.times, self.slow = frame_times(first.end_time, first.contacts)  # the animation's
         self.player.end = len(self.times) - 1
 
     @param.depends("revision", watch=True)
@@ -302,6 +303,7 @@ class StackScene(Scene):
             list(PALETTE),
             at=frame,
             unit="tau",
+            slow=self.slow,
         )
 
     def _summary_text(self) -> str:

@@ -552,6 +552,8 @@ def test_the_stack_animation_s_frames_are_the_stack_at_their_times():
     """The Stack scene's frames: each ball's drawn centre, less its radius and the diameters of
     the balls below it, is its height from an independent run of the solver at the frame's
     time; four balls, then three (the frames and the drawn balls as many as the stack has)."""
+    from app.collisions import collisions
+
     explorer = rendered({"scene": "stack", "N": "4", "ratio": "0.3"})
     scene = explorer.scenes["stack"]
     for balls in (4, 3):
@@ -574,7 +576,11 @@ def test_the_stack_animation_s_frames_are_the_stack_at_their_times():
             height = np.asarray(frames[f"y{ball}"], dtype=float) - radius - below
             assert np.allclose(height, exact.x[:, ball], rtol=0, atol=1e-6 * scale)
             below += 2 * radius
-        assert not np.asarray(frames["slow"]).any()
+        # slow motion said in the caption exactly inside a collision, as for two balls
+        windows = [(g[0].start, max(c.end for c in g)) for g in collisions(scene.result.contacts)]
+        inside = [any(a <= t <= b for a, b in windows) for t in scene.times]
+        assert list(np.asarray(frames["slow"], dtype=bool)) == inside
+        assert 0 < sum(inside) < len(inside)
 
 
 @pytest.mark.parametrize(
