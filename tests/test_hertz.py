@@ -207,6 +207,14 @@ def test_the_check_values_of_the_specification():
     assert hertz.floor_contact_time(1.0, 0.5) == pytest.approx(3.218, abs=1e-3)
 
 
+def test_an_eps_within_rounding_of_one_is_elastic():
+    """eps one ulp below 1 lies above the undamped contact's integrated restitution (1 - 4e-13):
+    the root finder had no bracket and raised (found by the property test above)."""
+    eps = math.nextafter(1.0, 0.0)
+    assert hertz.damping_factor(eps) == 0.0
+    assert simulate_stack([1.0], eps, 0.0, force="hertz").h1 > 0.0
+
+
 def test_hertz_refuses_heights_beyond_the_domain():
     """H = 1e30 ended in a traceback (RuntimeError: DOP853 failed); now refused up front, as
     the linear force is, with the largest height (docs/model.md, "Stacks of N balls")."""
