@@ -2,29 +2,41 @@
 Hertz force"): the method of :mod:`twoball.stacks.hertz` in numba, with a different integrator.
 
 Free flight is exact (parabolas; touches, clamps and apexes are roots of quadratics). A phase
-with a contact active is integrated by DOP853 (the coefficients of Hairer's and scipy's, seventh
-order dense output), compiled here, with changes that make it accurate to ~1e-14 in h1 where
-scipy's was off by up to 1e-6 in h2 (docs/accuracy.md, "The Hertz stack"):
+with a contact active is integrated by Taylor series of order :data:`ORDER` (docs/stacks.md,
+"Why a Taylor series of the time-changed motion"):
 
+- **The time change makes the motion analytic.** The force delta^(3/2) is not smooth where a
+  contact touches or releases (the overlap is linear in time there). With rho_c = sqrt(delta_c)
+  for each active contact and dt = J dtau, J the product of the active rho, the equations are
+  polynomial in (t, x, v, rho) (drho_c/dtau = -(J / rho_c) eta_c' / 2, the force rho^3 (1 -
+  lam eta')), and their solution is analytic in tau through a touch (rho starts at 0) and a
+  release (rho falls through 0). Each step computes the series of every variable by the
+  recurrences of products (:func:`_series`) and takes the step at which the last two terms of
+  each are below :data:`TOLERANCE` of its scale (Jorba and Zou's rule): truncation error at
+  rounding, in steps 4 to 6 times longer than the eighth-order Runge-Kutta this replaced.
 - **Each step integrates the contact forces' effect only.** From a step's start (x0, v0), every
-  height is x0 + v0 s - s^2/2 + w(s), and the integrator carries w, w' from zero, with
-  w_j'' = (f_j - f_(j+1)) / m_j; a ball in free flight has w = 0 exactly, so its apex is exact
-  (s = v0).
-- **The error is measured on that w against the contact's own scale** (rtol :data:`RTOL`, atol
-  rtol times the largest compression and speed the energy allows), not on heights of order H.
+  height is x0 + v0 s - s^2/2 + w(s), s the clock's series, and the series carried are w, w'
+  from zero (w_j'' = (f_j - f_(j+1)) / m_j); a ball in free flight has w = 0 exactly, so its apex
+  is exact (s = v0), and the tolerance is against the contact's own scale (the largest
+  compression and speed the energy allows), not heights of order H.
 - **Nothing is rounded to an ulp of H at every step** (:func:`_advance`): the overlaps eta and
-  their rates are carried from step to step, never rebuilt as differences of heights, and every
-  carried quantity and the clock is a compensated sum moved on with exact products.
-- **The state at an event is a step's own**: a switch or an apex is located on the dense output,
-  and the state there taken from a step to it (eighth order), not from the interpolant.
+  their rates are carried from step to step, moved by the same w, w' as the heights, never
+  rebuilt as differences of heights, and every carried quantity and the clock is a compensated
+  sum moved on with exact products.
+- **The state at an event is the series' own** at the event's tau (the series is the step's
+  dense output, at the step's accuracy): a switch is bisected on it, an apex or a sample time
+  found by Newton's method on the clock's series.
 
-No touch or release is stepped over: the certified steps of :mod:`twoball.stacks.hertz` (the energy,
-which never rises, bounds every force; with the contacts active in a phase that bounds eta''
-towards each switch; each step keeps eta + eta' h - M h^2 / 2 on its side), ported as they are;
-a span certified so holds for every step inside it, so :data:`AHEAD` steps are certified at once.
-The clamp (1 + lam delta' = 0) is looked for at :data:`PROBES` points of the dense output of
-each step in which a proven bound on eta'' lets it be reached, and refined by bisection on it:
-estimated, not proven (as in :mod:`twoball.stacks.hertz`).
+No touch or release is stepped over: the certified steps of :mod:`twoball.stacks.hertz` (the
+energy, which never rises, bounds every force; with the contacts active in a phase that bounds
+eta'' towards each switch; each step keeps eta + eta' h - M h^2 / 2 on its side), ported as they
+are, cut each step on the clock; a span certified so holds for every step inside it, so
+:data:`AHEAD` steps are certified at once. The clamp (1 + lam delta' = 0) is looked for at
+:data:`PROBES` points of each step in which a proven bound on eta'' lets it be reached, and
+refined by bisection: estimated, not proven (as in :mod:`twoball.stacks.hertz`). A contact
+touching with neither compression nor speed (balls released touching) would stall the time
+change (rho = rho' = 0, so J = 0): it is left out of one first step short enough that its force,
+bounded as in the certified steps, could not move anything by a thousandth of the tolerance.
 """
 
 from __future__ import annotations
@@ -36,10 +48,12 @@ import numpy as np
 from twoball.jit import njit
 from twoball.kernels.codes import STATUS_DONE, STATUS_FAILED, STATUS_PHASES, STATUS_REST
 from twoball.kernels.runs import _room_for_one
+from twoball.kernels.taylor import ORDER, TOLERANCE, _series, _taylor_step, _time_root, _value
 
-MAX_STEPS = 300_000  # a run that cannot end fails within seconds (a step takes ~3 us)
-PROBES = 8  # dense-output points per step where the clamp is looked for
+MAX_STEPS = 300_000  # a run that cannot end fails within seconds (a step takes ~4 us)
+PROBES = 8  # points per step where the clamp is looked for
 AHEAD = 4.0  # steps certified at once
+STALL = 1e-8  # a contact this close to delta = 0 and delta' = 0 would stall the time change
 
 
 # what ends a phase
@@ -395,144 +409,6 @@ def _sample_forces(row, lam, active) -> None:
             deta = row[n + c] - (row[n + c - 1] if c >= 1 else 0.0)
             if eta < 0.0:
                 row[2 * n + c] = _power(-eta) * max(1.0 - lam[c] * deta, 0.0)
-
-
-# --- the Taylor integrator of the contact phases -------------------------------------------------
-
-ORDER = 20  # Taylor coefficients per step (the series' degree)
-TOLERANCE = 1e-16  # each series' last two terms at the step, relative to its variable's scale
-STALL = 1e-8  # a contact this close to delta = 0 and delta' = 0 would stall the time change
-
-
-@njit
-def _cauchy(a, b, k) -> float:
-    """Coefficient k of the product of the series a and b."""
-    total = 0.0
-    for i in range(k + 1):
-        total += a[i] * b[k - i]
-    return total
-
-
-@njit
-def _series(masses, lam, used, moving, on, count, deta0, S, D, Q, Cb, L, F, G, J, Jo, Pre, Suf):
-    """Taylor coefficients 1..ORDER in tau of a step's series (rows of S, coefficient 0 given):
-    S[0] the clock t, S[1 + j] w_j and S[1 + n + j] w_j' (the displacement and velocity the
-    contact forces add to ball j's parabola since the step's start, for the ``moving`` balls),
-    S[1 + 2n + c] rho_c = sqrt(delta_c) (the ``on`` contacts, the first ``count`` of the ``used``
-    ones), with dt = J dtau, J the product of their rho (see :func:`contact_phase`); ``D``
-    receives the series of every eta_c'."""
-    n = masses.size
-    W, U, R = 1, 1 + n, 1 + 2 * n
-    for k in range(ORDER):
-        for c in range(n):
-            rate = deta0[c] if k == 0 else 0.0
-            if c == 0:
-                rate -= S[0, k]
-            if moving[c]:
-                rate += S[U + c, k]
-            if c >= 1 and moving[c - 1]:
-                rate -= S[U + c - 1, k]
-            D[c, k] = rate
-        for i in range(count):
-            c = on[i]
-            r = S[R + c]
-            Q[c, k] = _cauchy(r, r, k)
-            Cb[c, k] = _cauchy(Q[c], r, k)
-            L[c, k] = (1.0 if k == 0 else 0.0) - lam[c] * D[c, k]
-            F[c, k] = _cauchy(Cb[c], L[c], k)
-        if count == 1:
-            c = on[0]
-            J[k] = S[R + c, k]
-            Jo[c, k] = 1.0 if k == 0 else 0.0
-        else:
-            Pre[0, k] = S[R + on[0], k]
-            for i in range(1, count):
-                Pre[i, k] = _cauchy(Pre[i - 1], S[R + on[i]], k)
-            Suf[count - 1, k] = S[R + on[count - 1], k]
-            for i in range(count - 2, 0, -1):
-                Suf[i, k] = _cauchy(S[R + on[i]], Suf[i + 1], k)
-            J[k] = Pre[count - 1, k]
-            Jo[on[0], k] = Suf[1, k]
-            Jo[on[count - 1], k] = Pre[count - 2, k]
-            for i in range(1, count - 1):
-                Jo[on[i], k] = _cauchy(Pre[i - 1], Suf[i + 1], k)
-        after = 1.0 / (k + 1)
-        S[0, k + 1] = J[k] * after
-        for j in range(n):
-            if moving[j]:
-                below = F[j, k] if used[j] else 0.0
-                above = F[j + 1, k] if j + 1 < n and used[j + 1] else 0.0
-                G[j, k] = (below - above) / masses[j]
-                S[W + j, k + 1] = _cauchy(J, S[U + j], k) * after
-                S[U + j, k + 1] = _cauchy(J, G[j], k) * after
-        for i in range(count):
-            c = on[i]
-            S[R + c, k + 1] = -0.5 * _cauchy(Jo[c], D[c], k) * after
-
-
-@njit
-def _value(S, row, tau) -> float:
-    """Series ``row`` of S at tau (Horner)."""
-    total = 0.0
-    for k in range(ORDER, -1, -1):
-        total = total * tau + S[row, k]
-    return total
-
-
-@njit
-def _change(S, row, tau) -> float:
-    """Series ``row`` of S at tau, less its value at 0."""
-    total = 0.0
-    for k in range(ORDER, 0, -1):
-        total = total * tau + S[row, k]
-    return total * tau
-
-
-@njit
-def _rate(S, row, tau) -> float:
-    """The derivative in tau of series ``row`` at tau."""
-    total = 0.0
-    for k in range(ORDER, 0, -1):
-        total = total * tau + k * S[row, k]
-    return total
-
-
-@njit
-def _taylor_step(S, scales, rows) -> float:
-    """The step in tau at which the last two terms of every series in ``rows`` are below
-    TOLERANCE of its scale (Jorba and Zou's rule)."""
-    step = math.inf
-    for i in range(rows.size):
-        row = rows[i]
-        for k in (ORDER - 1, ORDER):
-            size = abs(S[row, k])
-            if size > 0.0:
-                step = min(step, (TOLERANCE * scales[row] / size) ** (1.0 / k))
-    return step
-
-
-@njit
-def _time_root(S, target, high) -> float:
-    """The tau in (0, high] at which the clock's series reaches ``target`` (it rises on [0,
-    high] and reaches at least ``target`` at high): Newton's method, kept in its bracket."""
-    low = 0.0
-    tau = high
-    for _ in range(100):
-        value = _value(S, 0, tau) - target
-        if value > 0.0:
-            high = tau
-        elif value < 0.0:
-            low = tau
-        else:
-            return tau
-        slope = _rate(S, 0, tau)
-        guess = tau - value / slope if slope > 0.0 else 0.5 * (low + high)
-        if not low <= guess <= high:
-            guess = 0.5 * (low + high)
-        if guess == tau or high - low <= 1e-16 * high:
-            return guess
-        tau = guess
-    return tau
 
 
 @njit

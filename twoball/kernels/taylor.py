@@ -1,0 +1,141 @@
+"""Taylor series of the Hertz stack's time-changed motion, for the contact phases of
+:mod:`twoball.kernels.hertz` (docs/stacks.md, "Why a Taylor series of the time-changed motion").
+
+With rho_c = sqrt(delta_c) for each contact in the series and dt = J dtau, J the product of
+their rho, the motion is polynomial in (t, w, w', rho) (w, w' what the contact forces add to each
+ball's parabola since the step's start), so every coefficient of its Taylor series in tau follows
+from the lower ones by the recurrences of products (Cauchy products): :func:`_series`. The step
+is Jorba and Zou's: where the last two terms of every series fall below :data:`TOLERANCE` of its
+scale (:func:`_taylor_step`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from twoball.jit import njit
+
+ORDER = 20  # Taylor coefficients per step (the series' degree)
+TOLERANCE = 1e-16  # each series' last two terms at the step, relative to its variable's scale
+
+
+@njit
+def _cauchy(a, b, k) -> float:
+    """Coefficient k of the product of the series a and b."""
+    total = 0.0
+    for i in range(k + 1):
+        total += a[i] * b[k - i]
+    return total
+
+
+@njit
+def _series(masses, lam, used, moving, on, count, deta0, S, D, Q, Cb, L, F, G, J, Jo, Pre, Suf):
+    """Taylor coefficients 1..ORDER in tau of a step's series (rows of S, coefficient 0 given):
+    S[0] the clock t, S[1 + j] w_j and S[1 + n + j] w_j' (the displacement and velocity the
+    contact forces add to ball j's parabola since the step's start, for the ``moving`` balls),
+    S[1 + 2n + c] rho_c = sqrt(delta_c) (the ``on`` contacts, the first ``count`` of the ``used``
+    ones), with dt = J dtau, J the product of their rho; ``D`` receives the series of every
+    eta_c'."""
+    n = masses.size
+    W, U, R = 1, 1 + n, 1 + 2 * n
+    for k in range(ORDER):
+        for c in range(n):
+            rate = deta0[c] if k == 0 else 0.0
+            if c == 0:
+                rate -= S[0, k]
+            if moving[c]:
+                rate += S[U + c, k]
+            if c >= 1 and moving[c - 1]:
+                rate -= S[U + c - 1, k]
+            D[c, k] = rate
+        for i in range(count):
+            c = on[i]
+            r = S[R + c]
+            Q[c, k] = _cauchy(r, r, k)
+            Cb[c, k] = _cauchy(Q[c], r, k)
+            L[c, k] = (1.0 if k == 0 else 0.0) - lam[c] * D[c, k]
+            F[c, k] = _cauchy(Cb[c], L[c], k)
+        if count == 1:
+            c = on[0]
+            J[k] = S[R + c, k]
+            Jo[c, k] = 1.0 if k == 0 else 0.0
+        else:
+            Pre[0, k] = S[R + on[0], k]
+            for i in range(1, count):
+                Pre[i, k] = _cauchy(Pre[i - 1], S[R + on[i]], k)
+            Suf[count - 1, k] = S[R + on[count - 1], k]
+            for i in range(count - 2, 0, -1):
+                Suf[i, k] = _cauchy(S[R + on[i]], Suf[i + 1], k)
+            J[k] = Pre[count - 1, k]
+            Jo[on[0], k] = Suf[1, k]
+            Jo[on[count - 1], k] = Pre[count - 2, k]
+            for i in range(1, count - 1):
+                Jo[on[i], k] = _cauchy(Pre[i - 1], Suf[i + 1], k)
+        after = 1.0 / (k + 1)
+        S[0, k + 1] = J[k] * after
+        for j in range(n):
+            if moving[j]:
+                below = F[j, k] if used[j] else 0.0
+                above = F[j + 1, k] if j + 1 < n and used[j + 1] else 0.0
+                G[j, k] = (below - above) / masses[j]
+                S[W + j, k + 1] = _cauchy(J, S[U + j], k) * after
+                S[U + j, k + 1] = _cauchy(J, G[j], k) * after
+        for i in range(count):
+            c = on[i]
+            S[R + c, k + 1] = -0.5 * _cauchy(Jo[c], D[c], k) * after
+
+
+@njit
+def _value(S, row, tau) -> float:
+    """Series ``row`` of S at tau (Horner)."""
+    total = 0.0
+    for k in range(ORDER, -1, -1):
+        total = total * tau + S[row, k]
+    return total
+
+
+@njit
+def _rate(S, row, tau) -> float:
+    """The derivative in tau of series ``row`` at tau."""
+    total = 0.0
+    for k in range(ORDER, 0, -1):
+        total = total * tau + k * S[row, k]
+    return total
+
+
+@njit
+def _taylor_step(S, scales, rows) -> float:
+    """The step in tau at which the last two terms of every series in ``rows`` are below
+    TOLERANCE of its scale (Jorba and Zou's rule)."""
+    step = math.inf
+    for i in range(rows.size):
+        row = rows[i]
+        for k in (ORDER - 1, ORDER):
+            size = abs(S[row, k])
+            if size > 0.0:
+                step = min(step, (TOLERANCE * scales[row] / size) ** (1.0 / k))
+    return step
+
+
+@njit
+def _time_root(S, target, high) -> float:
+    """The tau in (0, high] at which the clock's series reaches ``target`` (it rises on [0,
+    high] and reaches at least ``target`` at high): Newton's method, kept in its bracket."""
+    low = 0.0
+    tau = high
+    for _ in range(100):
+        value = _value(S, 0, tau) - target
+        if value > 0.0:
+            high = tau
+        elif value < 0.0:
+            low = tau
+        else:
+            return tau
+        slope = _rate(S, 0, tau)
+        guess = tau - value / slope if slope > 0.0 else 0.5 * (low + high)
+        if not low <= guess <= high:
+            guess = 0.5 * (low + high)
+        if guess == tau or high - low <= 1e-16 * high:
+            return guess
+        tau = guess
+    return tau
