@@ -11,9 +11,10 @@ with a contact active is integrated by Taylor series of order :data:`ORDER` (doc
   polynomial in (t, x, v, rho) (drho_c/dtau = -(J / rho_c) eta_c' / 2, the force rho^3 (1 -
   lam eta')), and their solution is analytic in tau through a touch (rho starts at 0) and a
   release (rho falls through 0). Each step computes the series of every variable by the
-  recurrences of products (:func:`_series`) and takes the step at which the last two terms of
-  each are below :data:`TOLERANCE` of its scale (Jorba and Zou's rule): truncation error at
-  rounding, in steps 4 to 6 times longer than the eighth-order Runge-Kutta this replaced.
+  recurrences of products (:func:`_series`) and takes the step at which the last term of each
+  is :data:`TOLERANCE` of its scale (Jorba and Zou's rule, the radius of convergence from the
+  last few coefficients, :func:`_taylor_step`): truncation error at rounding, in steps 4 to 6
+  times longer than the eighth-order Runge-Kutta this replaced.
 - **Each step integrates the contact forces' effect only.** From a step's start (x0, v0), every
   height is x0 + v0 s - s^2/2 + w(s), s the clock's series, and the series carried are w, w'
   from zero (w_j'' = (f_j - f_(j+1)) / m_j); a ball in free flight has w = 0 exactly, so its apex
@@ -24,8 +25,8 @@ with a contact active is integrated by Taylor series of order :data:`ORDER` (doc
   rebuilt as differences of heights, and every carried quantity and the clock is a compensated
   sum moved on with exact products.
 - **The state at an event is the series' own** at the event's tau (the series is the step's
-  dense output, at the step's accuracy): a switch is bisected on it, an apex or a sample time
-  found by Newton's method on the clock's series.
+  dense output, at the step's accuracy): a switch is found on it by regula falsi, an apex or
+  a sample time by Newton's method on the clock's series.
 
 No touch or release is stepped over: the certified steps of :mod:`twoball.stacks.hertz` (the
 energy, which never rises, bounds every force; with the contacts active in a phase that bounds
@@ -48,7 +49,17 @@ import numpy as np
 from twoball.jit import njit
 from twoball.kernels.codes import STATUS_DONE, STATUS_FAILED, STATUS_PHASES, STATUS_REST
 from twoball.kernels.runs import _room_for_one
-from twoball.kernels.taylor import ORDER, TOLERANCE, _series, _taylor_step, _time_root, _value
+from twoball.kernels.taylor import (
+    ORDER,
+    TOLERANCE,
+    _function_root,
+    _functions,
+    _motion,
+    _series,
+    _taylor_step,
+    _time_root,
+    _value,
+)
 
 MAX_STEPS = 300_000  # a run that cannot end fails within seconds (a step takes ~4 us)
 PROBES = 8  # points per step where the clamp is looked for
@@ -409,94 +420,6 @@ def _sample_forces(row, lam, active) -> None:
             deta = row[n + c] - (row[n + c - 1] if c >= 1 else 0.0)
             if eta < 0.0:
                 row[2 * n + c] = _power(-eta) * max(1.0 - lam[c] * deta, 0.0)
-
-
-@njit
-def _motion(S, tau, moving, z) -> float:
-    """The clock's s at tau, and z = (w, w') there (zero for a ball in free flight)."""
-    n = moving.size
-    for j in range(n):
-        z[j], z[n + j] = 0.0, 0.0
-        if moving[j]:
-            z[j], z[n + j] = _value(S, 1 + j, tau), _value(S, 1 + n + j, tau)
-    return _value(S, 0, tau)
-
-
-@njit
-def _functions(lam, used, moving, S, tau, eta0, deta0, z, out) -> None:
-    """Each contact's switching function at tau, signed to fall through zero at its switch: for
-    a contact in the series min(rho, 1 + lam delta'), for another max(eta, lam eta' - 1) (the
-    rule of docs/model.md, "Bodies, coordinates, forces": with rho >= 0, -max(-rho^2, g) has
-    rho's sign)."""
-    n = lam.size
-    s = _motion(S, tau, moving, z)
-    for c in range(n):
-        eta = eta0[c] + deta0[c] * s + z[c] - (z[c - 1] if c >= 1 else 0.0)
-        deta = deta0[c] + z[n + c] - (z[n + c - 1] if c >= 1 else 0.0)
-        if c == 0:
-            eta -= 0.5 * s * s
-            deta -= s
-        if used[c]:
-            out[c] = min(_value(S, 1 + 2 * n + c, tau), 1.0 - lam[c] * deta)
-        else:
-            out[c] = max(eta, lam[c] * deta - 1.0)
-
-
-@njit
-def _function(lam, used, moving, S, c, tau, eta0, deta0) -> float:
-    """Contact c's switching function at tau (as :func:`_functions`, evaluating its series only)."""
-    n = lam.size
-    s = _value(S, 0, tau)
-    rate = deta0[c]
-    if moving[c]:
-        rate += _value(S, 1 + n + c, tau)
-    if c >= 1 and moving[c - 1]:
-        rate -= _value(S, n + c, tau)
-    if c == 0:
-        rate -= s
-    if used[c]:
-        return min(_value(S, 1 + 2 * n + c, tau), 1.0 - lam[c] * rate)
-    eta = eta0[c] + deta0[c] * s
-    if moving[c]:
-        eta += _value(S, 1 + c, tau)
-    if c >= 1 and moving[c - 1]:
-        eta -= _value(S, c, tau)
-    if c == 0:
-        eta -= 0.5 * s * s
-    return max(eta, lam[c] * rate - 1.0)
-
-
-@njit
-def _function_root(lam, used, moving, S, c, low, high, eta0, deta0) -> float:
-    """The tau in (low, high] where contact c's switching function falls through zero, to
-    rounding (the side past the root): regula falsi with Illinois' halving, which keeps the
-    bracket and takes a handful of evaluations where bisection took fifty (each evaluating
-    every series, the larger part of a run's time)."""
-    f_low = _function(lam, used, moving, S, c, low, eta0, deta0)
-    f_high = _function(lam, used, moving, S, c, high, eta0, deta0)
-    if not f_low > 0.0:
-        f_low = 1e-300  # at the root itself: regula falsi falls back to bisection
-    side = 0
-    for iteration in range(200):
-        if high - low <= 1e-16 * high:
-            break
-        middle = (low * f_high - high * f_low) / (f_high - f_low)
-        if iteration >= 100 or not low < middle < high:
-            middle = 0.5 * (low + high)
-            if not low < middle < high:
-                break
-        value = _function(lam, used, moving, S, c, middle, eta0, deta0)
-        if value < 0.0:
-            high, f_high = middle, value
-            if side == -1:
-                f_low *= 0.5
-            side = -1
-        else:
-            low, f_low = middle, max(value, 1e-300)
-            if side == 1:
-                f_high *= 0.5
-            side = 1
-    return high
 
 
 @njit

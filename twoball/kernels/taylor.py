@@ -6,7 +6,10 @@ their rho, the motion is polynomial in (t, w, w', rho) (w, w' what the contact f
 ball's parabola since the step's start), so every coefficient of its Taylor series in tau follows
 from the lower ones by the recurrences of products (Cauchy products): :func:`_series`. The step
 is Jorba and Zou's, the last term of every series at :data:`TOLERANCE` of its scale, with the
-radius of convergence taken from the last :data:`LAST` coefficients (:func:`_taylor_step`).
+radius of convergence taken from the last :data:`LAST` coefficients (:func:`_taylor_step`). The
+series are each step's dense output: the contacts' switching functions on them
+(:func:`_functions`), a switch found by regula falsi (:func:`_function_root`), a moment of the
+clock by Newton's method (:func:`_time_root`).
 """
 
 from __future__ import annotations
@@ -146,3 +149,91 @@ def _time_root(S, target, high) -> float:
             return guess
         tau = guess
     return tau
+
+
+@njit
+def _motion(S, tau, moving, z) -> float:
+    """The clock's s at tau, and z = (w, w') there (zero for a ball in free flight)."""
+    n = moving.size
+    for j in range(n):
+        z[j], z[n + j] = 0.0, 0.0
+        if moving[j]:
+            z[j], z[n + j] = _value(S, 1 + j, tau), _value(S, 1 + n + j, tau)
+    return _value(S, 0, tau)
+
+
+@njit
+def _functions(lam, used, moving, S, tau, eta0, deta0, z, out) -> None:
+    """Each contact's switching function at tau, signed to fall through zero at its switch: for
+    a contact in the series min(rho, 1 + lam delta'), for another max(eta, lam eta' - 1) (the
+    rule of docs/model.md, "Bodies, coordinates, forces": with rho >= 0, -max(-rho^2, g) has
+    rho's sign)."""
+    n = lam.size
+    s = _motion(S, tau, moving, z)
+    for c in range(n):
+        eta = eta0[c] + deta0[c] * s + z[c] - (z[c - 1] if c >= 1 else 0.0)
+        deta = deta0[c] + z[n + c] - (z[n + c - 1] if c >= 1 else 0.0)
+        if c == 0:
+            eta -= 0.5 * s * s
+            deta -= s
+        if used[c]:
+            out[c] = min(_value(S, 1 + 2 * n + c, tau), 1.0 - lam[c] * deta)
+        else:
+            out[c] = max(eta, lam[c] * deta - 1.0)
+
+
+@njit
+def _function(lam, used, moving, S, c, tau, eta0, deta0) -> float:
+    """Contact c's switching function at tau (as :func:`_functions`, evaluating its series only)."""
+    n = lam.size
+    s = _value(S, 0, tau)
+    rate = deta0[c]
+    if moving[c]:
+        rate += _value(S, 1 + n + c, tau)
+    if c >= 1 and moving[c - 1]:
+        rate -= _value(S, n + c, tau)
+    if c == 0:
+        rate -= s
+    if used[c]:
+        return min(_value(S, 1 + 2 * n + c, tau), 1.0 - lam[c] * rate)
+    eta = eta0[c] + deta0[c] * s
+    if moving[c]:
+        eta += _value(S, 1 + c, tau)
+    if c >= 1 and moving[c - 1]:
+        eta -= _value(S, c, tau)
+    if c == 0:
+        eta -= 0.5 * s * s
+    return max(eta, lam[c] * rate - 1.0)
+
+
+@njit
+def _function_root(lam, used, moving, S, c, low, high, eta0, deta0) -> float:
+    """The tau in (low, high] where contact c's switching function falls through zero, to
+    rounding (the side past the root): regula falsi with Illinois' halving, which keeps the
+    bracket and takes a handful of evaluations where bisection took fifty (each evaluating
+    every series, the larger part of a run's time)."""
+    f_low = _function(lam, used, moving, S, c, low, eta0, deta0)
+    f_high = _function(lam, used, moving, S, c, high, eta0, deta0)
+    if not f_low > 0.0:
+        f_low = 1e-300  # at the root itself: regula falsi falls back to bisection
+    side = 0
+    for iteration in range(200):
+        if high - low <= 1e-16 * high:
+            break
+        middle = (low * f_high - high * f_low) / (f_high - f_low)
+        if iteration >= 100 or not low < middle < high:
+            middle = 0.5 * (low + high)
+            if not low < middle < high:
+                break
+        value = _function(lam, used, moving, S, c, middle, eta0, deta0)
+        if value < 0.0:
+            high, f_high = middle, value
+            if side == -1:
+                f_low *= 0.5
+            side = -1
+        else:
+            low, f_low = middle, max(value, 1e-300)
+            if side == 1:
+                f_high *= 0.5
+            side = 1
+    return high
