@@ -48,6 +48,7 @@ KERNEL_MODULES = (
     "twoball.kernels.runs",
     "twoball.kernels.clusters",
     "twoball.kernels.stack",
+    "twoball.kernels.taylor",
     "twoball.kernels.hertz",
 )
 

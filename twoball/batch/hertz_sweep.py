@@ -175,7 +175,7 @@ def annotate(dataset, height: float) -> None:
                 "Hertz is not scale-free: every ratio depends on H, one cube per height "
                 "(twoball/batch/hertz_sweep.py)"
             ),
-            "solver": SOLVER + " (compiled DOP853 on the contact forces' displacement, "
-            "certified steps; docs/stacks.md)",
+            "solver": SOLVER + " (compiled Taylor series in dt = sqrt(delta) dtau on the contact "
+            "forces' displacement, certified steps; docs/stacks.md)",
         }
     )

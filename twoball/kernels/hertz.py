@@ -2,29 +2,42 @@
 Hertz force"): the method of :mod:`twoball.stacks.hertz` in numba, with a different integrator.
 
 Free flight is exact (parabolas; touches, clamps and apexes are roots of quadratics). A phase
-with a contact active is integrated by DOP853 (the coefficients of Hairer's and scipy's, seventh
-order dense output), compiled here, with changes that make it accurate to ~1e-14 in h1 where
-scipy's was off by up to 1e-6 in h2 (docs/accuracy.md, "The Hertz stack"):
+with a contact active is integrated by Taylor series of order :data:`ORDER` (docs/stacks.md,
+"Why a Taylor series of the time-changed motion"):
 
+- **The time change makes the motion analytic.** The force delta^(3/2) is not smooth where a
+  contact touches or releases (the overlap is linear in time there). With rho_c = sqrt(delta_c)
+  for each active contact and dt = J dtau, J the product of the active rho, the equations are
+  polynomial in (t, x, v, rho) (drho_c/dtau = -(J / rho_c) eta_c' / 2, the force rho^3 (1 -
+  lam eta')), and their solution is analytic in tau through a touch (rho starts at 0) and a
+  release (rho falls through 0). Each step computes the series of every variable by the
+  recurrences of products (:func:`_series`) and takes the step at which the last term of each
+  is :data:`TOLERANCE` of its scale (Jorba and Zou's rule, the radius of convergence from the
+  last few coefficients, :func:`_taylor_step`): truncation error at rounding, in steps 4 to 6
+  times longer than the eighth-order Runge-Kutta this replaced.
 - **Each step integrates the contact forces' effect only.** From a step's start (x0, v0), every
-  height is x0 + v0 s - s^2/2 + w(s), and the integrator carries w, w' from zero, with
-  w_j'' = (f_j - f_(j+1)) / m_j; a ball in free flight has w = 0 exactly, so its apex is exact
-  (s = v0).
-- **The error is measured on that w against the contact's own scale** (rtol :data:`RTOL`, atol
-  rtol times the largest compression and speed the energy allows), not on heights of order H.
+  height is x0 + v0 s - s^2/2 + w(s), s the clock's series, and the series carried are w, w'
+  from zero (w_j'' = (f_j - f_(j+1)) / m_j); a ball in free flight has w = 0 exactly, so its apex
+  is exact (s = v0), and the tolerance is against the contact's own scale (the largest
+  compression and speed the energy allows), not heights of order H.
 - **Nothing is rounded to an ulp of H at every step** (:func:`_advance`): the overlaps eta and
-  their rates are carried from step to step, never rebuilt as differences of heights, and every
-  carried quantity and the clock is a compensated sum moved on with exact products.
-- **The state at an event is a step's own**: a switch or an apex is located on the dense output,
-  and the state there taken from a step to it (eighth order), not from the interpolant.
+  their rates are carried from step to step, moved by the same w, w' as the heights, never
+  rebuilt as differences of heights, and every carried quantity and the clock is a compensated
+  sum moved on with exact products.
+- **The state at an event is the series' own** at the event's tau (the series is the step's
+  dense output, at the step's accuracy): a switch is found on it by regula falsi, an apex or
+  a sample time by Newton's method on the clock's series.
 
-No touch or release is stepped over: the certified steps of :mod:`twoball.stacks.hertz` (the energy,
-which never rises, bounds every force; with the contacts active in a phase that bounds eta''
-towards each switch; each step keeps eta + eta' h - M h^2 / 2 on its side), ported as they are;
-a span certified so holds for every step inside it, so :data:`AHEAD` steps are certified at once.
-The clamp (1 + lam delta' = 0) is looked for at :data:`PROBES` points of the dense output of
-each step in which a proven bound on eta'' lets it be reached, and refined by bisection on it:
-estimated, not proven (as in :mod:`twoball.stacks.hertz`).
+No touch or release is stepped over: the certified steps of :mod:`twoball.stacks.hertz` (the
+energy, which never rises, bounds every force; with the contacts active in a phase that bounds
+eta'' towards each switch; each step keeps eta + eta' h - M h^2 / 2 on its side), ported as they
+are, cut each step on the clock; a span certified so holds for every step inside it, so
+:data:`AHEAD` steps are certified at once. The clamp (1 + lam delta' = 0) is looked for at
+:data:`PROBES` points of each step in which a proven bound on eta'' lets it be reached, and
+refined by bisection: estimated, not proven (as in :mod:`twoball.stacks.hertz`). A contact
+touching with neither compression nor speed (balls released touching) would stall the time
+change (rho = rho' = 0, so J = 0): it is left out of one first step short enough that its force,
+bounded as in the certified steps, could not move anything by a thousandth of the tolerance.
 """
 
 from __future__ import annotations
@@ -32,30 +45,27 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.integrate._ivp import dop853_coefficients as _dop853
 
 from twoball.jit import njit
 from twoball.kernels.codes import STATUS_DONE, STATUS_FAILED, STATUS_PHASES, STATUS_REST
 from twoball.kernels.runs import _room_for_one
+from twoball.kernels.taylor import (
+    ORDER,
+    TOLERANCE,
+    _function_root,
+    _functions,
+    _motion,
+    _series,
+    _taylor_step,
+    _time_root,
+    _value,
+)
 
-MAX_STEPS = 300_000  # a run that cannot end fails within seconds (a step takes ~3 us)
-RTOL = 1e-15  # local error of w (and w') per step, relative to the contact's scale
-PROBES = 8  # dense-output points per step where the clamp is looked for
+MAX_STEPS = 300_000  # a run that cannot end fails within seconds (a step takes ~4 us)
+PROBES = 8  # points per step where the clamp is looked for
 AHEAD = 4.0  # steps certified at once
-APPROACH = 0.8  # towards a release, steps shrink as (time left to it)^APPROACH
+STALL = 1e-8  # a contact this close to delta = 0 and delta' = 0 would stall the time change
 
-_STAGES = _dop853.N_STAGES
-_A = np.ascontiguousarray(_dop853.A[:_STAGES, :_STAGES])
-_B = np.ascontiguousarray(_dop853.B)
-_C = np.ascontiguousarray(_dop853.C[:_STAGES])
-_E3 = np.ascontiguousarray(_dop853.E3)
-_E5 = np.ascontiguousarray(_dop853.E5)
-_D = np.ascontiguousarray(_dop853.D)
-_A_EXTRA = np.ascontiguousarray(_dop853.A[_STAGES + 1 :])
-_C_EXTRA = np.ascontiguousarray(_dop853.C[_STAGES + 1 :])
-_EXTENDED = _dop853.N_STAGES_EXTENDED
-_POWER = _dop853.INTERPOLATOR_POWER
-SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 
 # what ends a phase
 K_SWITCH, K_APEX, K_TIME, K_REST, K_STEPS, K_FAILED = 0, 1, 2, 3, 4, 5
@@ -309,35 +319,6 @@ def _next_in_flight(lam, eta, deta, v, horizon):
 
 
 @njit
-def _rhs(s, z, out, eta0, deta0, masses, lam, active, forces) -> None:
-    """z = (w, w'): the displacement by the contact forces since the step's start, s after it."""
-    n = masses.size
-    for c in range(n):
-        forces[c] = 0.0
-        if not active[c]:
-            continue
-        eta = eta0[c] + deta0[c] * s + z[c] - (z[c - 1] if c >= 1 else 0.0)
-        deta = deta0[c] + z[n + c] - (z[n + c - 1] if c >= 1 else 0.0)
-        if c == 0:
-            eta -= 0.5 * s * s
-            deta -= s
-        if eta < 0.0:
-            forces[c] = _power(-eta) * max(1.0 - lam[c] * deta, 0.0)
-    for j in range(n):
-        out[j] = z[n + j]
-        out[n + j] = (forces[j] - (forces[j + 1] if j + 1 < n else 0.0)) / masses[j]
-
-
-@njit
-def _state_at(s, x0, v0, z, x, v) -> None:
-    """Heights and velocities s after the step's start, from its w, w' = z."""
-    n = x0.size
-    for j in range(n):
-        x[j] = x0[j] + v0[j] * s - 0.5 * s * s + z[j]
-        v[j] = v0[j] - s + z[n + j]
-
-
-@njit
 def _advance(s, z, state, low, full) -> None:
     """Move the carried state (rows x, v, eta, eta', each as state + low, :func:`_tick`; ``full``
     their rounded sums) on by s from a step's start, w, w' = z there, each by its change, products
@@ -367,36 +348,6 @@ def _advance(s, z, state, low, full) -> None:
         state[3, j], low[3, j] = _tick(high, part, z[n + j] - (z[n + j - 1] if j >= 1 else 0.0))
         for row in range(4):
             full[row, j] = state[row, j] + low[row, j]
-
-
-@njit
-def _dense(F, s, h, z) -> None:
-    """z = (w, w') at s in [0, h] from the step's dense output F (DOP853's interpolant)."""
-    u = s / h
-    z[:] = 0.0
-    for i in range(_POWER):
-        z += F[_POWER - 1 - i]
-        if i % 2 == 0:
-            z *= u
-        else:
-            z *= 1.0 - u
-    return
-
-
-@njit
-def _switch_values(lam, active, s, z, eta0, deta0, out) -> None:
-    """Each contact's switching function s after the step's start, signed so that it falls
-    through zero at a switch: S = max(eta, g) for an inactive contact, -S for an active one,
-    g = lam eta' - 1 (the one rule of docs/model.md, "Bodies, coordinates, forces")."""
-    n = lam.size
-    for c in range(n):
-        eta = eta0[c] + deta0[c] * s + z[c] - (z[c - 1] if c >= 1 else 0.0)
-        deta = deta0[c] + z[n + c] - (z[n + c - 1] if c >= 1 else 0.0)
-        if c == 0:
-            eta -= 0.5 * s * s
-            deta -= s
-        value = max(eta, lam[c] * deta - 1.0)
-        out[c] = -value if active[c] else value
 
 
 @njit
@@ -472,69 +423,65 @@ def _sample_forces(row, lam, active) -> None:
 
 
 @njit
-def _bisect(lam, active, F, h, eta0, deta0, c, low, high, t, z, values) -> float:
-    """The time s in (low, high] where contact c's switching function falls through zero,
-    refined on the dense output to rounding of the clock (the side past the root)."""
-    while True:
-        middle = 0.5 * (low + high)
-        if not low < middle < high or high - low <= 4e-16 * (abs(t) + high):
-            return high
-        _dense(F, middle, h, z)
-        _switch_values(lam, active, middle, z, eta0, deta0, values)
-        if values[c] < 0.0:
-            high = middle
-        else:
-            low = middle
+def _state_at(s, x0, v0, z, x, v) -> None:
+    """Heights and velocities s after the step's start, from its w, w' = z."""
+    n = x0.size
+    for j in range(n):
+        x[j] = x0[j] + v0[j] * s - 0.5 * s * s + z[j]
+        v[j] = v0[j] - s + z[n + j]
 
 
 @njit
-def _dop853_step(h, stages, z_new, dz, eta0, deta0, masses, lam, active, forces) -> None:
-    """One DOP853 step of w, w' from zero (scipy's rk_step), stages[0] given: the stages, the
-    new z = (w, w') into ``z_new`` and the last stage (at h, for the error and the next step)."""
-    m = z_new.size
-    for stage in range(1, _STAGES):
-        for i in range(m):
-            total = 0.0
-            for k in range(stage):
-                total += stages[k, i] * _A[stage, k]
-            dz[i] = total * h
-        _rhs(_C[stage] * h, dz, stages[stage], eta0, deta0, masses, lam, active, forces)
-    for i in range(m):
-        total = 0.0
-        for k in range(_STAGES):
-            total += stages[k, i] * _B[k]
-        z_new[i] = h * total
-    _rhs(h, z_new, stages[_STAGES], eta0, deta0, masses, lam, active, forces)
+def _left_out_span(lam, eta, deta, c, both, span, limit) -> float:
+    """The longest s <= span over which contact c, from delta = max(-eta, 0) and rate deta with
+    |eta''| <= both, gives an impulse below ``limit``: a span it can be left out of the series."""
+    s = span
+    for _ in range(200):
+        reach = max(-eta, 0.0) + abs(deta) * s + 0.5 * both * s * s
+        if s * _power(reach) * (1.0 + lam[c] * (abs(deta) + both * s)) <= limit:
+            return s
+        s *= 0.5
+    return 0.0
 
 
 @njit
 def contact_phase(
     masses, lam, state, low, full, t, t_low, active, force_bound, t_end, steps, fresh, watch_rest,
-    times, samples, next_sample, atol, h_abs, level,
+    times, samples, next_sample, scales, h_abs, level,
 ):  # fmt: skip
-    """Integrate a phase with a contact active to its first event (see the module), moving the
-    carried state + low (and ``full``, their sum) on in place (:func:`_advance`), the clock as
-    t + t_low (:func:`_tick`).
+    """Integrate a phase with a contact active to its first event by Taylor series (see the
+    module), moving the carried state + low (and ``full``, their sum) on in place
+    (:func:`_advance`), the clock as t + t_low (:func:`_tick`). ``scales``: each series' scale
+    (the rows of :func:`_series`); ``h_abs``: the span on the clock of the last step (what is
+    certified ahead).
 
     Returns (kind, index, t, t_low, steps, next_sample, h_abs): kind K_FAILED when a step falls
     below the spacing of the clock (beyond the domain double precision carries)."""
     n = masses.size
-    m = 2 * n
-    stages = np.empty((_EXTENDED, m))
-    F = np.empty((_POWER, m))
-    z, z_new, dz = np.zeros(m), np.empty(m), np.empty(m)
-    forces, accel = np.empty(n), np.empty(n)
+    rows_count = 1 + 3 * n
+    S = np.zeros((rows_count, ORDER + 1))
+    work_series = np.zeros((9, n, ORDER + 1))
+    D, Q, Cb, L, F = work_series[0], work_series[1], work_series[2], work_series[3], work_series[4]
+    G, Jo, Pre, Suf = work_series[5], work_series[6], work_series[7], work_series[8]
+    J = np.zeros(ORDER + 1)
+    W, U, R = 1, 1 + n, 1 + 2 * n
+    accel, forces = np.empty(n), np.empty(n)
+    before, after, now = np.empty(n), np.empty(n), np.empty(n)
+    z = np.empty(2 * n)
     eta0, deta0 = np.empty(n), np.empty(n)
-    before, after, previous, now = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    scratch = np.empty(n)
     work = np.empty((3, n))
     x, v, eta, deta = full[0], full[1], full[2], full[3]
     x_old, v_old = np.empty(n), np.empty(n)
+    moving = np.zeros(n, dtype=np.bool_)
     watched = np.zeros(n, dtype=np.bool_)
     for j in range(n):
-        watched[j] = not active[j] and not (j + 1 < n and active[j + 1]) and v[j] > 0.0
+        moving[j] = active[j] or (j + 1 < n and active[j + 1])
+    for j in range(n):
+        watched[j] = not moving[j] and v[j] > 0.0
+    on = np.empty(n, dtype=np.int64)
+    used = np.zeros(n, dtype=np.bool_)  # the active contacts in this step's series
+    rows = np.empty(rows_count, dtype=np.int64)
     at_start = True
-    last = False  # stages[_STAGES] holds the forces at this step's start (first same as last)
     certified = -math.inf  # no overlap reaches its root unseen before this time
     bounds = np.empty(n)  # |eta''| <= bounds until then
     while steps < MAX_STEPS:
@@ -550,142 +497,118 @@ def contact_phase(
             )
             certified = t + span
             bounds[:] = work[0]
-        max_step = certified - t
+        max_step = min(certified - t, t_end - t)
         eta0[:], deta0[:] = eta, deta
-        if last:
-            stages[0, :n] = 0.0
-            stages[0, n:] = stages[_STAGES, n:]
-        else:
-            z[:] = 0.0
-            _rhs(0.0, z, stages[0], eta0, deta0, masses, lam, active, forces)
-        # one DOP853 step (scipy's rk_step and error estimate), w and w' from zero
-        rejected = False
-        h_tried, norm_tried = 0.0, 0.0  # the last rejected try
-        while True:
-            h = min(h_abs, max_step)
-            if t + h > t_end:
-                h = t_end - t
-            if h < 10.0 * (np.nextafter(t, np.inf) - t):
-                if h == t_end - t:  # the end, closer than a step can go
-                    return K_TIME, -1, t_end, 0.0, steps, next_sample, h_abs
-                return K_FAILED, -1, t, t_low, steps, next_sample, h_abs
-            _dop853_step(h, stages, z_new, dz, eta0, deta0, masses, lam, active, forces)
-            err5, err3 = 0.0, 0.0
-            for i in range(m):
-                scale = atol[i] + RTOL * abs(z_new[i])
-                e5, e3 = 0.0, 0.0
-                for k in range(_STAGES + 1):
-                    e5 += stages[k, i] * _E5[k]
-                    e3 += stages[k, i] * _E3[k]
-                err5 += (e5 / scale) ** 2
-                err3 += (e3 / scale) ** 2
-            norm = 0.0
-            if err5 > 0.0 or err3 > 0.0:
-                norm = h * err5 / math.sqrt((err5 + 0.01 * err3) * m)
-            if norm < 1.0:
-                factor = MAX_FACTOR if norm == 0.0 else min(MAX_FACTOR, SAFETY * norm**-0.125)
-                approach = 1.0
-                for c in range(n):
-                    if active[c] and eta0[c] < 0.0 < deta0[c] and -eta0[c] > deta0[c] * h:
-                        # towards a release the force, delta^(3/2), is ever less smooth and the
-                        # error grows faster than the controller's h^8 predicts: shrink the
-                        # steps with the time left to it, estimated at the rate (a third of
-                        # the rejected steps)
-                        ahead = -eta0[c] / deta0[c]
-                        approach *= (1.0 - h / ahead) ** APPROACH
-                h_abs = h * factor * max(approach, MIN_FACTOR)
-                break
-            if rejected and h < h_tried and norm < norm_tried:
-                # rejected twice: the error's order in h measured by the two tries (after a
-                # touch the force grows as s^(3/2) from the step's start, the error as about
-                # h^(7/2), and shrinking by h^8's rule took a dozen tries)
-                order = min(max(math.log(norm_tried / norm) / math.log(h_tried / h), 2.0), 8.0)
-                shrink = max(SAFETY * norm ** (-1.0 / order), MIN_FACTOR**4)
-            else:
-                shrink = max(MIN_FACTOR, SAFETY * norm**-0.125)
-            h_tried, norm_tried = h, norm
-            h_abs = h * shrink
-            rejected = True
-        steps += 1
-        # the events in the step: each switching function at the end (and, for the clamp, at
-        # probes of the dense output); each watched ball's apex, exact (w = 0 for it)
-        z[:] = 0.0
-        _switch_values(lam, active, 0.0, z, eta0, deta0, before)
-        _switch_values(lam, active, h, z_new, eta0, deta0, after)
-        damped = _clamp_possible(lam, deta0, h, bounds)
-        crossed = False
+        # the series and their values now; a contact touching with neither compression nor
+        # speed (balls released touching) would stall the time change (rho = rho' = 0): it is
+        # left out of a first step short enough that its force could not move anything
+        count, used_rows = 0, 1
+        rows[0] = 0
         for c in range(n):
-            crossed = crossed or (before[c] >= 0.0 and after[c] < 0.0)
+            used[c] = False
+            if not active[c]:
+                continue
+            rho = math.sqrt(max(-eta[c], 0.0))
+            if rho <= STALL * scales[R + c] and deta[c] >= -STALL * scales[U + c]:
+                mass = min(masses[c], masses[c - 1]) if c >= 1 else masses[c]
+                limit = 1e-3 * TOLERANCE * scales[U + c] * mass
+                left = _left_out_span(lam, eta[c], deta[c], c, bounds[c], max_step, limit)
+                if left > 0.0:
+                    max_step = min(max_step, left)
+                    continue
+            used[c] = True
+            on[count] = c
+            count += 1
+            S[R + c, 0] = rho
+            rows[used_rows] = R + c
+            used_rows += 1
         for j in range(n):
-            crossed = crossed or (watched[j] and 0.0 < v[j] <= h)
-        sampled = next_sample < times.size and times[next_sample] <= t + h
-        dense = crossed or damped or sampled
-        if dense:
-            for stage in range(_STAGES + 1, _EXTENDED):
-                row = stage - _STAGES - 1
-                for i in range(m):
-                    total = 0.0
-                    for k in range(stage):
-                        total += stages[k, i] * _A_EXTRA[row, k]
-                    dz[i] = total * h
-                _rhs(_C_EXTRA[row] * h, dz, stages[stage], eta0, deta0, masses, lam, active, forces)
-            for i in range(m):
-                F[0, i] = z_new[i]
-                F[1, i] = h * stages[0, i] - z_new[i]
-                F[2, i] = 2.0 * z_new[i] - h * (stages[_STAGES, i] + stages[0, i])
-                for row in range(_POWER - 3):
-                    total = 0.0
-                    for k in range(_EXTENDED):
-                        total += _D[row, k] * stages[k, i]
-                    F[3 + row, i] = h * total
-        root, kind, index = h, K_TIME, -1
-        if crossed or damped:
-            previous[:] = before
-            since = 0.0
-            probes = PROBES + 1 if damped else 1
-            for probe in range(1, probes + 1):
-                s = h * probe / probes
-                if probe == probes:
-                    now[:] = after
-                else:
-                    _dense(F, s, h, z)
-                    _switch_values(lam, active, s, z, eta0, deta0, now)
-                found = False
-                for c in range(n):
-                    if previous[c] >= 0.0 and now[c] < 0.0:
-                        found = True
-                        when = _bisect(lam, active, F, h, eta0, deta0, c, since, s, t, z, scratch)
-                        if when < root or kind == K_TIME:
-                            root, kind, index = when, K_SWITCH, c
-                if found:
+            if moving[j]:
+                S[W + j, 0], S[U + j, 0] = 0.0, 0.0
+                rows[used_rows], rows[used_rows + 1] = W + j, U + j
+                used_rows += 2
+        if count > 0:
+            S[0, 0] = 0.0
+            _series(
+                masses, lam, used, moving, on, count, deta0, S, D, Q, Cb, L, F, G, J, Jo, Pre, Suf
+            )
+            tau = _taylor_step(S, scales, rows[:used_rows])
+        else:
+            # every active contact left out: free flight, tau = t
+            S[:, :] = 0.0
+            S[0, 1] = 1.0
+            tau = max_step
+        if tau == math.inf:  # polynomial series (no force): as far as the clock may go
+            tau = 1.0
+            for _ in range(200):
+                if not _value(S, 0, tau) < max_step:
                     break
-                previous[:] = now
-                since = s
+                tau *= 2.0
+        # the step's span on the clock; past a release (in the step) the clock runs back
+        natural = _value(S, 0, tau)
+        spacing = 10.0 * (np.nextafter(t, np.inf) - t)
+        if not natural <= max_step and max_step < spacing:
+            if max_step == t_end - t:  # the end, closer than a step can go
+                return K_TIME, -1, t_end, 0.0, steps, next_sample, h_abs
+            return K_FAILED, -1, t, t_low, steps, next_sample, h_abs
+        steps += 1
+        # the events in the step: each switching function at its end (and, where a clamp can
+        # be reached, at probes); each watched ball's apex, exact (its parabola)
+        _functions(lam, used, moving, S, 0.0, eta0, deta0, z, before)
+        _functions(lam, used, moving, S, tau, eta0, deta0, z, after)
+        for c in range(n):
+            if active[c] and not used[c]:
+                before[c], after[c] = 1.0, 1.0  # left out for this step
+        span = natural if 0.0 < natural <= max_step else max_step
+        damped = _clamp_possible(lam, deta, span, bounds)
+        root, kind, index = tau, K_TIME, -1
+        probes = PROBES + 1 if damped else 1
+        low_tau = 0.0
+        for probe in range(1, probes + 1):
+            probe_tau = tau * probe / probes
+            if probe == probes:
+                now[:] = after
+            else:
+                _functions(lam, used, moving, S, probe_tau, eta0, deta0, z, now)
+                for c in range(n):
+                    if active[c] and not used[c]:
+                        now[c] = 1.0
+            found = False
+            for c in range(n):
+                if before[c] >= 0.0 and now[c] < 0.0:
+                    found = True
+                    when = _function_root(lam, used, moving, S, c, low_tau, probe_tau, eta0, deta0)
+                    if when < root or kind == K_TIME:
+                        root, kind, index = when, K_SWITCH, c
+            if found:
+                break
+            before[:] = now
+            low_tau = probe_tau
+        s_root = _value(S, 0, root)
+        if not s_root <= max_step:
+            # cut at the certified span's end (the clock rises up to the first event)
+            root, kind, index = _time_root(S, max_step, root), K_TIME, -1
+            s_root = _value(S, 0, root)
+        if kind == K_TIME and not s_root > spacing:
+            return K_FAILED, -1, t, t_low, steps, next_sample, h_abs
         for j in range(n):
-            if watched[j] and 0.0 < v[j] <= h and (v[j] < root or kind == K_TIME):
-                root, kind, index = v[j], K_APEX, j
+            if watched[j] and 0.0 < v[j] <= s_root:
+                root, kind, index, s_root = _time_root(S, v[j], root), K_APEX, j, v[j]
         t_old = t + t_low
         x_old[:], v_old[:] = x, v
-        if kind == K_TIME or root == h:
-            z[:] = z_new
-        else:
-            # the state at the event from a step of its own (eighth order), not from the dense
-            # output (seventh): every switch and apex would otherwise add the interpolant's error
-            _dop853_step(root, stages, z, dz, eta0, deta0, masses, lam, active, forces)
-            if kind == K_APEX:
-                z[index], z[n + index] = 0.0, 0.0
-        _advance(root, z, state, low, full)
-        t, t_low = _tick(t, t_low, root)
-        last = kind == K_TIME
-        if dense:
-            while next_sample < times.size and times[next_sample] <= t:
-                if times[next_sample] >= t_old:
-                    s = times[next_sample] - t_old
-                    _dense(F, s, h, dz)
-                    row = samples[next_sample]
-                    _state_at(s, x_old, v_old, dz, row[:n], row[n : 2 * n])
-                    _sample_forces(row, lam, active)
-                next_sample += 1
+        _motion(S, root, moving, z)
+        _advance(s_root, z, state, low, full)
+        t, t_low = _tick(t, t_low, s_root)
+        if 0.0 < natural < math.inf:
+            h_abs = natural
+        while next_sample < times.size and times[next_sample] <= t:
+            if times[next_sample] >= t_old:
+                at = times[next_sample] - t_old
+                _motion(S, _time_root(S, at, root), moving, z)
+                row = samples[next_sample]
+                _state_at(at, x_old, v_old, z, row[:n], row[n : 2 * n])
+                _sample_forces(row, lam, active)
+            next_sample += 1
         if kind != K_TIME:
             return kind, index, t, t_low, steps, next_sample, h_abs
         if t >= t_end:
@@ -713,10 +636,15 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
     level = rest_level(masses)
     weights = _weights(masses)
     room = energy(masses, x, v) + 0.6 * (weights ** (5.0 / 3.0)).sum()  # above the minimum
-    atol = np.empty(2 * n)
+    # each series' scale (the rows of _series): the largest compression and speeds the energy
+    # allows, their ratio for the clock
+    compression = (2.5 * room) ** 0.4
+    scales = np.empty(1 + 3 * n)
     for j in range(n):
-        atol[j] = RTOL * (2.5 * room) ** 0.4  # the largest compression the energy allows
-        atol[n + j] = RTOL * math.sqrt(2.0 * room / masses[j])  # the largest speed
+        scales[1 + j] = compression
+        scales[1 + n + j] = math.sqrt(2.0 * room / masses[j])
+        scales[1 + 2 * n + j] = math.sqrt(compression)
+    scales[0] = compression / scales[1 + n : 1 + 2 * n].max()
     active = np.zeros(n, dtype=np.bool_)
     fresh = np.zeros(n, dtype=np.bool_)
     opened = np.zeros(n)
@@ -745,7 +673,7 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
         else:
             kind, index, t, t_low, steps, next_sample, h_abs = contact_phase(
                 masses, lam, state, low, full, t, t_low, active, force_bound, t_end, steps, fresh,
-                not resting, times, samples, next_sample, atol, h_abs, level,
+                not resting, times, samples, next_sample, scales, h_abs, level,
             )  # fmt: skip
             steps += 1  # a phase counts, so that a run always ends
         if kind == K_TIME or (resting and next_sample == times.size):

@@ -42,7 +42,8 @@ def _normalised_contact(factor: float) -> tuple[float, float]:
 @functools.lru_cache(maxsize=256)
 def damping_factor(eps: float) -> float:
     """Lambda = lam v with an isolated Hunt-Crossley contact's restitution equal to eps."""
-    if eps >= 1.0:
+    if eps >= 1.0 or _normalised_contact(0.0)[0] <= eps:
+        # within the integration's error of elastic (eps = 1 - 1e-16 has no root in (0, high))
         return 0.0
     high = 1.0
     while _normalised_contact(high)[0] > eps:

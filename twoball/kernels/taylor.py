@@ -1,0 +1,239 @@
+"""Taylor series of the Hertz stack's time-changed motion, for the contact phases of
+:mod:`twoball.kernels.hertz` (docs/stacks.md, "Why a Taylor series of the time-changed motion").
+
+With rho_c = sqrt(delta_c) for each contact in the series and dt = J dtau, J the product of
+their rho, the motion is polynomial in (t, w, w', rho) (w, w' what the contact forces add to each
+ball's parabola since the step's start), so every coefficient of its Taylor series in tau follows
+from the lower ones by the recurrences of products (Cauchy products): :func:`_series`. The step
+is Jorba and Zou's, the last term of every series at :data:`TOLERANCE` of its scale, with the
+radius of convergence taken from the last :data:`LAST` coefficients (:func:`_taylor_step`). The
+series are each step's dense output: the contacts' switching functions on them
+(:func:`_functions`), a switch found by regula falsi (:func:`_function_root`), a moment of the
+clock by Newton's method (:func:`_time_root`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from twoball.jit import njit
+
+ORDER = 20  # Taylor coefficients per step (the series' degree)
+TOLERANCE = 1e-16  # each series' last term at the step, relative to its variable's scale
+LAST = 6  # coefficients that estimate the radius of convergence (more than a lacunary gap)
+ROOT_TOLERANCE = TOLERANCE ** (1.0 / ORDER)
+
+
+@njit
+def _cauchy(a, b, k) -> float:
+    """Coefficient k of the product of the series a and b."""
+    total = 0.0
+    for i in range(k + 1):
+        total += a[i] * b[k - i]
+    return total
+
+
+@njit
+def _series(masses, lam, used, moving, on, count, deta0, S, D, Q, Cb, L, F, G, J, Jo, Pre, Suf):
+    """Taylor coefficients 1..ORDER in tau of a step's series (rows of S, coefficient 0 given):
+    S[0] the clock t, S[1 + j] w_j and S[1 + n + j] w_j' (the displacement and velocity the
+    contact forces add to ball j's parabola since the step's start, for the ``moving`` balls),
+    S[1 + 2n + c] rho_c = sqrt(delta_c) (the ``on`` contacts, the first ``count`` of the ``used``
+    ones), with dt = J dtau, J the product of their rho; ``D`` receives the series of every
+    eta_c'."""
+    n = masses.size
+    W, U, R = 1, 1 + n, 1 + 2 * n
+    for k in range(ORDER):
+        for c in range(n):
+            rate = deta0[c] if k == 0 else 0.0
+            if c == 0:
+                rate -= S[0, k]
+            if moving[c]:
+                rate += S[U + c, k]
+            if c >= 1 and moving[c - 1]:
+                rate -= S[U + c - 1, k]
+            D[c, k] = rate
+        for i in range(count):
+            c = on[i]
+            r = S[R + c]
+            Q[c, k] = _cauchy(r, r, k)
+            Cb[c, k] = _cauchy(Q[c], r, k)
+            L[c, k] = (1.0 if k == 0 else 0.0) - lam[c] * D[c, k]
+            F[c, k] = _cauchy(Cb[c], L[c], k)
+        if count == 1:
+            c = on[0]
+            J[k] = S[R + c, k]
+            Jo[c, k] = 1.0 if k == 0 else 0.0
+        else:
+            Pre[0, k] = S[R + on[0], k]
+            for i in range(1, count):
+                Pre[i, k] = _cauchy(Pre[i - 1], S[R + on[i]], k)
+            Suf[count - 1, k] = S[R + on[count - 1], k]
+            for i in range(count - 2, 0, -1):
+                Suf[i, k] = _cauchy(S[R + on[i]], Suf[i + 1], k)
+            J[k] = Pre[count - 1, k]
+            Jo[on[0], k] = Suf[1, k]
+            Jo[on[count - 1], k] = Pre[count - 2, k]
+            for i in range(1, count - 1):
+                Jo[on[i], k] = _cauchy(Pre[i - 1], Suf[i + 1], k)
+        after = 1.0 / (k + 1)
+        S[0, k + 1] = J[k] * after
+        for j in range(n):
+            if moving[j]:
+                below = F[j, k] if used[j] else 0.0
+                above = F[j + 1, k] if j + 1 < n and used[j + 1] else 0.0
+                G[j, k] = (below - above) / masses[j]
+                S[W + j, k + 1] = _cauchy(J, S[U + j], k) * after
+                S[U + j, k + 1] = _cauchy(J, G[j], k) * after
+        for i in range(count):
+            c = on[i]
+            S[R + c, k + 1] = -0.5 * _cauchy(Jo[c], D[c], k) * after
+
+
+@njit
+def _value(S, row, tau) -> float:
+    """Series ``row`` of S at tau (Horner)."""
+    total = 0.0
+    for k in range(ORDER, -1, -1):
+        total = total * tau + S[row, k]
+    return total
+
+
+@njit
+def _rate(S, row, tau) -> float:
+    """The derivative in tau of series ``row`` at tau."""
+    total = 0.0
+    for k in range(ORDER, 0, -1):
+        total = total * tau + k * S[row, k]
+    return total
+
+
+@njit
+def _taylor_step(S, scales, rows) -> float:
+    """The step in tau from the last :data:`LAST` coefficients of the series in ``rows``, each
+    relative to its scale: with q_k the largest |c_k| / scale, the radius of convergence is
+    about q_k^(-1/k), and the step TOLERANCE^(1/ORDER) times the least of these, which for k =
+    ORDER puts the last term at TOLERANCE (Jorba and Zou's rule). Not their last two terms
+    only: at a touch the series are lacunary (a lone contact's sqrt(delta) obeys rho'' ~ rho^4
+    in tau, so from rho = 0 only every fifth coefficient is nonzero), and two vanishing last
+    terms gave steps six times too long (h2 off by 1e-10 at order 24)."""
+    largest = 0.0
+    for k in range(ORDER + 1 - LAST, ORDER + 1):
+        size = 0.0
+        for i in range(rows.size):
+            size = max(size, abs(S[rows[i], k]) / scales[rows[i]])
+        if size > 0.0:
+            largest = max(largest, size ** (1.0 / k))
+    return ROOT_TOLERANCE / largest if largest > 0.0 else math.inf
+
+
+@njit
+def _time_root(S, target, high) -> float:
+    """The tau in (0, high] at which the clock's series reaches ``target`` (it rises on [0,
+    high] and reaches at least ``target`` at high): Newton's method, kept in its bracket."""
+    low = 0.0
+    tau = high
+    for _ in range(100):
+        value = _value(S, 0, tau) - target
+        if value > 0.0:
+            high = tau
+        elif value < 0.0:
+            low = tau
+        else:
+            return tau
+        slope = _rate(S, 0, tau)
+        guess = tau - value / slope if slope > 0.0 else 0.5 * (low + high)
+        if not low <= guess <= high:
+            guess = 0.5 * (low + high)
+        if guess == tau or high - low <= 1e-16 * high:
+            return guess
+        tau = guess
+    return tau
+
+
+@njit
+def _motion(S, tau, moving, z) -> float:
+    """The clock's s at tau, and z = (w, w') there (zero for a ball in free flight)."""
+    n = moving.size
+    for j in range(n):
+        z[j], z[n + j] = 0.0, 0.0
+        if moving[j]:
+            z[j], z[n + j] = _value(S, 1 + j, tau), _value(S, 1 + n + j, tau)
+    return _value(S, 0, tau)
+
+
+@njit
+def _functions(lam, used, moving, S, tau, eta0, deta0, z, out) -> None:
+    """Each contact's switching function at tau, signed to fall through zero at its switch: for
+    a contact in the series min(rho, 1 + lam delta'), for another max(eta, lam eta' - 1) (the
+    rule of docs/model.md, "Bodies, coordinates, forces": with rho >= 0, -max(-rho^2, g) has
+    rho's sign)."""
+    n = lam.size
+    s = _motion(S, tau, moving, z)
+    for c in range(n):
+        eta = eta0[c] + deta0[c] * s + z[c] - (z[c - 1] if c >= 1 else 0.0)
+        deta = deta0[c] + z[n + c] - (z[n + c - 1] if c >= 1 else 0.0)
+        if c == 0:
+            eta -= 0.5 * s * s
+            deta -= s
+        if used[c]:
+            out[c] = min(_value(S, 1 + 2 * n + c, tau), 1.0 - lam[c] * deta)
+        else:
+            out[c] = max(eta, lam[c] * deta - 1.0)
+
+
+@njit
+def _function(lam, used, moving, S, c, tau, eta0, deta0) -> float:
+    """Contact c's switching function at tau (as :func:`_functions`, evaluating its series only)."""
+    n = lam.size
+    s = _value(S, 0, tau)
+    rate = deta0[c]
+    if moving[c]:
+        rate += _value(S, 1 + n + c, tau)
+    if c >= 1 and moving[c - 1]:
+        rate -= _value(S, n + c, tau)
+    if c == 0:
+        rate -= s
+    if used[c]:
+        return min(_value(S, 1 + 2 * n + c, tau), 1.0 - lam[c] * rate)
+    eta = eta0[c] + deta0[c] * s
+    if moving[c]:
+        eta += _value(S, 1 + c, tau)
+    if c >= 1 and moving[c - 1]:
+        eta -= _value(S, c, tau)
+    if c == 0:
+        eta -= 0.5 * s * s
+    return max(eta, lam[c] * rate - 1.0)
+
+
+@njit
+def _function_root(lam, used, moving, S, c, low, high, eta0, deta0) -> float:
+    """The tau in (low, high] where contact c's switching function falls through zero, to
+    rounding (the side past the root): regula falsi with Illinois' halving, which keeps the
+    bracket and takes a handful of evaluations where bisection took fifty (each evaluating
+    every series, the larger part of a run's time)."""
+    f_low = _function(lam, used, moving, S, c, low, eta0, deta0)
+    f_high = _function(lam, used, moving, S, c, high, eta0, deta0)
+    if not f_low > 0.0:
+        f_low = 1e-300  # at the root itself: regula falsi falls back to bisection
+    side = 0
+    for iteration in range(200):
+        if high - low <= 1e-16 * high:
+            break
+        middle = (low * f_high - high * f_low) / (f_high - f_low)
+        if iteration >= 100 or not low < middle < high:
+            middle = 0.5 * (low + high)
+            if not low < middle < high:
+                break
+        value = _function(lam, used, moving, S, c, middle, eta0, deta0)
+        if value < 0.0:
+            high, f_high = middle, value
+            if side == -1:
+                f_low *= 0.5
+            side = -1
+        else:
+            low, f_low = middle, max(value, 1e-300)
+            if side == 1:
+                f_high *= 0.5
+            side = 1
+    return high
