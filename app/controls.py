@@ -246,7 +246,12 @@ class Controls(Built):
             )
         if not low <= typed <= high:
             clamped = min(max(typed, low), high)
-            return presets.height_from_metres(clamped), (
+            # (H from the clamped metres, kept within H's own range: the round trip through
+            # metres gave 9.999999999999998 for the lowest, which the state refused with a
+            # traceback and left the drop unchanged)
+            lowest, highest = app_range("height")
+            height = min(max(presets.height_from_metres(clamped), lowest), highest)
+            return height, (
                 f"{typed:g} m is outside the explorer's range, {span(low, high, ' m')}; "
                 f"using {clamped:.4g} m."
             )

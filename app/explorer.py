@@ -34,6 +34,19 @@ PAGE_CSS = """
   #header .title, .title { font-size: 1.15rem !important; white-space: normal; }
 }
 """
+# A change the server has not answered yet (scene.PENDING_JS marks the body): after a quarter of
+# a second, so that a quick answer never flickers, the scene dims and a banner says the plots
+# are being updated; stale plots never look current while a busy server catches up
+PENDING_CSS = """
+#main { transition: opacity 0.1s; }
+body.twoball-pending #main { opacity: 0.45; transition: opacity 0.2s 0.25s; }
+body.twoball-pending::after {
+  content: "Updating the plots…"; position: fixed; top: 72px; right: 24px; z-index: 2000;
+  background: #0072B2; color: #fff; padding: 6px 14px; border-radius: 4px; font-size: 1.1rem;
+  opacity: 0; animation: twoball-pending-shows 0.2s 0.25s forwards;
+}
+@keyframes twoball-pending-shows { to { opacity: 1; } }
+"""
 # On a phone (narrower than 768 px) the page scrolls as a whole (the template's container is
 # one screen high and clips: the plots were out of reach), the scene comes first and the lesson
 # and the controls follow it at full width; the button top left still folds them away.
@@ -202,7 +215,7 @@ class Explorer(Built):
             # itself that its own change is pending (scene.PENDING_JS).
             busy_indicator=None,
         )
-        template.config.raw_css.append(PAGE_CSS)
+        template.config.raw_css.extend([PAGE_CSS, PENDING_CSS])
         if self.state.presentation:
             template.config.raw_css.append(PRESENTATION_CSS)
         return template

@@ -300,6 +300,23 @@ def test_bad_typed_values_show_a_message_and_keep_a_valid_state():
     assert explorer.scenes["drop"].result.drop.eps12 == 0.5
 
 
+@pytest.mark.parametrize("typed", ["0.0001", "1e9"])
+def test_a_drop_height_typed_in_metres_outside_the_range_is_clamped_and_used(typed):
+    """In metres, a height below (or above) the explorer's range is clamped to its end, and the
+    drop uses it (below, the clamped metres came back as H = 9.999999999999998, which the state
+    refused with a traceback, leaving the drop unchanged under a message that said otherwise)."""
+    from app.state import app_range
+
+    explorer = rendered({"units": "SI"})
+    lowest, highest = app_range("height")
+    explorer.controls.height.value = typed
+    expected = lowest if float(typed) < 1 else highest
+    assert explorer.state.height == expected
+    assert explorer.scenes["drop"].result.drop.height == expected
+    message = explorer.controls.typed_message
+    assert message.visible and "outside the explorer's range" in message.object
+
+
 def test_a_preset_sets_the_parameters_and_the_sliders():
     explorer = rendered()
     explorer.controls.preset.value = "ping-pong"

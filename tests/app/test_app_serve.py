@@ -269,11 +269,24 @@ def test_the_page_says_it_is_working_while_the_server_is_behind(browser, artifac
             assert press_slider(page, "eps", timeout_ms=500) == -1  # no answer: it is stopped
             assert page.evaluate(pending)
             page.wait_for_timeout(600)  # the dimming waits 0.25 s, so quick answers never show it
+            # seen, not only marked: the scene dimmed and the banner shown (the mark alone,
+            # without its style sheet, once showed nothing, and a new user saw stale plots)
+            shown = page.evaluate(
+                """() => [parseFloat(getComputedStyle(document.querySelector('#main')).opacity),
+                          getComputedStyle(document.body, '::after').content,
+                          parseFloat(getComputedStyle(document.body, '::after').opacity)]"""
+            )
+            assert shown[0] < 0.6 and "Updating the plots" in shown[1] and shown[2] > 0.9, shown
             page.screenshot(path=artifacts / "server_behind.png")
         finally:
             os.kill(served.process.pid, signal.SIGCONT)
         wait_for_change(page, before)
         page.wait_for_function(f"() => !({pending})()", timeout=20_000)
+        page.wait_for_timeout(300)
+        assert (
+            page.evaluate("parseFloat(getComputedStyle(document.querySelector('#main')).opacity)")
+            == 1
+        )
         assert errors == []
     finally:
         context.close()
