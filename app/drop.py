@@ -54,7 +54,7 @@ LOWER, UPPER = "#0072B2", "#D55E00"
 BALL_RADIUS = 0.06  # of the plot's height: the lower ball as drawn
 PLAYER_HELP = (
     "Press play (the triangle): each collision is shown in **slow motion**, marked (slow). The "
-    "balls are drawn stacked, so the stage's heights are the stack's, not each ball's X."
+    "balls are drawn to the heights' scale, each on the one below it."
 )
 
 
@@ -136,20 +136,23 @@ def balls_glyph() -> Circle:
 
 
 def stage():
-    """The animation's stage: a narrow figure with the floor (a grey band below height 0), a
-    height axis and no other (the balls are side by side at fixed places)."""
+    """The animation's stage: a narrow figure with the floor (a grey band below height 0) and
+    no axis. A picture of the balls, each drawn on the one below at the heights' scale; its
+    numbers would have been the stack's heights, which differ from each ball's on the heights
+    plot beside it by the balls below (a new user took them for wrong heights), and the
+    heights plot gives the numbers."""
     fig = figure(
         width=220,
         height=400,
         x_range=(-1, 1),
         y_range=Range1d(0.0, 1.0),
         x_axis_type=None,
+        y_axis_type=None,
         tools="",
         toolbar_location=None,
         title="t = 0",
     )
     fig.add_layout(BoxAnnotation(top=0.0, fill_color="gray", fill_alpha=0.5))
-    height_axis(fig)
     return fig
 
 
@@ -169,7 +172,6 @@ def below_zero(height: float | None) -> str:
 # wraps below it only on a narrow screen (the pane's styles never reach the figure, whose
 # 100 % width then always pushed the stage below it: on a laptop out of sight)
 BESIDE_STYLES = {"flex": "1 1 340px", "min-width": "0"}
-STACKED = "stacked"  # the stage's heights are the stack's (PLAYER_HELP says how), as its axis says
 PROJECTOR_PLOT_HEIGHT = 290  # presentation mode (scene.py): plots and player within 720 px
 
 
@@ -308,9 +310,6 @@ class DropScene(Scene):
         room = high / (1 - 4 * BALL_RADIUS)  # the balls drawn on top of their heights fit
         self.animation.y_range.update(start=low, end=room, reset_start=low, reset_end=room)
         self.heights.yaxis.axis_label = units.length_label
-        # the stage's heights are the stack's: each ball drawn on top of those below it (a
-        # new user compared its numbers with the heights plot's, and they differ by the balls)
-        self.animation.yaxis.axis_label = f"{units.length_label}, {STACKED}"
         self.heights.xaxis.axis_label = units.time_label
         self._animate(units)
 

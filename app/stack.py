@@ -32,7 +32,6 @@ from .animation import Animation, FramePlayer
 from .controls import ReleasedIntSlider, ReleasedSlider, plain
 from .drop import (
     BESIDE_STYLES,
-    STACKED,
     balls_glyph,
     below_zero,
     frame_times,
@@ -61,9 +60,9 @@ CAPTION_HELP = (
 )
 
 
-PROJECTOR_PLOT_HEIGHT = 310  # presentation mode (scene.py): plots and player in 720 px, with
-# room to spare (at 350 the player's buttons ended at 715 px, and a touch screen's taller
-# buttons were cut)
+PROJECTOR_PLOT_HEIGHT = 330  # presentation mode (scene.py): plots and player in 720 px, with
+# room to spare for a touch screen's taller buttons; the legend stands right of the curves
+# there (below them, at 310 px, it left the curves 115 px)
 
 
 class StackScene(Scene):
@@ -176,10 +175,14 @@ class StackScene(Scene):
         )  # fmt: skip
         fig.add_layout(self.icm_line)
         fig.add_layout(self.cursor)
-        # below the plot, four a row: inside it, eight balls' legend hid the curves and the
-        # apex labels
-        self.legend = Legend(items=[], orientation="horizontal", ncols=4)
-        fig.add_layout(self.legend, "below")
+        # outside the curves (inside, eight balls' legend hid them and the apex labels): below
+        # them, four a row; on a projector, whose height is what is short, right of them
+        if self.state.presentation:
+            self.legend = Legend(items=[], orientation="vertical")
+            fig.add_layout(self.legend, "right")
+        else:
+            self.legend = Legend(items=[], orientation="horizontal", ncols=4)
+            fig.add_layout(self.legend, "below")
         return fig
 
     def _add_lines(self, balls: int) -> None:
@@ -198,7 +201,6 @@ class StackScene(Scene):
 
     def _animation_figure(self):
         fig = stage()
-        fig.yaxis.axis_label = f"height X, {STACKED}"
         draw(fig, balls_glyph(), self.balls_drawn)
         return fig
 
@@ -270,7 +272,8 @@ class StackScene(Scene):
         icm = icm_chain(r.stack)[-1]
         self.icm_line.location = icm
         highest = max(float(np.nanmax(tr.x)), icm)
-        low, high = -0.03 * highest, 1.12 * highest
+        # room above the highest apex for its label (larger on a projector: 16 pt)
+        low, high = -0.03 * highest, (1.25 if self.state.presentation else 1.12) * highest
         self.heights.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
         room = high / (1 - 2 * BALL_RADIUS * n)
         self.animation.y_range.update(start=low, end=room, reset_start=low, reset_end=room)
@@ -330,10 +333,14 @@ class StackScene(Scene):
         eps = [float(e) for e in r.stack.eps]
         if len(set(eps)) > 1:  # typed under "advanced"
             first = f"eps per contact {', '.join(f'{e:g}' for e in eps)}; {first}"
+        # (on a projector the contact counts are left out: eight balls' list took the summary
+        # to five lines, and the player off the screen)
+        contacts = (
+            "" if s.presentation else f" Contacts before h1 (floor, then each pair): {counts}."
+        )
         return (
             f"{s.balls} balls, {s.force} force: {first}{second}.  \n"
-            f"Chain of independent collisions (dotted green): {number_text(icm)}{ratio}. "
-            f"Contacts before h1 (floor, then each pair): {counts}."
+            f"Chain of independent collisions (dotted green): {number_text(icm)}{ratio}.{contacts}"
         )
 
     def own_controls(self) -> pn.viewable.Viewable:
