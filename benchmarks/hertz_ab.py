@@ -1,6 +1,8 @@
 """A/B timing of the compiled Hertz kernel: this tree's against another revision's, in one process.
 
-    .venv/bin/python benchmarks/hertz_ab.py [--base REVISION] [--rounds 5]
+    .venv/bin/python benchmarks/hertz_ab.py --base REVISION [--rounds 5]
+
+(0e1a585 is the last revision with the compiled DOP853, before the Taylor series.)
 
 The other revision's twoball/kernels/hertz.py (``git show``; it must run on this tree's lower
 kernel modules) is loaded beside this tree's under another name, and both run the documented
@@ -70,7 +72,7 @@ def median_time(call, repeats: int) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--base", default="main", help="the other revision (default: main)")
+    parser.add_argument("--base", required=True, help="the other revision (e.g. 0e1a585)")
     parser.add_argument("--rounds", type=int, default=5)
     args = parser.parse_args()
     kernels = {"base": load_base(args.base), "this": this_kernel}
@@ -78,21 +80,26 @@ def main() -> None:
         for name, kernel in kernels.items():
             run = kernel.run(*inputs(balls))
             top = run[2][run[2][:, 0] == balls - 1, 2]
-            print(f"N = {balls} {name}: steps {run[6]}, h1 {float(top[0])!r}, h2 {float(top[1])!r}", flush=True)
+            print(
+                f"N = {balls} {name}: steps {run[6]}, h1 {float(top[0])!r}, h2 {float(top[1])!r}",
+                flush=True,
+            )
     medians = {(name, balls): [] for name in kernels for balls, _ in BALLS}
     for round_ in range(args.rounds):
         line = []
         for balls, repeats in BALLS:
             arguments = inputs(balls)
             for name, kernel in kernels.items():
-                seconds = median_time(lambda k=kernel: k.run(*arguments), repeats)
+                seconds = median_time(lambda k=kernel, a=arguments: k.run(*a), repeats)
                 medians[name, balls].append(seconds)
                 line.append(f"N = {balls} {name} {seconds * 1e3:.3f} ms")
         print(f"round {round_ + 1}: " + ", ".join(line), flush=True)
     for balls, _ in BALLS:
         base = statistics.median(medians["base", balls])
         this = statistics.median(medians["this", balls])
-        print(f"N = {balls}: base {base * 1e3:.3f} ms, this {this * 1e3:.3f} ms ({this / base:.2f})")
+        print(
+            f"N = {balls}: base {base * 1e3:.3f} ms, this {this * 1e3:.3f} ms ({this / base:.2f})"
+        )
 
 
 if __name__ == "__main__":

@@ -69,9 +69,9 @@ def main() -> None:
     parser.add_argument("--moves", type=int, default=30)
     parser.add_argument("--every", type=float, default=1.5)
     args = parser.parse_args()
-    from twoball import jit
+    from twoball.warmup import warm_up
 
-    jit.warm_up()
+    warm_up()
     latencies = asyncio.run(measure(args))
     for n in args.balls:
         medians = {f: 1e3 * statistics.median(latencies[f, n]) for f in ("linear", "hertz")}
