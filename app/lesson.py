@@ -28,7 +28,9 @@ class Lesson(Built):
 
     def __init__(self, **params):
         super().__init__(**params)
-        self.heading = pn.pane.Markdown(sizing_mode="stretch_width", margin=(0, 10))
+        self.heading = pn.pane.Markdown(
+            sizing_mode="stretch_width", margin=(0, 10), css_classes=["twoball-step-title"]
+        )
         self.choices = pn.widgets.RadioBoxGroup(
             options=[],
             value=None,
@@ -48,6 +50,11 @@ class Lesson(Built):
             lambda _: later(lambda: self._go((self.state.step + 1) % (len(STEPS) + 1)))
         )
         self.start.on_click(lambda _: later(self._begin))
+        # the card scrolled to the new step's title, or to the buttons after an answer, in
+        # the page (app/static/lesson.js)
+        for button in (self.start, self.previous, self.next):
+            button.js_on_click(code="twoballShowStep();")
+        self.reveal.js_on_click(code="twoballShowAnswer();")
         self.choices.param.watch(self._chosen, "value")
         # presentation mode: the question and its choices fill the main area while the class
         # predicts (:meth:`stage`), and the reveal puts a large one-line answer above the scene
@@ -143,11 +150,13 @@ class Lesson(Built):
     def _add_step_widgets(self) -> None:
         if self.state.presentation:  # the question large in the main area, the rest here
             self._projected.objects = [self._asking, self.answer_line]
-            self._steps.objects = [self.answer, pn.Row(self.previous, self.next)]
+            self._steps.objects = [self.answer, self._buttons()]
         else:
-            self._steps.objects = [
-                self.choices, self.reveal, self.answer, pn.Row(self.previous, self.next)
-            ]  # fmt: skip
+            self._steps.objects = [self.choices, self.reveal, self.answer, self._buttons()]
+
+    def _buttons(self) -> pn.Row:
+        """Previous and Next, a row that the page scrolls to after a reveal (lesson.js)."""
+        return pn.Row(self.previous, self.next, css_classes=["twoball-step-buttons"])
 
     def stage(self) -> pn.Column:
         """The step's question and choices, large, for the main area of a projected page

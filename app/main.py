@@ -13,7 +13,7 @@ from .scene import send_without_delay
 # presentation clicker's keys drive the lesson; a11y.js, names and a focus ring the widgets lack;
 # drag.js, a slider's drag stays in the page until its release; animation.js, the animations
 # drawn in the page (app/animation.py); pending.js, a page waiting for its change's answer
-# (app/scene.py)
+# (app/scene.py); lesson.js, the lesson's card scrolled to each new step
 pn.extension(
     notifications=False,
     js_files={
@@ -23,6 +23,7 @@ pn.extension(
         "drag": "app/static/drag.js",
         "animation": "app/static/animation.js",
         "pending": "app/static/pending.js",
+        "lesson": "app/static/lesson.js",
     },
 )
 

@@ -221,3 +221,31 @@ def test_a_projected_step_asks_large_and_answers_in_one_large_line(
         assert errors == []
     finally:
         context.close()
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize("size", [(1366, 768), (390, 844)], ids=["laptop", "phone"])
+def test_each_new_step_shows_from_its_title(browser, app_server, artifacts, size):
+    """After a reveal the page shows the buttons below the answer, and after Next the new
+    step's title is on screen (a long answer had pushed the card on, and the next step opened
+    scrolled to its last choice: a new user saw only 'About 9 times as high')."""
+    base, _ = app_server
+    width, height = size
+    context, page, errors = open_page(browser, f"{base}/app", viewport=size)
+    try:
+        page.get_by_role("button", name="Start the lesson").click()
+        for number in (1, 2, 3):
+            step = STEPS[number - 1]
+            title = page.get_by_text(f"Step {number} of {len(STEPS)}: {step.title}")
+            title.wait_for()
+            expect(title).to_be_in_viewport(ratio=1, timeout=10_000)
+            page.get_by_text(step.choices[step.answer], exact=True).click()
+            page.get_by_role("button", name="Reveal the answer").click()
+            page.get_by_text("Right.").wait_for()
+            following = page.get_by_role("button", name="Next >")
+            expect(following).to_be_in_viewport(ratio=1, timeout=10_000)
+            following.click()
+        page.screenshot(path=artifacts / "lesson" / f"step4-{width}x{height}.png")
+        assert errors == []
+    finally:
+        context.close()
