@@ -67,6 +67,12 @@ class Released:
     # the page does without (explorer.py), so a release is not counted
     _busy__ignore = ["value", "value_throttled"]
 
+    def __init__(self, **params):
+        # no value bubble: the title shows the value, and after a click the bubble stayed up
+        # over the title ('eps (re[0.208]n)', a new user)
+        params.setdefault("tooltips", False)
+        super().__init__(**params)
+
     def _get_model(self, doc, root=None, parent=None, comm=None):
         model = super()._get_model(doc, root, parent, comm)
         model.js_on_change("value_throttled", CustomJS(code=PENDING_JS))  # (app/static)
@@ -221,28 +227,28 @@ class Controls(Built):
 
     def _take_height(self, text: str) -> None:
         """A typed drop height: H, or metres when the units are SI (checked and reported in the
-        units it was typed in)."""
+        units it was typed in, quoting what was typed)."""
         si = self.state.units == "SI"
-        try:
-            typed = float(text)
-        except ValueError:
-            typed = text
         if si:
-            value, message = self._metres_checked(typed)
+            value, message = self._metres_checked(text)
         else:
-            value, message = validate("height", typed, self.state.height)
+            value, message = validate("height", text, self.state.height)
         label = "drop height [m]" if si else "H"
         self.show_messages([f"{label}: {message}"] if message else [], typed=True)
         self.state.height = value
         self._show_state()
 
-    def _metres_checked(self, typed: object) -> tuple[float, str | None]:
+    def _metres_checked(self, text: str) -> tuple[float, str | None]:
         """(H, message) for a drop height typed in metres; the message speaks metres."""
         low, high = (presets.metres_from_height(h) for h in app_range("height"))
         current = presets.metres_from_height(self.state.height)
-        if not isinstance(typed, float) or not math.isfinite(typed) or typed <= 0:
+        try:
+            typed = float(text)
+        except ValueError:
+            typed = math.nan
+        if not math.isfinite(typed) or typed <= 0:
             return self.state.height, (
-                f"must be a positive number of metres; got {typed!r}. Using {current:.4g} m."
+                f"must be a positive number of metres; got {text[:40]!r}. Using {current:.4g} m."
             )
         if not low <= typed <= high:
             clamped = min(max(typed, low), high)

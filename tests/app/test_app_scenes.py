@@ -293,6 +293,7 @@ def test_bad_typed_values_show_a_message_and_keep_a_valid_state():
     assert explorer.state.height == 1e4
     typed = controls.typed_message  # (under the inputs, where the value was typed)
     assert typed.visible and "height must be a number from 10 to" in typed.object
+    assert "got '-5'" in typed.object  # what was typed, not '-5.0' (a new user's puzzle)
     controls.eps12.value = "2"
     assert explorer.state.eps12 is None and "eps12" in controls.typed_message.object
     controls.eps12.value = "0.5"
