@@ -380,7 +380,7 @@ def _phase(active, e, de, store, masses, zeta):
     return Phase(count, lo, hi, cid, grounded, modes, centre, size, speed, of_ball)
 
 
-@njit
+@njit(borrow=True)
 def _evaluate_arrays(
     tau,
     count,
@@ -499,7 +499,7 @@ def _evaluate_arrays(
         gravity_below, gravity_rate_below = gravity, gravity_rate
 
 
-@njit
+@njit(borrow=True)
 def _sizes(kinds, blocks, companions, rates, cid, k, modes, p, out):
     """The two sizes of each block's state y = modes[p] (cluster cid, k blocks) that
     :func:`_block_weights` weighs, into out[p]: |y| (rotation), |y_0| and |y_1| (diagonal), the
@@ -529,7 +529,7 @@ def _sizes(kinds, blocks, companions, rates, cid, k, modes, p, out):
                 out[p, blk, 0], out[p, blk, 1] = math.sqrt(du * du + det * u * u), 0.0
 
 
-@njit
+@njit(borrow=True)
 def _bounds(
     count,
     cids,
@@ -569,7 +569,7 @@ def _bounds(
             out[first + i, 4] = _bound(w_g, cid, i, sizes_w, p, k)
 
 
-@njit
+@njit(borrow=True)
 def _bound(weights, cid, index, sizes, p, k):
     """sum over the k blocks of p a + q b, (p, q) = weights[cid, index, block] and (a, b) =
     sizes[p, block]: a bound on a functional for the rest of the phase (:func:`_block_weights`)."""
