@@ -302,40 +302,70 @@ def _build_cluster(store, cid, lo, hi, grounded, masses, zeta):
     store.ready[cid] = True
 
 
-class Phase(NamedTuple):
-    """The clusters of one phase and their state at its start."""
-
-    count: int
-    lo: np.ndarray  # (N,) per phase cluster
-    hi: np.ndarray
-    cid: np.ndarray
-    grounded: np.ndarray
-    modes: np.ndarray  # (N, 2N) X^-1 z at the start
-    centre: np.ndarray  # (N, 2) centre of mass height and velocity (free clusters)
-    size: np.ndarray  # (N,) rounding scale of heights
-    speed: np.ndarray  # (N,) rounding scale of velocities
-    of_ball: np.ndarray  # (N,) the phase cluster of each ball
+@njit(borrow=True)
+def _clusters_ready(active, ready):
+    """Whether the store (its ``ready``) holds every cluster of this set of active contacts."""
+    n = active.size
+    j = 0
+    while j < n:
+        start = j
+        while j + 1 < n and active[j + 1]:
+            j += 1
+        if not ready[_cluster_id(start, j, start == 0 and active[0], n)]:
+            return False
+        j += 1
+    return True
 
 
 @njit
-def _phase(active, e, de, store, masses, zeta):
-    """Split the stack into clusters for this set of active contacts; their modes at the start.
+def _ensure_clusters(active, store, masses, zeta):
+    """Build the closed forms of this set of active contacts' clusters that ``store`` lacks
+    (:func:`_build_cluster`): before :func:`_phase`, which allocates nothing. Called only when
+    :func:`_clusters_ready` says so: handing it the store counts its arrays' references."""
+    n = masses.size
+    j = 0
+    while j < n:
+        start = j
+        while j + 1 < n and active[j + 1]:
+            j += 1
+        grounded = start == 0 and active[0]
+        cid = _cluster_id(start, j, grounded, n)
+        if not store.ready[cid]:
+            _build_cluster(store, cid, start, j, grounded, masses, zeta)
+        j += 1
+
+
+@njit(borrow=True)
+def _phase(
+    active,
+    e,
+    de,
+    store,
+    masses,
+    zeta,
+    lo,
+    hi,
+    cid,
+    grounded,
+    modes,
+    centre,
+    size,
+    speed,
+    of_ball,
+    z,
+):
+    """Split the stack into clusters for this set of active contacts (their closed forms built:
+    :func:`_ensure_clusters`); their modes at the start. Returns the number of clusters; per
+    cluster, into the arrays passed: its balls lo..hi, its id cid, whether it is grounded, its
+    modes X^-1 z at the start, its centre of mass height and velocity (free clusters), the
+    rounding scales of its heights (size) and velocities (speed); of_ball the cluster of each
+    ball; z is a work array (2N). Allocates nothing, so a phase counts no references.
 
     The state is relative (docs/stacks.md, "How the state is carried"): e[0] the floor's overlap
     (ball 0's height), e[c] = x_c - x_(c-1) the overlap of contact c, de their rates. A cluster's
     z is read from them as it stands; only the centres of mass of free clusters, and the scales
     of rounding, take the heights, summed from the overlaps below."""
     n = masses.size
-    lo = np.zeros(n, dtype=np.int64)
-    hi = np.zeros(n, dtype=np.int64)
-    cid = np.zeros(n, dtype=np.int64)
-    grounded = np.zeros(n, dtype=np.bool_)
-    modes = np.zeros((n, 2 * n))
-    centre = np.zeros((n, 2))
-    size = np.zeros(n)
-    speed = np.zeros(n)
-    of_ball = np.zeros(n, dtype=np.int64)
-    z = np.empty(2 * n)
     eta_rest, x_inv = store.eta_rest, store.x_inv
     height = rate = 0.0
     count = 0
@@ -347,13 +377,12 @@ def _phase(active, e, de, store, masses, zeta):
         lo[count], hi[count] = start, j
         grounded[count] = start == 0 and active[0]
         cid[count] = _cluster_id(start, j, grounded[count], n)
-        if not store.ready[cid[count]]:
-            _build_cluster(store, cid[count], start, j, grounded[count], masses, zeta)
         here = cid[count]
         k = store.contacts[here]
         first = 0 if grounded[count] else start + 1
         total = mass_x = mass_v = 0.0
         size[count] = 1.0
+        speed[count] = 0.0
         for ball in range(start, j + 1):  # loops, not slices or temporaries (see _evaluate_arrays)
             height += e[ball]
             rate += de[ball]
@@ -377,7 +406,7 @@ def _phase(active, e, de, store, masses, zeta):
             modes[count, row] = total
         count += 1
         j += 1
-    return Phase(count, lo, hi, cid, grounded, modes, centre, size, speed, of_ball)
+    return count
 
 
 @njit(borrow=True)
