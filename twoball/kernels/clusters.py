@@ -559,46 +559,6 @@ def _sizes(kinds, blocks, companions, rates, cid, k, modes, p, out):
 
 
 @njit(borrow=True)
-def _bounds(
-    count,
-    cids,
-    lows,
-    highs,
-    grounded,
-    contacts,
-    kinds,
-    blocks,
-    companions,
-    rates,
-    w_x2,
-    w_g_low,
-    w_g_up,
-    w_eta,
-    w_g,
-    mode_w,
-    sizes_w,
-    out,
-):
-    """Every bound on a switching function's curvature for the rest of the phase, from the
-    blocks' sizes of w (:func:`_sizes`, into sizes_w): out[ball] holds those of x'' and of the
-    g'' of the ball's lower and upper contact, out[contact, 3:5] those of eta'' and g'' of an
-    active contact. One call per step (see :func:`_evaluate_arrays`)."""
-    for p in range(count):
-        cid = cids[p]
-        k = contacts[cid]
-        _sizes(kinds, blocks, companions, rates, cid, k, mode_w, p, sizes_w)
-        for ball in range(lows[p], highs[p] + 1):
-            jl = ball - lows[p]
-            out[ball, 0] = _bound(w_x2, cid, jl, sizes_w, p, k)
-            out[ball, 1] = _bound(w_g_low, cid, jl, sizes_w, p, k)
-            out[ball, 2] = _bound(w_g_up, cid, jl, sizes_w, p, k)
-        first = 0 if grounded[p] else lows[p] + 1
-        for i in range(k):
-            out[first + i, 3] = _bound(w_eta, cid, i, sizes_w, p, k)
-            out[first + i, 4] = _bound(w_g, cid, i, sizes_w, p, k)
-
-
-@njit(borrow=True)
 def _bound(weights, cid, index, sizes, p, k):
     """sum over the k blocks of p a + q b, (p, q) = weights[cid, index, block] and (a, b) =
     sizes[p, block]: a bound on a functional for the rest of the phase (:func:`_block_weights`)."""

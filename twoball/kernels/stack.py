@@ -12,7 +12,6 @@ from twoball.jit import njit
 from twoball.kernels.closed_forms import _release_time
 from twoball.kernels.clusters import (
     _bound,
-    _bounds,
     _cluster_id,
     _clusters_ready,
     _ensure_clusters,
@@ -68,7 +67,6 @@ class Workspace(NamedTuple):
     size_value: np.ndarray
     sizes_w: np.ndarray  # (N, N, 2) see _sizes
     sizes_z: np.ndarray  # (1, N, 2)
-    curvature: np.ndarray  # (N, 5) see _bounds
     solved: np.ndarray  # (N,) bool: contacts whose end is found in closed form
     # the phase's clusters (see clusters._phase)
     lo: np.ndarray  # (N,) int
@@ -82,6 +80,7 @@ class Workspace(NamedTuple):
     of_ball: np.ndarray  # (N,) int
     z: np.ndarray  # (2N,)
     rest_rounding: np.ndarray  # (N,) see clusters._rest_rounding, filled by run
+    sized: np.ndarray  # (N,) int, see advance_phase
 
 
 @njit
@@ -102,7 +101,6 @@ def new_workspace(n):
         np.zeros((n, 2 * n)),
         np.zeros((n, n, 2)),
         np.zeros((1, n, 2)),
-        np.zeros((n, 5)),
         np.zeros(n, dtype=np.bool_),
         np.zeros(n, dtype=np.int64),
         np.zeros(n, dtype=np.int64),
@@ -115,6 +113,7 @@ def new_workspace(n):
         np.zeros(n, dtype=np.int64),
         np.zeros(2 * n),
         np.zeros(n),
+        np.zeros(n, dtype=np.int64),
     )
 
 
@@ -172,7 +171,7 @@ def advance_phase(
     x, v, a, shift_x, shift_v = work.x, work.v, work.a, work.shift_x, work.shift_v
     shape_z, shape_w, mode_z, mode_w = work.shape_z, work.shape_w, work.mode_z, work.mode_w
     change_z, size_change, size_value = work.change_z, work.size_change, work.size_value
-    sizes_w, sizes_z, curvature, solved = work.sizes_w, work.sizes_z, work.curvature, work.solved
+    sizes_w, sizes_z, solved = work.sizes_w, work.sizes_z, work.solved
     solved[:] = False
     # the store's and the phase's arrays, read once (see _evaluate_arrays)
     kinds, blocks, companions, rates = store.kind, store.blocks, store.companion, store.rates
@@ -188,6 +187,12 @@ def advance_phase(
     horizon_contact = -1  # a contact whose force ends at the horizon
     tau = 0.0
     last_step = 0.0
+    # Each contact's bounds are formed from its clusters' block sizes, each cluster's once a
+    # step (sized: at which step they were formed).
+    sized = work.sized
+    for c in range(n):
+        sized[c] = -1
+    steps = 0
     for _ in range(MAX_STEPS_PER_PHASE):
         _evaluate_arrays(
             tau,
@@ -221,45 +226,33 @@ def advance_phase(
             shift_x,
             shift_v,
         )
-        _bounds(
-            count,
-            cids,
-            lows,
-            highs,
-            grounded,
-            contacts,
-            kinds,
-            blocks,
-            companions,
-            rates,
-            w_x2,
-            w_g_low,
-            w_g_up,
-            w_eta,
-            w_g,
-            mode_w,
-            sizes_w,
-            curvature,
-        )
         clock = 1.0 + t + tau
         step = horizon - tau
         event, best = -1, np.inf
+        early, early_contact = np.inf, -1
+        steps += 1
         for c in range(n):
             upper = of_ball[c]
             cid_u = cids[upper]
             k_u = contacts[cid_u]
             if solved[c] and tau > 0.0:
                 continue  # its end is the horizon, or beyond it
+            if sized[upper] != steps:
+                _sizes(kinds, blocks, companions, rates, cid_u, k_u, mode_w, upper, sizes_w)
+                sized[upper] = steps
             noise_u = noise[cid_u]
             tol_state = noise_u * (sizes[upper] + speeds[upper] * (1.0 + tau) + tau * tau)
             tol_rate = noise_u * (speeds[upper] + 1.0 + tau)
             if active[c]:
                 i = c - (0 if grounded[upper] else lows[upper] + 1)
                 eta, deta, ddeta = e[c], de[c], shape_w[upper, k_u + i]
-                bound_eta, bound_g = curvature[c, 3], curvature[c, 4]
+                bound_eta = _bound(w_eta, cid_u, i, sizes_w, upper, k_u)
+                bound_g = _bound(w_g, cid_u, i, sizes_w, upper, k_u)
             else:
                 rigid_u = 0.0 if grounded[upper] else -1.0
-                bound_eta, bound_g = curvature[c, 0], curvature[c, 1]
+                jl = c - lows[upper]
+                bound_eta = _bound(w_x2, cid_u, jl, sizes_w, upper, k_u)
+                bound_g = _bound(w_g_low, cid_u, jl, sizes_w, upper, k_u)
                 eta, deta = e[c], de[c]
                 if c == 0:
                     ddeta = a[0]
@@ -270,8 +263,13 @@ def advance_phase(
                     ddeta = a[c] - a[c - 1]
                     rigid_l = 0.0 if grounded[lower] else -1.0
                     rigid = abs(rigid_u - rigid_l)
-                    bound_eta += curvature[c - 1, 0]
-                    bound_g += curvature[c - 1, 2]
+                    k_l = contacts[cid_l]
+                    if sized[lower] != steps:
+                        _sizes(kinds, blocks, companions, rates, cid_l, k_l, mode_w, lower, sizes_w)
+                        sized[lower] = steps
+                    jl = c - 1 - lows[lower]
+                    bound_eta += _bound(w_x2, cid_l, jl, sizes_w, lower, k_l)
+                    bound_g += _bound(w_g_up, cid_l, jl, sizes_w, lower, k_l)
                     tol_state += noise[cid_l] * (
                         sizes[lower] + speeds[lower] * (1.0 + tau) + tau * tau
                     )
@@ -315,6 +313,19 @@ def advance_phase(
                     step = min(step, horizon)
             else:
                 step = min(step, h)
+                if rate < -tol_rate and not fresh:
+                    # Closing on its root: one Newton step s lands within M s^2/2 of it (M
+                    # the curvature bound), so once that is below the rounding the switch is
+                    # taken there, if no other contact can switch first, rather than stepped
+                    # to (its certified step h exceeds s then). tol bounds the rounding
+                    # generously (16 ulps of every term), so a 512th of it is asked for.
+                    g_part = active[c] or eta < eta + 2.0 * zeta[c] * deta
+                    s = value / -rate
+                    error = 0.5 * (bound_g if g_part else bound_eta) * s * s
+                    if error <= tol / 512.0 and tau + s < early:
+                        early, early_contact = tau + s, c
+        if event < 0 and early_contact >= 0 and early <= tau + step:
+            event, best = early_contact, early
         if event >= 0:
             _evaluate_arrays(
                 best,
