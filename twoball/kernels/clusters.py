@@ -409,7 +409,7 @@ def _phase(
     return count
 
 
-@njit(borrow=True)
+@njit(borrow=True, inline=True)
 def _evaluate_arrays(
     tau,
     count,
@@ -528,7 +528,7 @@ def _evaluate_arrays(
         gravity_below, gravity_rate_below = gravity, gravity_rate
 
 
-@njit(borrow=True)
+@njit(borrow=True, inline=True)
 def _sizes(kinds, blocks, companions, rates, cid, k, modes, p, out):
     """The two sizes of each block's state y = modes[p] (cluster cid, k blocks) that
     :func:`_block_weights` weighs, into out[p]: |y| (rotation), |y_0| and |y_1| (diagonal), the
@@ -558,7 +558,7 @@ def _sizes(kinds, blocks, companions, rates, cid, k, modes, p, out):
                 out[p, blk, 0], out[p, blk, 1] = math.sqrt(du * du + det * u * u), 0.0
 
 
-@njit(borrow=True)
+@njit(borrow=True, inline=True)
 def _bound(weights, cid, index, sizes, p, k):
     """sum over the k blocks of p a + q b, (p, q) = weights[cid, index, block] and (a, b) =
     sizes[p, block]: a bound on a functional for the rest of the phase (:func:`_block_weights`)."""
