@@ -123,12 +123,26 @@ if isinstance(CACHE_DIR, Path):
     _numba_config.CACHE_DIR = str(CACHE_DIR)
 
 
-def njit(function: Callable | None = None, *, nogil: bool = False) -> Callable:
+def njit(
+    function: Callable | None = None,
+    *,
+    nogil: bool = False,
+    borrow: bool = False,
+    inline: bool = False,
+) -> Callable:
     """``numba.njit`` with the disk cache wherever one can be written (see the module);
-    ``nogil`` releases the GIL while the compiled function runs (threads then run in parallel)."""
+    ``nogil`` releases the GIL while the compiled function runs (threads then run in parallel);
+    ``borrow`` compiles it without numba's reference counts (``_nrt=False``): it may then
+    allocate nothing, and the arrays handed to it are borrowed, not counted (numba increments
+    and decrements the count of each array argument, atomically, on entry and exit); ``inline``
+    inlines it into its callers in numba's own IR (a call handing it thirty arrays copies each
+    one's descriptor; inlined into a caller compiled with ``borrow``, nothing is counted either)."""
     if function is None:
-        return lambda wrapped: njit(wrapped, nogil=nogil)
-    return numba.njit(cache=CACHING, nogil=nogil)(function)
+        return lambda wrapped: njit(wrapped, nogil=nogil, borrow=borrow, inline=inline)
+    options = {"inline": "always"} if inline else {}
+    if borrow:
+        options["_nrt"] = False
+    return numba.njit(cache=CACHING, nogil=nogil, **options)(function)
 
 
 _dispatchers: dict[str, dict[str, CPUDispatcher]] = {}

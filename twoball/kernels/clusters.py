@@ -302,40 +302,70 @@ def _build_cluster(store, cid, lo, hi, grounded, masses, zeta):
     store.ready[cid] = True
 
 
-class Phase(NamedTuple):
-    """The clusters of one phase and their state at its start."""
-
-    count: int
-    lo: np.ndarray  # (N,) per phase cluster
-    hi: np.ndarray
-    cid: np.ndarray
-    grounded: np.ndarray
-    modes: np.ndarray  # (N, 2N) X^-1 z at the start
-    centre: np.ndarray  # (N, 2) centre of mass height and velocity (free clusters)
-    size: np.ndarray  # (N,) rounding scale of heights
-    speed: np.ndarray  # (N,) rounding scale of velocities
-    of_ball: np.ndarray  # (N,) the phase cluster of each ball
+@njit(borrow=True)
+def _clusters_ready(active, ready):
+    """Whether the store (its ``ready``) holds every cluster of this set of active contacts."""
+    n = active.size
+    j = 0
+    while j < n:
+        start = j
+        while j + 1 < n and active[j + 1]:
+            j += 1
+        if not ready[_cluster_id(start, j, start == 0 and active[0], n)]:
+            return False
+        j += 1
+    return True
 
 
 @njit
-def _phase(active, e, de, store, masses, zeta):
-    """Split the stack into clusters for this set of active contacts; their modes at the start.
+def _ensure_clusters(active, store, masses, zeta):
+    """Build the closed forms of this set of active contacts' clusters that ``store`` lacks
+    (:func:`_build_cluster`): before :func:`_phase`, which allocates nothing. Called only when
+    :func:`_clusters_ready` says so: handing it the store counts its arrays' references."""
+    n = masses.size
+    j = 0
+    while j < n:
+        start = j
+        while j + 1 < n and active[j + 1]:
+            j += 1
+        grounded = start == 0 and active[0]
+        cid = _cluster_id(start, j, grounded, n)
+        if not store.ready[cid]:
+            _build_cluster(store, cid, start, j, grounded, masses, zeta)
+        j += 1
+
+
+@njit(borrow=True)
+def _phase(
+    active,
+    e,
+    de,
+    store,
+    masses,
+    zeta,
+    lo,
+    hi,
+    cid,
+    grounded,
+    modes,
+    centre,
+    size,
+    speed,
+    of_ball,
+    z,
+):
+    """Split the stack into clusters for this set of active contacts (their closed forms built:
+    :func:`_ensure_clusters`); their modes at the start. Returns the number of clusters; per
+    cluster, into the arrays passed: its balls lo..hi, its id cid, whether it is grounded, its
+    modes X^-1 z at the start, its centre of mass height and velocity (free clusters), the
+    rounding scales of its heights (size) and velocities (speed); of_ball the cluster of each
+    ball; z is a work array (2N). Allocates nothing, so a phase counts no references.
 
     The state is relative (docs/stacks.md, "How the state is carried"): e[0] the floor's overlap
     (ball 0's height), e[c] = x_c - x_(c-1) the overlap of contact c, de their rates. A cluster's
     z is read from them as it stands; only the centres of mass of free clusters, and the scales
     of rounding, take the heights, summed from the overlaps below."""
     n = masses.size
-    lo = np.zeros(n, dtype=np.int64)
-    hi = np.zeros(n, dtype=np.int64)
-    cid = np.zeros(n, dtype=np.int64)
-    grounded = np.zeros(n, dtype=np.bool_)
-    modes = np.zeros((n, 2 * n))
-    centre = np.zeros((n, 2))
-    size = np.zeros(n)
-    speed = np.zeros(n)
-    of_ball = np.zeros(n, dtype=np.int64)
-    z = np.empty(2 * n)
     eta_rest, x_inv = store.eta_rest, store.x_inv
     height = rate = 0.0
     count = 0
@@ -347,13 +377,12 @@ def _phase(active, e, de, store, masses, zeta):
         lo[count], hi[count] = start, j
         grounded[count] = start == 0 and active[0]
         cid[count] = _cluster_id(start, j, grounded[count], n)
-        if not store.ready[cid[count]]:
-            _build_cluster(store, cid[count], start, j, grounded[count], masses, zeta)
         here = cid[count]
         k = store.contacts[here]
         first = 0 if grounded[count] else start + 1
         total = mass_x = mass_v = 0.0
         size[count] = 1.0
+        speed[count] = 0.0
         for ball in range(start, j + 1):  # loops, not slices or temporaries (see _evaluate_arrays)
             height += e[ball]
             rate += de[ball]
@@ -377,10 +406,10 @@ def _phase(active, e, de, store, masses, zeta):
             modes[count, row] = total
         count += 1
         j += 1
-    return Phase(count, lo, hi, cid, grounded, modes, centre, size, speed, of_ball)
+    return count
 
 
-@njit
+@njit(borrow=True, inline=True)
 def _evaluate_arrays(
     tau,
     count,
@@ -499,7 +528,7 @@ def _evaluate_arrays(
         gravity_below, gravity_rate_below = gravity, gravity_rate
 
 
-@njit
+@njit(borrow=True, inline=True)
 def _sizes(kinds, blocks, companions, rates, cid, k, modes, p, out):
     """The two sizes of each block's state y = modes[p] (cluster cid, k blocks) that
     :func:`_block_weights` weighs, into out[p]: |y| (rotation), |y_0| and |y_1| (diagonal), the
@@ -529,47 +558,7 @@ def _sizes(kinds, blocks, companions, rates, cid, k, modes, p, out):
                 out[p, blk, 0], out[p, blk, 1] = math.sqrt(du * du + det * u * u), 0.0
 
 
-@njit
-def _bounds(
-    count,
-    cids,
-    lows,
-    highs,
-    grounded,
-    contacts,
-    kinds,
-    blocks,
-    companions,
-    rates,
-    w_x2,
-    w_g_low,
-    w_g_up,
-    w_eta,
-    w_g,
-    mode_w,
-    sizes_w,
-    out,
-):
-    """Every bound on a switching function's curvature for the rest of the phase, from the
-    blocks' sizes of w (:func:`_sizes`, into sizes_w): out[ball] holds those of x'' and of the
-    g'' of the ball's lower and upper contact, out[contact, 3:5] those of eta'' and g'' of an
-    active contact. One call per step (see :func:`_evaluate_arrays`)."""
-    for p in range(count):
-        cid = cids[p]
-        k = contacts[cid]
-        _sizes(kinds, blocks, companions, rates, cid, k, mode_w, p, sizes_w)
-        for ball in range(lows[p], highs[p] + 1):
-            jl = ball - lows[p]
-            out[ball, 0] = _bound(w_x2, cid, jl, sizes_w, p, k)
-            out[ball, 1] = _bound(w_g_low, cid, jl, sizes_w, p, k)
-            out[ball, 2] = _bound(w_g_up, cid, jl, sizes_w, p, k)
-        first = 0 if grounded[p] else lows[p] + 1
-        for i in range(k):
-            out[first + i, 3] = _bound(w_eta, cid, i, sizes_w, p, k)
-            out[first + i, 4] = _bound(w_g, cid, i, sizes_w, p, k)
-
-
-@njit
+@njit(borrow=True, inline=True)
 def _bound(weights, cid, index, sizes, p, k):
     """sum over the k blocks of p a + q b, (p, q) = weights[cid, index, block] and (a, b) =
     sizes[p, block]: a bound on a functional for the rest of the phase (:func:`_block_weights`)."""

@@ -12,8 +12,9 @@ from twoball.jit import njit
 from twoball.kernels.closed_forms import _release_time
 from twoball.kernels.clusters import (
     _bound,
-    _bounds,
     _cluster_id,
+    _clusters_ready,
+    _ensure_clusters,
     _evaluate_arrays,
     _phase,
     _rest_rounding,
@@ -66,8 +67,20 @@ class Workspace(NamedTuple):
     size_value: np.ndarray
     sizes_w: np.ndarray  # (N, N, 2) see _sizes
     sizes_z: np.ndarray  # (1, N, 2)
-    curvature: np.ndarray  # (N, 5) see _bounds
     solved: np.ndarray  # (N,) bool: contacts whose end is found in closed form
+    # the phase's clusters (see clusters._phase)
+    lo: np.ndarray  # (N,) int
+    hi: np.ndarray
+    cid: np.ndarray
+    grounded: np.ndarray  # (N,) bool
+    modes: np.ndarray  # (N, 2N)
+    centre: np.ndarray  # (N, 2)
+    size: np.ndarray  # (N,)
+    speed: np.ndarray
+    of_ball: np.ndarray  # (N,) int
+    z: np.ndarray  # (2N,)
+    rest_rounding: np.ndarray  # (N,) see clusters._rest_rounding, filled by run
+    sized: np.ndarray  # (N,) int, see advance_phase
 
 
 @njit
@@ -88,12 +101,23 @@ def new_workspace(n):
         np.zeros((n, 2 * n)),
         np.zeros((n, n, 2)),
         np.zeros((1, n, 2)),
-        np.zeros((n, 5)),
         np.zeros(n, dtype=np.bool_),
+        np.zeros(n, dtype=np.int64),
+        np.zeros(n, dtype=np.int64),
+        np.zeros(n, dtype=np.int64),
+        np.zeros(n, dtype=np.bool_),
+        np.zeros((n, 2 * n)),
+        np.zeros((n, 2)),
+        np.zeros(n),
+        np.zeros(n),
+        np.zeros(n, dtype=np.int64),
+        np.zeros(2 * n),
+        np.zeros(n),
+        np.zeros(n, dtype=np.int64),
     )
 
 
-@njit
+@njit(borrow=True)
 def advance_phase(
     t,
     e0,
@@ -118,32 +142,57 @@ def advance_phase(
     the contact), an apex (index the ball; horizon_ball's apex is ``horizon`` away, or -1 for
     the end of the run), the end, rest, a stuck root finder or the step limit. ``pair`` is
     :func:`twoball.kernels.phases.prepare` of a two-ball stack (a placeholder for more balls):
-    its rest proof is used for N = 2. ``work`` is a :class:`Workspace`.
+    its rest proof is used for N = 2. ``work`` is a :class:`Workspace`; with every contact
+    active and N >= 3 its rest_rounding holds :func:`_rest_rounding` of the phase's start.
+    The clusters' closed forms are built (:func:`_ensure_clusters`).
+
+    Compiled without reference counts (it allocates nothing): numba counted each of the ~50
+    arrays handed to it, and to the helpers it calls, up and down at every call.
     """
     n = masses.size
-    phase = _phase(active, e0, de0, store, masses, zeta)
+    count = _phase(
+        active,
+        e0,
+        de0,
+        store,
+        masses,
+        zeta,
+        work.lo,
+        work.hi,
+        work.cid,
+        work.grounded,
+        work.modes,
+        work.centre,
+        work.size,
+        work.speed,
+        work.of_ball,
+        work.z,
+    )
     x, v, a, shift_x, shift_v = work.x, work.v, work.a, work.shift_x, work.shift_v
     shape_z, shape_w, mode_z, mode_w = work.shape_z, work.shape_w, work.mode_z, work.mode_w
     change_z, size_change, size_value = work.change_z, work.size_change, work.size_value
-    sizes_w, sizes_z, curvature, solved = work.sizes_w, work.sizes_z, work.curvature, work.solved
+    sizes_w, sizes_z, solved = work.sizes_w, work.sizes_z, work.solved
     solved[:] = False
     # the store's and the phase's arrays, read once (see _evaluate_arrays)
     kinds, blocks, companions, rates = store.kind, store.blocks, store.companion, store.rates
     contacts, noise, eta_rest = store.contacts, store.noise, store.eta_rest
     w_x2, w_g_low, w_g_up = store.w_x2, store.w_g_low, store.w_g_up
     w_eta, w_g, w_rest = store.w_eta, store.w_g, store.w_rest
-    cids, lows, grounded, of_ball = phase.cid, phase.lo, phase.grounded, phase.of_ball
-    sizes, speeds = phase.size, phase.speed
-    count, highs, centre, modes = phase.count, phase.hi, phase.centre, phase.modes
+    cids, lows, grounded, of_ball = work.cid, work.lo, work.grounded, work.of_ball
+    sizes, speeds = work.size, work.speed
+    highs, centre, modes = work.hi, work.centre, work.modes
     big_x, shape, offset = store.x, store.shape, store.offset
-    everything = phase.count == 1 and phase.grounded[0] and store.contacts[phase.cid[0]] == n
-    rest_rounding = np.zeros(n)
-    if everything and n >= 3:
-        heights, velocities = np.cumsum(e0), np.cumsum(de0)
-        rest_rounding = _rest_rounding(store, phase.cid[0], heights, velocities, carried)
+    everything = count == 1 and grounded[0] and store.contacts[cids[0]] == n
+    rest_rounding = work.rest_rounding
     horizon_contact = -1  # a contact whose force ends at the horizon
     tau = 0.0
     last_step = 0.0
+    # Each contact's bounds are formed from its clusters' block sizes, each cluster's once a
+    # step (sized: at which step they were formed).
+    sized = work.sized
+    for c in range(n):
+        sized[c] = -1
+    steps = 0
     for _ in range(MAX_STEPS_PER_PHASE):
         _evaluate_arrays(
             tau,
@@ -177,45 +226,33 @@ def advance_phase(
             shift_x,
             shift_v,
         )
-        _bounds(
-            count,
-            cids,
-            lows,
-            highs,
-            grounded,
-            contacts,
-            kinds,
-            blocks,
-            companions,
-            rates,
-            w_x2,
-            w_g_low,
-            w_g_up,
-            w_eta,
-            w_g,
-            mode_w,
-            sizes_w,
-            curvature,
-        )
         clock = 1.0 + t + tau
         step = horizon - tau
         event, best = -1, np.inf
+        early, early_contact = np.inf, -1
+        steps += 1
         for c in range(n):
             upper = of_ball[c]
             cid_u = cids[upper]
             k_u = contacts[cid_u]
             if solved[c] and tau > 0.0:
                 continue  # its end is the horizon, or beyond it
+            if sized[upper] != steps:
+                _sizes(kinds, blocks, companions, rates, cid_u, k_u, mode_w, upper, sizes_w)
+                sized[upper] = steps
             noise_u = noise[cid_u]
             tol_state = noise_u * (sizes[upper] + speeds[upper] * (1.0 + tau) + tau * tau)
             tol_rate = noise_u * (speeds[upper] + 1.0 + tau)
             if active[c]:
                 i = c - (0 if grounded[upper] else lows[upper] + 1)
                 eta, deta, ddeta = e[c], de[c], shape_w[upper, k_u + i]
-                bound_eta, bound_g = curvature[c, 3], curvature[c, 4]
+                bound_eta = _bound(w_eta, cid_u, i, sizes_w, upper, k_u)
+                bound_g = _bound(w_g, cid_u, i, sizes_w, upper, k_u)
             else:
                 rigid_u = 0.0 if grounded[upper] else -1.0
-                bound_eta, bound_g = curvature[c, 0], curvature[c, 1]
+                jl = c - lows[upper]
+                bound_eta = _bound(w_x2, cid_u, jl, sizes_w, upper, k_u)
+                bound_g = _bound(w_g_low, cid_u, jl, sizes_w, upper, k_u)
                 eta, deta = e[c], de[c]
                 if c == 0:
                     ddeta = a[0]
@@ -226,8 +263,13 @@ def advance_phase(
                     ddeta = a[c] - a[c - 1]
                     rigid_l = 0.0 if grounded[lower] else -1.0
                     rigid = abs(rigid_u - rigid_l)
-                    bound_eta += curvature[c - 1, 0]
-                    bound_g += curvature[c - 1, 2]
+                    k_l = contacts[cid_l]
+                    if sized[lower] != steps:
+                        _sizes(kinds, blocks, companions, rates, cid_l, k_l, mode_w, lower, sizes_w)
+                        sized[lower] = steps
+                    jl = c - 1 - lows[lower]
+                    bound_eta += _bound(w_x2, cid_l, jl, sizes_w, lower, k_l)
+                    bound_g += _bound(w_g_up, cid_l, jl, sizes_w, lower, k_l)
                     tol_state += noise[cid_l] * (
                         sizes[lower] + speeds[lower] * (1.0 + tau) + tau * tau
                     )
@@ -271,6 +313,19 @@ def advance_phase(
                     step = min(step, horizon)
             else:
                 step = min(step, h)
+                if rate < -tol_rate and not fresh:
+                    # Closing on its root: one Newton step s lands within M s^2/2 of it (M
+                    # the curvature bound), so once that is below the rounding the switch is
+                    # taken there, if no other contact can switch first, rather than stepped
+                    # to (its certified step h exceeds s then). tol bounds the rounding
+                    # generously (16 ulps of every term), so a 512th of it is asked for.
+                    g_part = active[c] or eta < eta + 2.0 * zeta[c] * deta
+                    s = value / -rate
+                    error = 0.5 * (bound_g if g_part else bound_eta) * s * s
+                    if error <= tol / 512.0 and tau + s < early:
+                        early, early_contact = tau + s, c
+        if event < 0 and early_contact >= 0 and early <= tau + step:
+            event, best = early_contact, early
         if event >= 0:
             _evaluate_arrays(
                 best,
@@ -318,7 +373,7 @@ def advance_phase(
                 if not margin > tol_rest:
                     margin_ok = False
             if not margin_ok and n == 2:
-                margin_ok = _pair_at_rest(pair, e, de, phase.size[0], phase.speed[0], tau, carried)
+                margin_ok = _pair_at_rest(pair, e, de, sizes[0], speeds[0], tau, carried)
             if margin_ok:
                 return EVENT_REST, -1, tau
         if tau + step >= horizon:
@@ -360,11 +415,13 @@ def advance_phase(
                 return EVENT_APEX, horizon_ball, horizon
             return EVENT_TIME, -1, horizon
         if not 0.0 < step < np.inf:
-            e[:], de[:] = e0, de0
+            for c in range(n):
+                e[c], de[c] = e0[c], de0[c]
             return EVENT_STUCK, -1, tau
         tau += step
         last_step = step
-    e[:], de[:] = e0, de0
+    for c in range(n):
+        e[c], de[c] = e0[c], de0[c]
     return EVENT_STEPS, -1, tau
 
 
@@ -467,6 +524,12 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
         horizon, horizon_ball = t_end - t, -1
         if not active[n - 1] and 0.0 < speeds[n - 1] < horizon:
             horizon, horizon_ball = speeds[n - 1], n - 1  # a free ball's apex is v away
+        if not _clusters_ready(active, store.ready):
+            _ensure_clusters(active, store, masses, zeta)
+        if n >= 3 and active.all():
+            work.rest_rounding[:] = _rest_rounding(
+                store, _cluster_id(0, n - 1, True, n), heights, speeds, carried
+            )
         event, index, tau = advance_phase(
             t,
             e,
@@ -580,27 +643,44 @@ def sample(phases, times, masses, zeta):
     de = np.empty(n)
     active = np.zeros(n, dtype=np.bool_)
     current = -1
-    phase = _phase(active, phases[0, 2 : 2 + n], phases[0, 2 + n :], store, masses, zeta)
+    count = 0
     for s in range(times.size):
         index = max(np.searchsorted(phases[:, 0], times[s], side="right") - 1, 0)
         bits = int(phases[index, 1])
         for c in range(n):
             active[c] = (bits >> c) & 1 == 1
         if index != current:
-            phase = _phase(
-                active, phases[index, 2 : 2 + n], phases[index, 2 + n :], store, masses, zeta
+            if not _clusters_ready(active, store.ready):
+                _ensure_clusters(active, store, masses, zeta)
+            count = _phase(
+                active,
+                phases[index, 2 : 2 + n],
+                phases[index, 2 + n :],
+                store,
+                masses,
+                zeta,
+                work.lo,
+                work.hi,
+                work.cid,
+                work.grounded,
+                work.modes,
+                work.centre,
+                work.size,
+                work.speed,
+                work.of_ball,
+                work.z,
             )
             current = index
         tau = times[s] - phases[index, 0]
         _evaluate_arrays(
             tau,
-            phase.count,
-            phase.cid,
-            phase.lo,
-            phase.hi,
-            phase.grounded,
-            phase.centre,
-            phase.modes,
+            count,
+            work.cid,
+            work.lo,
+            work.hi,
+            work.grounded,
+            work.centre,
+            work.modes,
             store.contacts,
             store.blocks,
             store.x,
