@@ -29,6 +29,20 @@ def _draw(rng: np.random.Generator, smallest_height: float, largest_height: floa
     return ratios, eps, gap, height
 
 
+def test_a_switch_found_by_its_own_steps_is_not_taken_back_to_the_phase_start():
+    """A contact just switched that limits the next step is stepped on its own (the others
+    certified further: twoball.kernels.stack.advance_phase); its Newton correction must not take
+    the next switch back to the phase's start, as the loop over every contact never does: that
+    made a zero-length phase, and contact 4 of this drop (from the property test below) then
+    switched on and off at t = 4.147 until the phase limit."""
+    ratios = [0.007929497748765295, 0.15013300878586391, 0.006177475767939529]
+    ratios += [0.04485317327924838, 0.22620203254589066, 0.3635016889631812]
+    result = simulate_stack(
+        ratios, 0.3259823883634342, 0.04683220317692793, height=1.1724484089743732
+    )
+    assert result.success, result.status
+
+
 @pytest.mark.parametrize(
     "count", [1_000, pytest.param(STACKS, marks=pytest.mark.slow)], ids=["1000", "10000"]
 )

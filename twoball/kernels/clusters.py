@@ -53,7 +53,7 @@ from twoball.kernels.closed_forms import (
     _split_modes,
 )
 from twoball.kernels.codes import ROUNDING
-from twoball.kernels.phases import _block_change
+from twoball.kernels.phases import _block_change, contact_switch
 
 # How a block's future is bounded (:func:`_block_kind`).
 BLOCK_ROTATION, BLOCK_DIAGONAL, BLOCK_EXPONENTIALS, BLOCK_ENERGY = 0, 1, 2, 3
@@ -412,19 +412,15 @@ def _phase(
 @njit(borrow=True, inline=True)
 def _evaluate_arrays(
     tau,
-    count,
+    p_from,
+    p_to,
     cids,
     lows,
     highs,
     grounded,
     centre,
     modes,
-    contacts,
-    blocks,
-    big_x,
-    shape,
-    offset,
-    eta_rest,
+    store,
     e0,
     de0,
     x,
@@ -442,8 +438,9 @@ def _evaluate_arrays(
     shift_x,
     shift_v,
 ):
-    """Heights, velocities, accelerations of every ball at tau into the phase (into x, v, a),
-    each phase cluster's z and w = z' (into shape_z, shape_w) and their block (mode)
+    """Heights, velocities, accelerations of the balls of phase clusters p_from to p_to - 1 (all:
+    0, count) at tau into the phase (into x, v, a), each such cluster's z and w = z' (into
+    shape_z, shape_w) and their block (mode)
     coordinates X^-1 z and X^-1 w (into mode_z, mode_w), from the phase's (:func:`_phase`) and
     the store's arrays, passed one by one: the step loop reads them once per phase. Written
     without array slices or tuples of arrays: each would count references, which took most of
@@ -457,9 +454,13 @@ def _evaluate_arrays(
     difference of the changes of the two balls' heights, tau eta' plus each ball's share of its
     cluster's change beyond its start velocity (into shift_x, shift_v), gravity cancelling
     between two free clusters. change_z, size_change and size_value are work arrays."""
+    contacts, blocks, big_x = store.contacts, store.blocks, store.x
+    shape, offset, eta_rest = store.shape, store.offset, store.eta_rest
     gravity_below = 0.0  # -tau^2/2 (or 0) in the height of the ball below, and its rate
     gravity_rate_below = 0.0
-    for p in range(count):
+    if p_from > 0 and not grounded[p_from - 1]:
+        gravity_below, gravity_rate_below = -0.5 * tau * tau, -tau
+    for p in range(p_from, p_to):
         cid = cids[p]
         k = contacts[cid]
         d = 2 * k
@@ -526,6 +527,93 @@ def _evaluate_arrays(
             e[c] = e0[c] + (tau * de0[c] + (shift_x[c] - below_x) + (gravity - gravity_below))
             de[c] = de0[c] + ((shift_v[c] - below_v) + (gravity_rate - gravity_rate_below))
         gravity_below, gravity_rate_below = gravity, gravity_rate
+
+
+@njit(borrow=True, inline=True)
+def _check_contact(
+    c,
+    tau,
+    clock,
+    is_active,
+    zeta_c,
+    carried,
+    e,
+    de,
+    a,
+    shape_w,
+    of_ball,
+    cids,
+    lows,
+    grounded,
+    store,
+    sizes,
+    speeds,
+    mode_w,
+    sizes_w,
+    sized,
+    stamp,
+):
+    """Contact c's switching function at tau from the evaluated phase (:func:`_evaluate_arrays`
+    of its clusters): (F, F', tol, tol of the rate, certified step, the error of one Newton step
+    to the root or inf if F does not fall), by :func:`twoball.kernels.phases.contact_switch`.
+    Its curvature bounds are formed from its clusters' block sizes of w (:func:`_sizes`, each
+    cluster's once per ``stamp``: ``sized`` holds the stamp they were formed at)."""
+    contacts, noise, kinds, blocks = store.contacts, store.noise, store.kind, store.blocks
+    companions, rates, w_x2, w_g_low = store.companion, store.rates, store.w_x2, store.w_g_low
+    w_g_up, w_eta, w_g = store.w_g_up, store.w_eta, store.w_g
+    upper = of_ball[c]
+    cid_u = cids[upper]
+    k_u = contacts[cid_u]
+    if sized[upper] != stamp:
+        _sizes(kinds, blocks, companions, rates, cid_u, k_u, mode_w, upper, sizes_w)
+        sized[upper] = stamp
+    noise_u = noise[cid_u]
+    tol_state = noise_u * (sizes[upper] + speeds[upper] * (1.0 + tau) + tau * tau)
+    tol_rate = noise_u * (speeds[upper] + 1.0 + tau)
+    if is_active:
+        i = c - (0 if grounded[upper] else lows[upper] + 1)
+        eta, deta, ddeta = e[c], de[c], shape_w[upper, k_u + i]
+        bound_eta = _bound(w_eta, cid_u, i, sizes_w, upper, k_u)
+        bound_g = _bound(w_g, cid_u, i, sizes_w, upper, k_u)
+    else:
+        rigid_u = 0.0 if grounded[upper] else -1.0
+        jl = c - lows[upper]
+        bound_eta = _bound(w_x2, cid_u, jl, sizes_w, upper, k_u)
+        bound_g = _bound(w_g_low, cid_u, jl, sizes_w, upper, k_u)
+        eta, deta = e[c], de[c]
+        if c == 0:
+            ddeta = a[0]
+            rigid = -rigid_u
+        else:
+            lower = of_ball[c - 1]
+            cid_l = cids[lower]
+            ddeta = a[c] - a[c - 1]
+            rigid_l = 0.0 if grounded[lower] else -1.0
+            rigid = abs(rigid_u - rigid_l)
+            k_l = contacts[cid_l]
+            if sized[lower] != stamp:
+                _sizes(kinds, blocks, companions, rates, cid_l, k_l, mode_w, lower, sizes_w)
+                sized[lower] = stamp
+            jl = c - 1 - lows[lower]
+            bound_eta += _bound(w_x2, cid_l, jl, sizes_w, lower, k_l)
+            bound_g += _bound(w_g_up, cid_l, jl, sizes_w, lower, k_l)
+            tol_state += noise[cid_l] * (sizes[lower] + speeds[lower] * (1.0 + tau) + tau * tau)
+            tol_rate += noise[cid_l] * (speeds[lower] + 1.0 + tau)
+        bound_eta += rigid
+        bound_g += rigid
+    tol_state = ROUNDING * tol_state + carried
+    value, rate, tol, h = contact_switch(
+        is_active, eta, deta, ddeta, zeta_c, bound_eta, bound_g, tol_state, clock
+    )
+    # a rate within the rounding of the velocities has no sign: balls moving together
+    # (touching, unloaded) would otherwise switch on and off with the rounding
+    tol_rate = ROUNDING * tol_rate * (1.0 + 2.0 * zeta_c)
+    error = np.inf
+    if rate < 0.0:
+        g_part = is_active or eta < eta + 2.0 * zeta_c * deta
+        s = value / -rate
+        error = 0.5 * (bound_g if g_part else bound_eta) * s * s
+    return value, rate, tol, tol_rate, h, error
 
 
 @njit(borrow=True, inline=True)

@@ -12,6 +12,7 @@ from twoball.jit import njit
 from twoball.kernels.closed_forms import _release_time
 from twoball.kernels.clusters import (
     _bound,
+    _check_contact,
     _cluster_id,
     _clusters_ready,
     _ensure_clusters,
@@ -43,7 +44,6 @@ from twoball.kernels.phases import (
     _block_states,
     _energy_roots,
     _rest_size,
-    contact_switch,
     prepare,
 )
 from twoball.kernels.runs import _room_for_one
@@ -168,20 +168,12 @@ def advance_phase(
         work.of_ball,
         work.z,
     )
-    x, v, a, shift_x, shift_v = work.x, work.v, work.a, work.shift_x, work.shift_v
-    shape_z, shape_w, mode_z, mode_w = work.shape_z, work.shape_w, work.mode_z, work.mode_w
-    change_z, size_change, size_value = work.change_z, work.size_change, work.size_value
-    sizes_w, sizes_z, solved = work.sizes_w, work.sizes_z, work.solved
+    mode_z, sizes_z, solved = work.mode_z, work.sizes_z, work.solved
     solved[:] = False
-    # the store's and the phase's arrays, read once (see _evaluate_arrays)
     kinds, blocks, companions, rates = store.kind, store.blocks, store.companion, store.rates
-    contacts, noise, eta_rest = store.contacts, store.noise, store.eta_rest
-    w_x2, w_g_low, w_g_up = store.w_x2, store.w_g_low, store.w_g_up
-    w_eta, w_g, w_rest = store.w_eta, store.w_g, store.w_rest
-    cids, lows, grounded, of_ball = work.cid, work.lo, work.grounded, work.of_ball
+    contacts, noise, eta_rest, w_rest = store.contacts, store.noise, store.eta_rest, store.w_rest
+    cids, grounded, of_ball = work.cid, work.grounded, work.of_ball
     sizes, speeds = work.size, work.speed
-    highs, centre, modes = work.hi, work.centre, work.modes
-    big_x, shape, offset = store.x, store.shape, store.offset
     everything = count == 1 and grounded[0] and store.contacts[cids[0]] == n
     rest_rounding = work.rest_rounding
     horizon_contact = -1  # a contact whose force ends at the horizon
@@ -194,96 +186,21 @@ def advance_phase(
         sized[c] = -1
     steps = 0
     for _ in range(MAX_STEPS_PER_PHASE):
-        _evaluate_arrays(
-            tau,
-            count,
-            cids,
-            lows,
-            highs,
-            grounded,
-            centre,
-            modes,
-            contacts,
-            blocks,
-            big_x,
-            shape,
-            offset,
-            eta_rest,
-            e0,
-            de0,
-            x,
-            v,
-            a,
-            shape_z,
-            shape_w,
-            mode_z,
-            mode_w,
-            e,
-            de,
-            change_z,
-            size_change,
-            size_value,
-            shift_x,
-            shift_v,
-        )
+        _evaluate(tau, 0, count, work, store, e0, de0, e, de)
         clock = 1.0 + t + tau
         step = horizon - tau
+        others = step  # the smallest certified step but that of the contact that limits step
+        limit = -1
         event, best = -1, np.inf
         early, early_contact = np.inf, -1
         steps += 1
         for c in range(n):
-            upper = of_ball[c]
-            cid_u = cids[upper]
-            k_u = contacts[cid_u]
             if solved[c] and tau > 0.0:
                 continue  # its end is the horizon, or beyond it
-            if sized[upper] != steps:
-                _sizes(kinds, blocks, companions, rates, cid_u, k_u, mode_w, upper, sizes_w)
-                sized[upper] = steps
-            noise_u = noise[cid_u]
-            tol_state = noise_u * (sizes[upper] + speeds[upper] * (1.0 + tau) + tau * tau)
-            tol_rate = noise_u * (speeds[upper] + 1.0 + tau)
-            if active[c]:
-                i = c - (0 if grounded[upper] else lows[upper] + 1)
-                eta, deta, ddeta = e[c], de[c], shape_w[upper, k_u + i]
-                bound_eta = _bound(w_eta, cid_u, i, sizes_w, upper, k_u)
-                bound_g = _bound(w_g, cid_u, i, sizes_w, upper, k_u)
-            else:
-                rigid_u = 0.0 if grounded[upper] else -1.0
-                jl = c - lows[upper]
-                bound_eta = _bound(w_x2, cid_u, jl, sizes_w, upper, k_u)
-                bound_g = _bound(w_g_low, cid_u, jl, sizes_w, upper, k_u)
-                eta, deta = e[c], de[c]
-                if c == 0:
-                    ddeta = a[0]
-                    rigid = -rigid_u
-                else:
-                    lower = of_ball[c - 1]
-                    cid_l = cids[lower]
-                    ddeta = a[c] - a[c - 1]
-                    rigid_l = 0.0 if grounded[lower] else -1.0
-                    rigid = abs(rigid_u - rigid_l)
-                    k_l = contacts[cid_l]
-                    if sized[lower] != steps:
-                        _sizes(kinds, blocks, companions, rates, cid_l, k_l, mode_w, lower, sizes_w)
-                        sized[lower] = steps
-                    jl = c - 1 - lows[lower]
-                    bound_eta += _bound(w_x2, cid_l, jl, sizes_w, lower, k_l)
-                    bound_g += _bound(w_g_up, cid_l, jl, sizes_w, lower, k_l)
-                    tol_state += noise[cid_l] * (
-                        sizes[lower] + speeds[lower] * (1.0 + tau) + tau * tau
-                    )
-                    tol_rate += noise[cid_l] * (speeds[lower] + 1.0 + tau)
-                bound_eta += rigid
-                bound_g += rigid
-            tol_state = ROUNDING * tol_state + carried
-            value, rate, tol, h = contact_switch(
-                active[c], eta, deta, ddeta, zeta[c], bound_eta, bound_g, tol_state, clock
+            value, rate, tol, tol_rate, h, error = _check(
+                c, tau, clock, active[c], zeta[c], carried, e, de, work, store, steps
             )
             fresh = c == entered_by and tau == 0.0
-            # a rate within the rounding of the velocities has no sign: balls moving together
-            # (touching, unloaded) would otherwise switch on and off with the rounding
-            tol_rate = ROUNDING * tol_rate * (1.0 + 2.0 * zeta[c])
             if value <= -tol or (value <= tol and rate < -tol_rate and not fresh):
                 shift = 0.0  # one Newton correction, as in twoball.kernels.phases.advance_phase
                 if rate < 0.0:
@@ -292,10 +209,11 @@ def advance_phase(
                     shift = 0.0
                 if tau + shift < best:
                     best, event = tau + shift, c
-            elif active[c] and k_u == 1 and tau == 0.0:
+            elif active[c] and contacts[cids[of_ball[c]]] == 1 and tau == 0.0:
                 # A contact alone in its cluster is a damped oscillator about its static
                 # overlap: its force ends at a root found in closed form, which bounds the phase
                 # as an apex does (twoball.kernels.phases.advance_phase), not by steps.
+                cid_u = cids[of_ball[c]]
                 level = tol if fresh and value <= tol else 0.0
                 w = -blocks[cid_u, 0, 1, 0]
                 release = _release_time(
@@ -311,54 +229,24 @@ def advance_phase(
                 if release < horizon:
                     horizon, horizon_contact = release, c
                     step = min(step, horizon)
+                    others = min(others, horizon)
             else:
-                step = min(step, h)
-                if rate < -tol_rate and not fresh:
-                    # Closing on its root: one Newton step s lands within M s^2/2 of it (M
-                    # the curvature bound), so once that is below the rounding the switch is
-                    # taken there, if no other contact can switch first, rather than stepped
-                    # to (its certified step h exceeds s then). tol bounds the rounding
-                    # generously (16 ulps of every term), so a 512th of it is asked for.
-                    g_part = active[c] or eta < eta + 2.0 * zeta[c] * deta
-                    s = value / -rate
-                    error = 0.5 * (bound_g if g_part else bound_eta) * s * s
-                    if error <= tol / 512.0 and tau + s < early:
-                        early, early_contact = tau + s, c
+                if h < step:
+                    others, step, limit = step, h, c
+                else:
+                    others = min(others, h)
+                # Closing on its root: one Newton step s lands within M s^2/2 of it (M the
+                # curvature bound), so once that is below the rounding the switch is taken
+                # there, if no other contact can switch first, rather than stepped to (its
+                # certified step h exceeds s then). tol bounds the rounding generously (16 ulps
+                # of every term), so a 512th of it is asked for.
+                closing = rate < -tol_rate and not fresh and error <= tol / 512.0
+                if closing and tau + value / -rate < early:
+                    early, early_contact = tau + value / -rate, c
         if event < 0 and early_contact >= 0 and early <= tau + step:
             event, best = early_contact, early
         if event >= 0:
-            _evaluate_arrays(
-                best,
-                count,
-                cids,
-                lows,
-                highs,
-                grounded,
-                centre,
-                modes,
-                contacts,
-                blocks,
-                big_x,
-                shape,
-                offset,
-                eta_rest,
-                e0,
-                de0,
-                x,
-                v,
-                a,
-                shape_z,
-                shape_w,
-                mode_z,
-                mode_w,
-                e,
-                de,
-                change_z,
-                size_change,
-                size_value,
-                shift_x,
-                shift_v,
-            )
+            _evaluate(best, 0, count, work, store, e0, de0, e, de)
             return EVENT_SWITCH, event, best
         if everything:
             margin_ok = True
@@ -377,38 +265,7 @@ def advance_phase(
             if margin_ok:
                 return EVENT_REST, -1, tau
         if tau + step >= horizon:
-            _evaluate_arrays(
-                horizon,
-                count,
-                cids,
-                lows,
-                highs,
-                grounded,
-                centre,
-                modes,
-                contacts,
-                blocks,
-                big_x,
-                shape,
-                offset,
-                eta_rest,
-                e0,
-                de0,
-                x,
-                v,
-                a,
-                shape_z,
-                shape_w,
-                mode_z,
-                mode_w,
-                e,
-                de,
-                change_z,
-                size_change,
-                size_value,
-                shift_x,
-                shift_v,
-            )
+            _evaluate(horizon, 0, count, work, store, e0, de0, e, de)
             if horizon_contact >= 0:
                 return EVENT_SWITCH, horizon_contact, horizon
             if horizon_ball >= 0:
@@ -418,11 +275,112 @@ def advance_phase(
             for c in range(n):
                 e[c], de[c] = e0[c], de0[c]
             return EVENT_STUCK, -1, tau
+        if limit >= 0 and others > 2.0 * step and not everything:
+            # Every other contact is certified until tau + others: step the one that limits
+            # the step on its own until then, evaluating only its clusters (most steps approach
+            # the root of the contact that then switches). Its switch, if found before, ends
+            # the phase; else the whole stack is looked at again from there.
+            reach = tau + others
+            low = of_ball[limit - 1] if limit >= 1 and not active[limit] else of_ball[limit]
+            at, inner = tau + step, step
+            while True:
+                _evaluate(at, low, of_ball[limit] + 1, work, store, e0, de0, e, de)
+                steps += 1
+                value, rate, tol, tol_rate, h, error = _check(
+                    limit,
+                    at,
+                    1.0 + t + at,
+                    active[limit],
+                    zeta[limit],
+                    carried,
+                    e,
+                    de,
+                    work,
+                    store,
+                    steps,
+                )
+                found = -1.0
+                if value <= -tol or (value <= tol and rate < -tol_rate):
+                    found = at + (min(max(value / -rate, -inner), h) if rate < 0.0 else 0.0)
+                    if limit == entered_by and found <= 0.0:
+                        found = at  # as in the loop above: never back to the phase's start
+                elif rate < -tol_rate and error <= tol / 512.0:
+                    found = at + value / -rate
+                if found >= 0.0 and found <= reach:
+                    _evaluate(found, 0, count, work, store, e0, de0, e, de)
+                    return EVENT_SWITCH, limit, found
+                if found >= 0.0 or not h > 0.0 or at + h >= reach:
+                    break  # looked at again with the others, from here
+                at += h
+                inner = h
+            step = at - tau
         tau += step
         last_step = step
     for c in range(n):
         e[c], de[c] = e0[c], de0[c]
     return EVENT_STEPS, -1, tau
+
+
+@njit(borrow=True, inline=True)
+def _evaluate(tau, p_from, p_to, work, store, e0, de0, e, de):
+    """:func:`_evaluate_arrays` of phase clusters p_from to p_to - 1 at tau, from the
+    workspace's and the store's arrays."""
+    _evaluate_arrays(
+        tau,
+        p_from,
+        p_to,
+        work.cid,
+        work.lo,
+        work.hi,
+        work.grounded,
+        work.centre,
+        work.modes,
+        store,
+        e0,
+        de0,
+        work.x,
+        work.v,
+        work.a,
+        work.shape_z,
+        work.shape_w,
+        work.mode_z,
+        work.mode_w,
+        e,
+        de,
+        work.change_z,
+        work.size_change,
+        work.size_value,
+        work.shift_x,
+        work.shift_v,
+    )
+
+
+@njit(borrow=True, inline=True)
+def _check(c, tau, clock, is_active, zeta_c, carried, e, de, work, store, stamp):
+    """:func:`_check_contact` of contact c at tau from the evaluated workspace."""
+    return _check_contact(
+        c,
+        tau,
+        clock,
+        is_active,
+        zeta_c,
+        carried,
+        e,
+        de,
+        work.a,
+        work.shape_w,
+        work.of_ball,
+        work.cid,
+        work.lo,
+        work.grounded,
+        store,
+        work.size,
+        work.speed,
+        work.mode_w,
+        work.sizes_w,
+        work.sized,
+        stamp,
+    )
 
 
 @njit
@@ -672,37 +630,8 @@ def sample(phases, times, masses, zeta):
             )
             current = index
         tau = times[s] - phases[index, 0]
-        _evaluate_arrays(
-            tau,
-            count,
-            work.cid,
-            work.lo,
-            work.hi,
-            work.grounded,
-            work.centre,
-            work.modes,
-            store.contacts,
-            store.blocks,
-            store.x,
-            store.shape,
-            store.offset,
-            store.eta_rest,
-            phases[index, 2 : 2 + n],
-            phases[index, 2 + n :],
-            work.x,
-            work.v,
-            work.a,
-            work.shape_z,
-            work.shape_w,
-            work.mode_z,
-            work.mode_w,
-            e,
-            de,
-            work.change_z,
-            work.size_change,
-            work.size_value,
-            work.shift_x,
-            work.shift_v,
+        _evaluate(
+            tau, 0, count, work, store, phases[index, 2 : 2 + n], phases[index, 2 + n :], e, de
         )
         x, v = work.x, work.v
         heights[s] = x
