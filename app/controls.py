@@ -16,7 +16,7 @@ from bokeh.models import CustomJS, CustomJSTickFormatter
 
 from twoball import presets
 
-from .scene import PENDING_JS, Built, alert, later
+from .scene import PENDING_JS, Built, alert, join, later
 from .state import ExplorerState, app_range, span, validate
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
@@ -180,9 +180,8 @@ class Controls(Built):
             shown = messages if (box is self.typed_message) == typed else []
             box.object = "\n\n".join(plain(m) for m in shown)
             box.visible = bool(shown)
-        page = self._layout
-        if self.message.visible and page is not None and self.message not in page.objects:
-            page.insert(0, self.message)  # (joins the page when first needed: layout)
+        if self.message.visible:
+            join(self._layout, self.message)
 
     def _slider_moved(self, name: str, value: float) -> None:
         """A slider released by the user: the messages go, and a log slider sets its value
@@ -205,8 +204,7 @@ class Controls(Built):
             self._set_preset(preset)
         finally:
             self._applying_preset = False
-        if self.preset_source not in self.two_ball.objects:  # (joins the page when first used)
-            self.two_ball.insert(1, self.preset_source)
+        join(self.two_ball, self.preset_source, at=1)
         self.preset_source.object = (
             f"Drop from {presets.DEFAULT_DROP_METRES:g} m. Sources: {preset.source}"
         )

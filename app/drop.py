@@ -172,6 +172,18 @@ def below_zero(height: float | None) -> str:
 # wraps below it only on a narrow screen (the pane's styles never reach the figure, whose
 # 100 % width then always pushed the stage below it: on a laptop out of sight)
 BESIDE_STYLES = {"flex": "1 1 340px", "min-width": "0"}
+
+
+def heights_and_stage(heights, animation, presentation: bool) -> pn.viewable.Viewable:
+    """A scene's heights figure with its animation's stage beside it: a row on a projector
+    (wide: never wrapped), else a row that wraps the stage below on a phone."""
+    heights.styles = BESIDE_STYLES
+    panes = (pn.pane.Bokeh(heights, sizing_mode="stretch_width"), pn.pane.Bokeh(animation))
+    if presentation:
+        return pn.Row(*panes, sizing_mode="stretch_width")
+    return pn.FlexBox(*panes, sizing_mode="stretch_width", flex_wrap="wrap")
+
+
 PROJECTOR_PLOT_HEIGHT = 290  # presentation mode (scene.py): plots and player within 720 px
 
 
@@ -441,20 +453,9 @@ class DropScene(Scene):
 
     def layout(self) -> pn.viewable.Viewable:
         self._draw()
-        self.heights.styles = BESIDE_STYLES
-        heights = pn.pane.Bokeh(self.heights, sizing_mode="stretch_width")
-        if self.state.presentation:  # a projector is wide: side by side, never wrapped
-            plots = pn.Row(heights, pn.pane.Bokeh(self.animation), sizing_mode="stretch_width")
-        else:  # side by side on a wide screen, stacked on a phone
-            plots = pn.FlexBox(
-                heights,
-                pn.pane.Bokeh(self.animation),
-                sizing_mode="stretch_width",
-                flex_wrap="wrap",
-            )
         return pn.Column(
             self.summary,
-            plots,
+            heights_and_stage(self.heights, self.animation, self.state.presentation),
             # wraps: on a phone a row squeezed the player until its first buttons left the screen
             pn.FlexBox(
                 self.player,

@@ -12,7 +12,7 @@ from twoball import jit
 
 from .controls import Controls
 from .lesson import Lesson
-from .scene import MODEL_PARAMETERS, Built, Scene, alert
+from .scene import MODEL_PARAMETERS, Built, Scene, alert, join
 from .scenes import SCENE_REGISTRY, SCENES
 from .state import ExplorerState, read_query, url_query
 
@@ -122,9 +122,8 @@ class Explorer(Built):
         elif covered:  # (its text is sent only to a page that follows the lesson)
             self.cover.object = COVER_TEXT
         self.cover.visible = covered and not self.state.presentation
-        page = self._layout
-        if self.cover.visible and page is not None and self.cover not in page.objects:
-            page.insert(0, self.cover)  # (joins the page when first needed: layout)
+        if self.cover.visible:
+            join(self._layout, self.cover)
         self.tabs.visible = not covered
 
     @param.depends("state.scene", watch=True)

@@ -57,6 +57,13 @@ def send_without_delay() -> None:
             socket.set_nodelay(True)
 
 
+def join(layout: pn.layout.ListLike | None, pane: pn.viewable.Viewable, at: int = 0) -> None:
+    """Put ``pane`` into ``layout`` at ``at`` unless it is there (or the layout is not built
+    yet): a pane that joins the page when first needed, not in every page's first document."""
+    if layout is not None and pane not in layout.objects:
+        layout.insert(at, pane)
+
+
 class Built(pn.viewable.Viewer):
     """A viewer whose layout is built once, by :meth:`layout`, and returned by ``__panel__``
     from then on (its widgets and figures keep their Bokeh models for the session)."""

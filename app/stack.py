@@ -31,11 +31,11 @@ from twoball.units import number_text
 from .animation import Animation, FramePlayer
 from .controls import ReleasedIntSlider, ReleasedSlider, plain
 from .drop import (
-    BESIDE_STYLES,
     balls_glyph,
     below_zero,
     frame_times,
     height_axis,
+    heights_and_stage,
     stage,
     underneath,
 )
@@ -130,7 +130,7 @@ class StackScene(Scene):
             collapsed=True,
             sizing_mode="stretch_width",
         )
-        self._controls: pn.Column | None = None  # (own_controls)
+        self._controls = pn.Column(self.widgets, self.advanced, sizing_mode="stretch_width")
         self.summary = pn.pane.Markdown(sizing_mode="stretch_width")
         self.curves = ColumnDataSource({"t": []})
         self._lines: list = []  # a line per ball drawn so far (:meth:`_add_lines`)
@@ -345,18 +345,10 @@ class StackScene(Scene):
 
     def own_controls(self) -> pn.viewable.Viewable:
         """The stack's sliders, its force and its eps per contact, for the sidebar."""
-        if self._controls is None:
-            self._controls = pn.Column(self.widgets, self.advanced, sizing_mode="stretch_width")
         return self._controls
 
     def layout(self) -> pn.viewable.Viewable:
         self._draw()
-        self.heights.styles = BESIDE_STYLES
-        heights = pn.pane.Bokeh(self.heights, sizing_mode="stretch_width")
-        animation = pn.pane.Bokeh(self.animation)
-        if self.state.presentation:  # a projector is wide: side by side, never wrapped
-            plots = pn.Row(heights, animation, sizing_mode="stretch_width")
-        else:  # side by side on a wide screen, stacked on a phone
-            plots = pn.FlexBox(heights, animation, sizing_mode="stretch_width", flex_wrap="wrap")
+        plots = heights_and_stage(self.heights, self.animation, self.state.presentation)
         caption = pn.pane.Markdown(CAPTION_HELP, sizing_mode="stretch_width")
         return pn.Column(self.summary, plots, self.player, caption, sizing_mode="stretch_width")
