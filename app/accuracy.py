@@ -22,6 +22,7 @@ from .scene import PROJECTOR_LINE_WIDTH, AnsweringMarkdown, Scene, font_sizes
 # Okabe and Ito's eight colours, told apart with every common colour-vision deficiency (black
 # first: the exact solver, pale yellow last); Category10's red and green were not
 OKABE_ITO = ("#000000", "#E69F00", "#56B4E9", "#009E73", "#0072B2", "#D55E00", "#CC79A7", "#F0E442")
+STALE = {"opacity": "0.35"}  # the results of the drop before, while this one is measured
 PROJECTOR_PLOT_HEIGHT = 400  # presentation mode (scene.py): first under the tabs, in 720 px
 
 
@@ -64,7 +65,10 @@ class AccuracyScene(Scene):
         )
         # on a projector the plot comes first, under the tabs (the teacher says what it shows)
         parts = [self.plot, about] if self.state.presentation else [about, self.plot]
-        self.view = pn.Column(self.status, *parts, self.table, sizing_mode="stretch_width")
+        # the last drop's plot and table, dimmed while the next is measured (at full strength
+        # they were read as the new drop's for the few seconds of the measurement)
+        self.results = pn.Column(*parts, self.table, sizing_mode="stretch_width")
+        self.view = pn.Column(self.status, self.results, sizing_mode="stretch_width")
 
     def _state_changed(self, *events: param.parameterized.Event) -> None:
         if self.active:
@@ -85,6 +89,8 @@ class AccuracyScene(Scene):
         self.status.object = (
             "*Computing: every method at every tolerance on this drop (a few seconds)...*"
         )
+        if self.rows is not None:
+            self.results.styles = STALE
         document = pn.state.curdoc
         if document is not None and document.session_context is not None:
             pn.state.execute(functools.partial(self._compute_in_thread, self._request, document))
@@ -108,6 +114,7 @@ class AccuracyScene(Scene):
         self.rows = rows
         self.param.trigger("revision")
         self.status.object = ""
+        self.results.styles = {"opacity": "1"}
 
     def _plot(self, revision: bool) -> hv.Overlay:
         time_dim = hv.Dimension("seconds", label="run time per drop [s]")

@@ -38,6 +38,8 @@ def collision_window(contacts: list[twoball.ContactInterval], end: float) -> tup
 
 
 PROJECTOR_PLOT_HEIGHT = 470  # presentation mode (scene.py): positions; each force half of it
+# beside the forces, each at least 380 px wide (a phone wraps them one above the other)
+BESIDE_STYLES = {"flex": "1 1 380px", "min-width": "0"}
 
 
 class CloseUpScene(Scene):
@@ -52,7 +54,7 @@ class CloseUpScene(Scene):
         )
         self.samples = ColumnDataSource({"t": [], "x1": [], "x2": [], "f01": [], "f12": []})
         answers_pending(self.samples)
-        self.positions = self._figure("Positions (negative: compressed)", 300)
+        self.positions = self._figure("Positions (negative: compressed)", 400)
         lower = draw(
             self.positions, Line(x="t", y="x1", line_color=LOWER, line_width=2), self.samples
         )
@@ -152,4 +154,9 @@ class CloseUpScene(Scene):
         if self.state.presentation:  # 1280x720 (scene.py): positions beside the two forces
             plots = pn.Row(panes[0], pn.Column(*panes[1:]), sizing_mode="stretch_width")
             return pn.Column(plots, self.table, sizing_mode="stretch_width")
-        return pn.Column(*panes, self.table, sizing_mode="stretch_width")
+        # beside them on a laptop too (stacked, the three plots ended 100 px below a 1366x768
+        # window), wrapped one above the other on a phone
+        self.positions.styles = BESIDE_STYLES
+        forces = pn.Column(*panes[1:], styles=BESIDE_STYLES, sizing_mode="stretch_width")
+        plots = pn.FlexBox(panes[0], forces, flex_wrap="wrap", sizing_mode="stretch_width")
+        return pn.Column(plots, self.table, sizing_mode="stretch_width")

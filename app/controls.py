@@ -16,7 +16,7 @@ from bokeh.models import CustomJS, CustomJSTickFormatter
 
 from twoball import presets
 
-from .scene import PENDING_JS, Built, alert, join, later
+from .scene import PENDING_JS, Built, alert, for_a_room, join, later
 from .state import ExplorerState, app_range, span, validate
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
@@ -132,6 +132,7 @@ class Controls(Built):
         self.preset = pn.widgets.Select(
             label="Preset",
             options={"(custom)": ""} | {p.label: key for key, p in presets.PRESETS.items()},
+            stylesheets=for_a_room(self.state.presentation),
         )
         self.preset.param.watch(self._apply_preset, "value")
         self._applying_preset = False

@@ -33,7 +33,14 @@ import numpy as np
 import panel as pn
 import param
 import xarray as xr
-from bokeh.models import BasicTickFormatter, ColumnDataSource, FixedTicker
+from bokeh.models import (
+    BasicTicker,
+    BasicTickFormatter,
+    ColumnDataSource,
+    CustomJSHover,
+    FixedTicker,
+    HoverTool,
+)
 from holoviews.operation import contours
 from scipy import ndimage
 
@@ -47,6 +54,7 @@ from .scene import (
     Scene,
     answers_pending,
     font_sizes,
+    for_a_room,
     later,
     on_screen,
 )
@@ -61,6 +69,18 @@ SMALLEST_OUTLINED = 4  # cells: a delayed-rebound patch smaller than this is not
 PROJECTOR_MAP_HEIGHT = 490  # presentation mode (scene.py): both axes and the colour bar in 720 px
 SHOWN = ("h2_over_h1", "h1_over_icm", "h1_over_drop", "h2_over_drop", "contacts_first")
 RATIO_CENTRES = {"h2_over_h1": 1.0, "h1_over_icm": 1.0}
+# the choice's words for a variable where the cube's long name is too long for it (the select
+# showed "number of ball-ball contact intervals bef"); the colour bar keeps the long name
+CHOICE_LABELS = {"contacts_first": "ball contacts before h1"}
+# the map's style on a laptop, desktop or phone: beside the choices where the screen is wide
+# enough (below them, the 640 px map of a 1366x768 laptop needed scrolling to see its lower
+# half), and as tall as the window leaves under the header and tabs, at most 640 px
+SIDE_STYLES = {"flex": "0 1 300px"}
+FIT_STYLES = {
+    "height": "clamp(380px, calc(100vh - 190px), 640px)",
+    "flex": "1 1 560px",
+    "min-width": "0",
+}
 # colour-bar ticks of the ratios' log scale: values below 1 get numbers too (LogTicker: powers
 # of ten only, so a range of 0.5 to 2 showed "1" alone)
 RATIO_TICKS = [0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1, 1.4, 2, 3, 5, 10, 20, 50, 100]
@@ -70,6 +90,16 @@ def ratio_colorbar() -> dict:
     """Colour-bar options of a ratio: a FixedTicker shows the ticks inside the colour range
     (new models each time: a Bokeh model belongs to one session's document)."""
     return {"ticker": FixedTicker(ticks=RATIO_TICKS), "formatter": BasicTickFormatter()}
+
+
+def values_hover(label: str) -> HoverTool:
+    """The map's hover: mu and tau_d/tau_f as numbers, not the log10 the image is drawn in (a
+    new model each time, as :func:`ratio_colorbar`)."""
+    power = CustomJSHover(code="return (10 ** value).toPrecision(3)")
+    return HoverTool(
+        tooltips=[("mu", "$x{custom}"), ("tau_d/tau_f", "$y{custom}"), (label, "@image")],
+        formatters={"$x": power, "$y": power},
+    )
 
 
 def variable_label(variable: str) -> str:
@@ -217,7 +247,11 @@ class MapScene(Scene):
         self.computed = False  # the slice was computed for this drop (not the cube's)
         self.error: str | None = None
         self.choice = pn.widgets.Select(
-            label="Colour by", options={variable_label(v): v for v in SHOWN}, value=self.variable
+            label="Colour by",
+            options={CHOICE_LABELS.get(v, variable_label(v)): v for v in SHOWN},
+            value=self.variable,
+            width=270,  # (within the 300 px column beside the map)
+            stylesheets=for_a_room(self.state.presentation),
         )
         self.choice.link(self, value="variable")
         self.force = pn.widgets.RadioButtonGroup.from_param(  # (no tooltip: see app/stack.py)
@@ -266,9 +300,10 @@ class MapScene(Scene):
             xlabel="mu = m2/m1 (log scale)",
             ylabel="tau_d/tau_f (log scale)",
             responsive=True,
-            height=PROJECTOR_MAP_HEIGHT
-            if self.state.presentation
-            else 640,  # (with its colour bar)
+            # (with its colour bar; else the window's height: FIT_STYLES, set in the hook)
+            **(
+                {"height": PROJECTOR_MAP_HEIGHT} if self.state.presentation else {"min_height": 380}
+            ),
             framewise=False,
             fontsize=font_sizes(self.state.presentation),
             toolbar="right" if self.state.presentation else "above",
@@ -304,8 +339,10 @@ class MapScene(Scene):
 
     def _draw_star(self, plot, element) -> None:
         """HoloViews hook: the star's glyph on the map's Bokeh figure, once per figure, with a
-        source of its own."""
+        source of its own; and the figure's height from the window's (FIT_STYLES)."""
         figure = plot.state
+        if not self.state.presentation:  # (a projector's map has a fixed height)
+            figure.styles = FIT_STYLES
         if not any(getattr(r, "name", None) == "star" for r in figure.renderers):
             self.star = ColumnDataSource(self._star_position())
             answers_pending(self.star)
@@ -444,10 +481,12 @@ class MapScene(Scene):
             )
         else:
             opts = dict(cmap="viridis", logz=False, clim=(np.nan, np.nan))
+            if variable == "contacts_first":  # a count: whole numbers on its colour bar
+                opts["colorbar_opts"] = {"ticker": BasicTicker(min_interval=1)}
         return mesh.opts(
             colorbar=True,
             colorbar_position=self._colorbar_position(),
-            tools=["hover", "tap"],
+            tools=[values_hover(label), "tap"],
             **opts,
         )
 
@@ -509,16 +548,6 @@ class MapScene(Scene):
         if self.state.presentation:  # 1280x720 (scene.py): the choices beside the map
             side = pn.Column(self.choice, self.force, self.download, self.note, width=300)
             return pn.Row(self.figure, side, sizing_mode="stretch_width")
-        return pn.Column(
-            # wraps: on a phone the two side by side made the page scroll sideways
-            pn.FlexBox(
-                self.choice,
-                self.force,
-                self.download,
-                flex_wrap="wrap",
-                sizing_mode="stretch_width",
-            ),
-            self.note,
-            self.figure,
-            sizing_mode="stretch_width",
-        )
+        # the choices and the note right of the map, wrapped below it on a phone
+        side = pn.Column(self.choice, self.force, self.download, self.note, styles=SIDE_STYLES)
+        return pn.FlexBox(self.figure, side, flex_wrap="wrap", sizing_mode="stretch_width")

@@ -35,7 +35,7 @@ from twoball.units import units_named
 
 from .animation import Animation, FramePlayer
 from .collisions import collisions
-from .scene import Scene, answers_pending, draw, later, on_screen, readable
+from .scene import Scene, answers_pending, draw, for_a_room, later, on_screen, readable
 from .worksheet import drop_csv
 
 FLIGHT_FRAMES = 240  # evenly spread over the drop
@@ -225,7 +225,9 @@ class DropScene(Scene):
         self.animation = self._animation_figure()
         # played in the browser (app/animation.py)
         self.animated = Animation(self.balls, self.cursor, self.animation.title, self.trail)
-        self.player = FramePlayer(self.animated, end=FLIGHT_FRAMES - 1)
+        self.player = FramePlayer(
+            self.animated, end=FLIGHT_FRAMES - 1, stylesheets=for_a_room(self.state.presentation)
+        )
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # 1280x720: under the header, tabs and summary, the player

@@ -179,6 +179,20 @@ def on_screen(values) -> np.ndarray:
     return np.asarray(values, dtype=np.float32)
 
 
+# a room's inputs: a select's text and the player's buttons as large as the page's 20 px text
+# (a select kept the browser's own 13 px, the player's buttons were 50 x 21 px; nine of 52 px
+# fit its 520 px)
+PROJECTED_INPUTS = (
+    ":host select { font-size: 20px; }"
+    " :host button { min-width: 52px; height: 40px; font-size: 20px; }"
+)
+
+
+def for_a_room(presentation: bool) -> list[str]:
+    """The ``stylesheets`` of a select or a player: large for a room, else the widget's own."""
+    return [PROJECTED_INPUTS] if presentation else []
+
+
 def readable(fig, presentation: bool) -> None:
     """Font sizes of a Bokeh figure: for a screen, or for a room (tick labels >= 16 px, and
     lines, markers and labels drawn bold enough for the back of the room)."""

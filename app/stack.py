@@ -39,7 +39,7 @@ from .drop import (
     stage,
     underneath,
 )
-from .scene import Scene, answers_pending, draw, on_screen, readable
+from .scene import Scene, answers_pending, draw, for_a_room, on_screen, readable
 from .state import contact_eps
 
 # Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first (all
@@ -145,7 +145,9 @@ class StackScene(Scene):
         self.animation = self._animation_figure()
         # played in the browser (app/animation.py)
         self.animated = Animation(self.balls_drawn, self.cursor, self.animation.title)
-        self.player = FramePlayer(self.animated, end=1)
+        self.player = FramePlayer(
+            self.animated, end=1, stylesheets=for_a_room(self.state.presentation)
+        )
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # plots and player within 720 px (scene.py)

@@ -264,6 +264,13 @@ def test_presentation_mode_shows_each_scene_on_one_screen(
         assert all(r <= width and b <= height for r, b in shown), shown
         # the player's buttons with room to spare (a touch screen draws them taller)
         assert all(b["bottom"] <= height - 20 for b in players), players
+        # a room reads the selects and hits the player's buttons (they were 13 px, 50 x 21 px)
+        selects = [s for s in deep_query(page, "select") if s["visible"]]
+        assert len(selects) >= (scene != "stack"), selects  # (the preset's: not the Stack's)
+        assert all(s["font"] >= 18 for s in selects), selects
+        buttons = [b for b in deep_query(page, "button.play, button.pause") if b["visible"]]
+        assert len(buttons) == 2 * len(players), buttons
+        assert all(b["height"] >= 36 and b["width"] >= 50 for b in buttons), buttons
         assert page.evaluate("parseFloat(getComputedStyle(document.body).fontSize)") >= 18
         shots = artifacts / "projector"
         shots.mkdir(exist_ok=True)
@@ -299,6 +306,65 @@ def test_a_laptop_shows_the_plots_the_balls_and_the_player_without_scrolling(
         assert sidebar.get_by_text("balls N:").is_visible() == (scene == "stack")
         assert sidebar.get_by_text("mu = m2/m1 (log scale):").is_visible() == (scene == "drop")
         page.screenshot(path=artifacts / f"laptop_{scene}.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
+@pytest.mark.parametrize("scene", ["closeup", "map"])
+def test_a_laptop_shows_the_collision_and_the_map_without_scrolling(
+    browser, app_server, artifacts, scene
+):
+    """At 1366x768 the first collision's three plots and the whole map (with its colour bar)
+    lie inside the window (they ended 100 and 180 px below it), the map's choices beside it,
+    inside the window too."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?scene={scene}", viewport=(1366, 768))
+    try:
+        if scene == "map":
+            page.get_by_text("Slice of the shipped cube").wait_for()
+        page.wait_for_timeout(800)
+        plots = [
+            c for c in deep_query(page, "canvas")
+            if c["visible"] and c["width"] > 100 and c["height"] > 100
+        ]  # fmt: skip
+        plots = list({(c["left"], c["top"]): c for c in plots}.values())  # (canvas layers)
+        assert len(plots) == (3 if scene == "closeup" else 1), plots
+        assert all(c["bottom"] <= 768 and c["right"] <= 1366 for c in plots), plots
+        if scene == "map":  # a plot no squatter than 3:2 (a first try was 900 x 220)
+            assert plots[0]["height"] >= plots[0]["width"] / 2, plots
+            choice = [s for s in deep_query(page, "select") if s["visible"]][-1]
+            assert choice["right"] <= 1366 and choice["left"] > plots[0]["right"], choice
+        page.screenshot(path=artifacts / f"laptop_{scene}.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_the_map_hover_says_mu_and_tau_ratio_not_their_logarithms(browser, app_server):
+    """The map is drawn on log10 axes; its hover quotes the values a student sets (it showed
+    'log10 mu: -2')."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?scene=map", viewport=(1366, 768))
+    try:
+        page.get_by_text("Slice of the shipped cube").wait_for()
+        page.wait_for_timeout(500)
+        canvas = max(
+            (c for c in deep_query(page, "canvas") if c["visible"]),
+            key=lambda c: c["width"] * c["height"],
+        )
+        # the middle of the map: log10 mu near -1.5 and log10 tau_d/tau_f near -1, both < 0
+        page.mouse.move(canvas["left"] + canvas["width"] / 2, canvas["top"] + canvas["height"] / 2)
+        tooltip = page.wait_for_function(
+            """() => { const found = []; const walk = (root) => {
+                for (const el of root.querySelectorAll("*")) {
+                  if (el.classList.contains("bk-tooltip-row-value")) found.push(el.innerText);
+                  if (el.shadowRoot) walk(el.shadowRoot); } };
+              walk(document); return found.length >= 2 ? found : null; }""",
+            timeout=10_000,
+        ).json_value()
+        mu, tau_ratio = float(tooltip[0]), float(tooltip[1])
+        assert 0.003 < mu < 0.3 and 0.003 < tau_ratio < 1, tooltip  # the values, not log10
         assert errors == []
     finally:
         context.close()

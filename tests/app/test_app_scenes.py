@@ -8,10 +8,12 @@ from __future__ import annotations
 
 import math
 
+import holoviews as hv
 import numpy as np
 import param
 import pytest
 from bokeh.document import Document
+from bokeh.models import ColorBar
 
 import twoball
 from app.delayed_map import map_cube
@@ -284,6 +286,37 @@ def test_a_class_at_one_drop_measures_the_accuracy_once(monkeypatch):
     pages[1].state.mu = 0.3
     assert len(calls) == 2 and calls[-1][1] == 0.3
     app.accuracy.measured.cache_clear()
+
+
+def test_the_accuracy_of_the_last_drop_is_dimmed_while_the_next_is_measured(monkeypatch):
+    """While a new drop is measured (seconds, in a thread under a server) the plot and table
+    of the drop before stay on screen dimmed, not at full strength as if current."""
+    import app.accuracy
+
+    explorer = rendered({"scene": "accuracy", "eps": "0.7", "mu": "0.2", "tau_ratio": "0.5"})
+    scene = explorer.scenes["accuracy"]
+    shown_while_measuring = []
+    measure = scene._work
+
+    def watched():
+        shown_while_measuring.append((dict(scene.results.styles), scene.status.object))
+        return measure()
+
+    monkeypatch.setattr(scene, "_work", watched)
+    explorer.state.mu = 0.3
+    ((styles, status),) = shown_while_measuring
+    assert styles == app.accuracy.STALE and "Computing" in status
+    assert scene.results.styles == {"opacity": "1"} and scene.status.object == ""
+
+
+def test_the_map_of_contact_counts_ticks_whole_numbers():
+    """A count's colour bar has no ticks between whole numbers (it showed 2.5, 3.5)."""
+    explorer = rendered({"scene": "map"})
+    scene = explorer.scenes["map"]
+    scene.variable = "contacts_first"
+    image = scene._image(scene.revision, "contacts_first")
+    colorbar = hv.render(image).select_one({"type": ColorBar})
+    assert colorbar.ticker.min_interval == 1
 
 
 def test_bad_typed_values_show_a_message_and_keep_a_valid_state():
