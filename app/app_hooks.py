@@ -18,6 +18,7 @@ import time
 
 import panel
 import panel.io.document
+import tornado.netutil
 from bokeh.settings import settings as bokeh_settings
 from tornado.ioloop import IOLoop
 from tornado.websocket import WebSocketClosedError
@@ -118,6 +119,25 @@ def on_server_loaded(server_context) -> None:
     except (OSError, ValueError) as error:  # the map scene shows this too
         log.warning("the map cube could not be opened: %s", error)
     exempt_the_server_from_collection()
+    accept_one_connection_at_a_time()
+
+
+def accept_one_connection_at_a_time() -> None:
+    """Each server process takes one new connection per wake-up, so that a class's pages are
+    shared among the processes (``twoball serve --num-procs``) by which of them is free.
+
+    The processes share one listening socket, and Tornado's accept handler takes up to 128
+    waiting connections each time it wakes: the first process to wake took most of a burst
+    and built those sessions alone while the other idled. Measured with 30 pages opened at once
+    on two processes (server CPU of each, three bursts): 7.5 / 3.3 s, 9.7 / 1.7 s, 7.9 / 4.0 s
+    before; 5.9 / 5.9 s, 5.9 / 6.0 s, 5.9 / 5.8 s after. A process busy building a session
+    is not waiting on the socket, so the next connection goes to one that is.
+
+    Tornado reads the count from its private ``netutil._DEFAULT_BACKLOG`` at each wake-up (the
+    listening socket's own backlog was fixed when it was bound, before this runs);
+    tests/app/test_app_hooks.py checks that one wake-up now accepts one connection, and fails
+    if a Tornado release reads it elsewhere."""
+    tornado.netutil._DEFAULT_BACKLOG = 1
 
 
 def exempt_the_server_from_collection() -> None:

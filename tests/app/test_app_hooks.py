@@ -80,3 +80,36 @@ def test_a_write_task_failing_on_a_closed_page_is_a_warning_not_a_traceback(capl
         assert [type(c.get("exception")) for c in passed_on] == [RuntimeError]
     finally:
         loop.close()
+
+
+def test_a_server_process_accepts_one_waiting_connection_per_wake_up(monkeypatch):
+    """Three connections wait on a listening socket; one wake-up of Tornado's accept handler
+    takes one of them (it took all three before: app_hooks.accept_one_connection_at_a_time)."""
+    import socket
+
+    import tornado.netutil
+    from tornado.ioloop import IOLoop
+
+    from app import app_hooks
+
+    monkeypatch.setattr(tornado.netutil, "_DEFAULT_BACKLOG", tornado.netutil._DEFAULT_BACKLOG)
+    app_hooks.accept_one_connection_at_a_time()
+    handlers = []
+    loop = types.SimpleNamespace(add_handler=lambda fd, handler, events: handlers.append(handler))
+    monkeypatch.setattr(IOLoop, "current", staticmethod(lambda instance=True: loop))
+    with socket.socket() as listener:
+        listener.bind(("127.0.0.1", 0))
+        listener.listen(8)
+        listener.setblocking(False)
+        accepted = []
+        tornado.netutil.add_accept_handler(listener, lambda conn, address: accepted.append(conn))
+        clients = [socket.create_connection(listener.getsockname()) for _ in range(3)]
+        try:
+            (wake_up,) = handlers
+            wake_up(listener, IOLoop.READ)
+            assert len(accepted) == 1
+            wake_up(listener, IOLoop.READ)
+            assert len(accepted) == 2
+        finally:
+            for connection in [*clients, *accepted]:
+                connection.close()
