@@ -17,7 +17,7 @@ import param
 
 from twoball.studies.precision import ERROR_FLOOR, FAILED_ERROR, PrecisionRow, work_precision
 
-from .scene import PROJECTOR_LINE_WIDTH, AnsweringMarkdown, Scene, font_sizes
+from .scene import PROJECTOR_LINE_WIDTH, AnsweringMarkdown, Scene, Text, font_sizes
 
 # Okabe and Ito's eight colours, told apart with every common colour-vision deficiency (black
 # first: the exact solver, pale yellow last); Category10's red and green were not
@@ -49,9 +49,7 @@ class AccuracyScene(Scene):
         self.plot = pn.pane.HoloViews(
             pn.bind(self._plot, self.param.revision), sizing_mode="stretch_width"
         )
-        self.table = pn.pane.Markdown(
-            pn.bind(self._table, self.param.revision), sizing_mode="stretch_width"
-        )
+        self.table = Text(pn.bind(self._table, self.param.revision), sizing_mode="stretch_width")
         # what is being computed, said in words (Panel's loading overlay, set back from the
         # computation's callback, sometimes stayed on in the browser though the plots arrived)
         # ("Computing..." answers a move)

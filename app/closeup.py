@@ -22,7 +22,7 @@ from twoball.units import units_named
 
 from .collisions import first_collision
 from .drop import LOWER, UPPER
-from .scene import Scene, answers_pending, draw, on_screen, readable
+from .scene import Scene, Text, answers_pending, draw, on_screen, readable
 
 SAMPLES = 600  # over the collision, with every contact's start and end: ~2 px apart at 1366 px
 MARGIN = 0.08  # of the collision's duration, shown before and after it
@@ -48,7 +48,7 @@ class CloseUpScene(Scene):
     def __init__(self, **params):
         super().__init__(**params)
         self.result: twoball.Result | None = None
-        self.table = pn.pane.Markdown(
+        self.table = Text(
             pn.bind(self._contacts_text, self.param.revision, self.param.active),
             sizing_mode="stretch_width",
         )

@@ -35,7 +35,7 @@ from twoball.units import units_named
 
 from .animation import Animation, FramePlayer
 from .collisions import collisions
-from .scene import Scene, answers_pending, draw, for_a_room, later, on_screen, readable
+from .scene import Scene, Text, answers_pending, draw, for_a_room, later, on_screen, readable
 from .worksheet import drop_csv
 
 FLIGHT_FRAMES = 240  # evenly spread over the drop
@@ -206,7 +206,7 @@ class DropScene(Scene):
         self.download = pn.widgets.FileDownload(  # written when clicked, not at every move
             callback=self._csv, filename="drop.csv", label="Download this drop (CSV)", embed=False
         )
-        self.summary = pn.pane.Markdown(sizing_mode="stretch_width")
+        self.summary = Text(sizing_mode="stretch_width")
         # compare two drops (tennis against ping-pong): one pinned, drawn dashed under the next
         self.pinned: PinnedDrop | None = None
         self.pin = pn.widgets.Button(label="Pin this drop to compare")

@@ -39,7 +39,7 @@ from .drop import (
     stage,
     underneath,
 )
-from .scene import Scene, answers_pending, draw, for_a_room, on_screen, readable
+from .scene import Scene, Text, answers_pending, draw, for_a_room, on_screen, readable
 from .state import contact_eps
 
 # Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first (all
@@ -131,7 +131,7 @@ class StackScene(Scene):
             sizing_mode="stretch_width",
         )
         self._controls = pn.Column(self.widgets, self.advanced, sizing_mode="stretch_width")
-        self.summary = pn.pane.Markdown(sizing_mode="stretch_width")
+        self.summary = Text(sizing_mode="stretch_width")
         self.curves = ColumnDataSource({"t": []})
         self._lines: list = []  # a line per ball drawn so far (:meth:`_add_lines`)
         answers_pending(self.curves)

@@ -721,3 +721,22 @@ def test_an_apex_below_zero_is_explained_not_shown_as_a_missing_bounce():
     assert scene.result.h1 == drop.h1
     assert "below 0: the top ball barely left the ball under it" in scene.summary.object
     assert "below 0" not in rendered(PAPER).scenes["drop"].summary.object
+
+
+def test_a_text_pane_sends_what_panels_markdown_pane_sends():
+    """app.scene.Text sets only the model's text on a change: the same text Panel's Markdown
+    pane renders for the same object, and its other properties still follow the pane."""
+    import panel as pn
+
+    from app.scene import Text
+
+    text, markdown = Text("**one**"), pn.pane.Markdown("**one**")
+    models = [pane.get_root(Document()) for pane in (text, markdown)]
+    for new in ("**two** and *three*", "| a | b |\n| --- | --- |\n| 1 | 2 |", ""):
+        text.object = markdown.object = new
+        assert models[0].text == models[1].text
+    assert "table" not in models[0].text  # (the last object, empty, was rendered too)
+    text.object = "| a | b |\n| --- | --- |\n| 1 | 2 |"
+    assert "&lt;table&gt;" in models[0].text  # (Panel sends the HTML escaped)
+    text.styles = {"opacity": "0.5"}
+    assert models[0].styles == {"opacity": "0.5"}
