@@ -42,6 +42,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tools"))
 
 from appdriver import (  # noqa: E402
+    cpu_by_process,
     cpu_seconds,
     free_port,
     rss_mb,
@@ -279,11 +280,17 @@ async def run(label: str, command: list[str], url: str, port: int, args, log: Pa
         await asyncio.sleep(1.0)
         idle = rss_mb(process.pid)
         cpu_start = cpu_seconds(process.pid)
+        each_start = cpu_by_process(process.pid)
         started = time.monotonic()
         burst = await open_burst(url, args.burst)
         wall = time.monotonic() - started
         await settled(process.pid)  # the scenes that follow the documents, the URLs' rewrite
         cpu = cpu_seconds(process.pid) - cpu_start
+        # how the burst was shared among the server's processes (the parent only waits)
+        shares = sorted(
+            (now - each_start.get(pid, 0.0) for pid, now in cpu_by_process(process.pid).items()),
+            reverse=True,
+        )[: args.num_procs]
         opens = [c.opened for c in burst]
         complete = [c.complete() for c in burst]
         print(
@@ -291,7 +298,8 @@ async def run(label: str, command: list[str], url: str, port: int, args, log: Pa
             f"in {max(opens):.2f} s (median {statistics.median(opens):.2f} s, wall {wall:.2f} s),"
             f" pages complete (their last message) in {max(complete):.2f} s (median "
             f"{statistics.median(complete):.2f} s); "
-            f"server CPU {1e3 * cpu / args.burst:.0f} ms per session; first document "
+            f"server CPU {1e3 * cpu / args.burst:.0f} ms per session (by process: "
+            f"{' / '.join(f'{share:.1f}' for share in shares)} s); first document "
             f"{burst[0].document_bytes / 1e3:.0f} kB ({len(burst[0].models)} models)",
             flush=True,
         )
