@@ -17,6 +17,7 @@ from twoball.kernels.clusters import (
     _clusters_ready,
     _ensure_clusters,
     _evaluate_arrays,
+    _evaluate_contact,
     _phase,
     _rest_rounding,
     _sizes,
@@ -277,14 +278,32 @@ def advance_phase(
             return EVENT_STUCK, -1, tau
         if limit >= 0 and others > 2.0 * step and not everything:
             # Every other contact is certified until tau + others: step the one that limits
-            # the step on its own until then, evaluating only its clusters (most steps approach
-            # the root of the contact that then switches). Its switch, if found before, ends
-            # the phase; else the whole stack is looked at again from there.
+            # the step on its own until then, evaluating only the rows it reads
+            # (_evaluate_contact; most steps approach the root of the contact that then
+            # switches). Its switch, if found before, ends the phase; else the whole stack is
+            # looked at again from there.
             reach = tau + others
-            low = of_ball[limit - 1] if limit >= 1 and not active[limit] else of_ball[limit]
             at, inner = tau + step, step
             while True:
-                _evaluate(at, low, of_ball[limit] + 1, work, store, e0, de0, e, de)
+                _evaluate_contact(
+                    at,
+                    limit,
+                    active[limit],
+                    cids,
+                    work.lo,
+                    grounded,
+                    work.modes,
+                    of_ball,
+                    store,
+                    e0,
+                    de0,
+                    work.a,
+                    work.shape_w,
+                    work.mode_w,
+                    e,
+                    de,
+                    work.change_z,
+                )
                 steps += 1
                 value, rate, tol, tol_rate, h, error = _check(
                     limit,
