@@ -412,8 +412,8 @@ def _phase(
 @njit(borrow=True, inline=True)
 def _evaluate_arrays(
     tau,
-    p_from,
-    p_to,
+    count,
+    every_ball,
     cids,
     lows,
     highs,
@@ -438,8 +438,9 @@ def _evaluate_arrays(
     shift_x,
     shift_v,
 ):
-    """Heights, velocities, accelerations of the balls of phase clusters p_from to p_to - 1 (all:
-    0, count) at tau into the phase (into x, v, a), each such cluster's z and w = z' (into
+    """Heights, velocities, accelerations of the balls of the phase's count clusters at tau into
+    the phase (into x, v, a; with every_ball False only the accelerations of the balls at
+    either end of a cluster, all that the step loop reads), each cluster's z and w = z' (into
     shape_z, shape_w) and their block (mode)
     coordinates X^-1 z and X^-1 w (into mode_z, mode_w), from the phase's (:func:`_phase`) and
     the store's arrays, passed one by one: the step loop reads them once per phase. Written
@@ -458,9 +459,7 @@ def _evaluate_arrays(
     shape, offset, eta_rest = store.shape, store.offset, store.eta_rest
     gravity_below = 0.0  # -tau^2/2 (or 0) in the height of the ball below, and its rate
     gravity_rate_below = 0.0
-    if p_from > 0 and not grounded[p_from - 1]:
-        gravity_below, gravity_rate_below = -0.5 * tau * tau, -tau
-    for p in range(p_from, p_to):
+    for p in range(count):
         cid = cids[p]
         k = contacts[cid]
         d = 2 * k
@@ -497,19 +496,24 @@ def _evaluate_arrays(
             gravity, gravity_rate = -0.5 * tau * tau, -tau
         first = 0 if grounded[p] else lows[p] + 1
         for ball in range(lows[p], highs[p] + 1):
+            if not (every_ball or ball == lows[p] or ball == highs[p]):
+                continue
             jl = ball - lows[p]
-            xs = vs = acc = moved = moved_rate = 0.0
+            acc = moved = moved_rate = 0.0
             for i in range(k):
                 coefficient = shape[cid, jl, i]
-                xs += coefficient * shape_z[p, i]
-                vs += coefficient * shape_z[p, k + i]
                 acc += coefficient * shape_w[p, k + i]
                 moved += coefficient * (change_z[p, i] - tau * de0[first + i])
                 moved_rate += coefficient * change_z[p, k + i]
-            x[ball] = base_x + offset[cid, jl] + xs
-            v[ball] = base_v + vs
             a[ball] = base_a + acc
             shift_x[ball], shift_v[ball] = moved, moved_rate
+            if every_ball:
+                xs = vs = 0.0
+                for i in range(k):
+                    xs += shape[cid, jl, i] * shape_z[p, i]
+                    vs += shape[cid, jl, i] * shape_z[p, k + i]
+                x[ball] = base_x + offset[cid, jl] + xs
+                v[ball] = base_v + vs
         for i in range(k):  # the active contacts: start plus change, or rest plus value
             c = first + i
             if size_change[p, i] <= abs(eta_rest[cid, i]) + size_value[p, i]:

@@ -187,7 +187,7 @@ def advance_phase(
         sized[c] = -1
     steps = 0
     for _ in range(MAX_STEPS_PER_PHASE):
-        _evaluate(tau, 0, count, work, store, e0, de0, e, de)
+        _evaluate(tau, count, False, work, store, e0, de0, e, de)
         clock = 1.0 + t + tau
         step = horizon - tau
         others = step  # the smallest certified step but that of the contact that limits step
@@ -247,7 +247,7 @@ def advance_phase(
         if event < 0 and early_contact >= 0 and early <= tau + step:
             event, best = early_contact, early
         if event >= 0:
-            _evaluate(best, 0, count, work, store, e0, de0, e, de)
+            _evaluate(best, count, False, work, store, e0, de0, e, de)
             return EVENT_SWITCH, event, best
         if everything:
             margin_ok = True
@@ -266,7 +266,7 @@ def advance_phase(
             if margin_ok:
                 return EVENT_REST, -1, tau
         if tau + step >= horizon:
-            _evaluate(horizon, 0, count, work, store, e0, de0, e, de)
+            _evaluate(horizon, count, False, work, store, e0, de0, e, de)
             if horizon_contact >= 0:
                 return EVENT_SWITCH, horizon_contact, horizon
             if horizon_ball >= 0:
@@ -326,7 +326,7 @@ def advance_phase(
                 elif rate < -tol_rate and error <= tol / 512.0:
                     found = at + value / -rate
                 if found >= 0.0 and found <= reach:
-                    _evaluate(found, 0, count, work, store, e0, de0, e, de)
+                    _evaluate(found, count, False, work, store, e0, de0, e, de)
                     return EVENT_SWITCH, limit, found
                 if found >= 0.0 or not h > 0.0 or at + h >= reach:
                     break  # looked at again with the others, from here
@@ -341,13 +341,13 @@ def advance_phase(
 
 
 @njit(borrow=True, inline=True)
-def _evaluate(tau, p_from, p_to, work, store, e0, de0, e, de):
-    """:func:`_evaluate_arrays` of phase clusters p_from to p_to - 1 at tau, from the
-    workspace's and the store's arrays."""
+def _evaluate(tau, count, every_ball, work, store, e0, de0, e, de):
+    """:func:`_evaluate_arrays` of the phase's count clusters at tau, from the workspace's and
+    the store's arrays."""
     _evaluate_arrays(
         tau,
-        p_from,
-        p_to,
+        count,
+        every_ball,
         work.cid,
         work.lo,
         work.hi,
@@ -650,7 +650,7 @@ def sample(phases, times, masses, zeta):
             current = index
         tau = times[s] - phases[index, 0]
         _evaluate(
-            tau, 0, count, work, store, phases[index, 2 : 2 + n], phases[index, 2 + n :], e, de
+            tau, count, True, work, store, phases[index, 2 : 2 + n], phases[index, 2 + n :], e, de
         )
         x, v = work.x, work.v
         heights[s] = x
