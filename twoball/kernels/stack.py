@@ -524,15 +524,16 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
             pair,
             work,
         )
-        e, e_next = e_next, e  # the phase's end is the next one's start
-        de, de_next = de_next, de
+        for c in range(n):  # the phase's end is the next one's start (copied: swapping the
+            e[c], de[c] = e_next[c], de_next[c]  # arrays counted 8 references a phase)
         phase_apexes = n_apex
         for ball in range(n - 1):
             free = not active[ball] and not active[ball + 1]
             rise = speeds[ball]
             if free and not apex_passed[ball] and 0.0 < rise <= tau:
                 apex_passed[ball] = True
-                apexes = _room_for_one(apexes, n_apex)
+                if n_apex == apexes.shape[0]:  # only then: each call counts references
+                    apexes = _room_for_one(apexes, n_apex)
                 row = n_apex  # in order of time among this phase's apexes
                 while row > phase_apexes and apexes[row - 1, 1] > t + rise:
                     apexes[row] = apexes[row - 1]
@@ -547,13 +548,16 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
             grounded_top += 1
         if grounded_top > 0:
             cid = _cluster_id(0, grounded_top, True, n)
-            offset = np.abs(store.eta_rest[cid, : grounded_top + 1]).sum()
+            offset = 0.0  # summed in a loop: a slice and np.abs allocated and counted
+            for c in range(grounded_top + 1):
+                offset += abs(store.eta_rest[cid, c])
             carried = max(carried, ROUNDING * store.noise[cid] * offset)
         entered_by = index if event == EVENT_SWITCH else -1
         t += tau
         if event == EVENT_SWITCH:
             if active[index]:
-                contacts = _room_for_one(contacts, n_contacts)
+                if n_contacts == contacts.shape[0]:
+                    contacts = _room_for_one(contacts, n_contacts)
                 contacts[n_contacts, 0], contacts[n_contacts, 1] = index, opened[index]
                 contacts[n_contacts, 2] = t
                 n_contacts += 1
