@@ -474,9 +474,14 @@ def _evaluate_arrays(
                 (blocks[cid, blk, 0, 0], blocks[cid, blk, 0, 1]),
                 (blocks[cid, blk, 1, 0], blocks[cid, blk, 1, 1]),
             )
-            n0, n1, d0, d1, r0, r1 = _block_change(
-                block, modes[p, 2 * blk], modes[p, 2 * blk + 1], tau
-            )
+            if tau == 0.0:  # a phase's start: the values _block_change gives there, at no cost
+                n0, n1, d0, d1 = modes[p, 2 * blk], modes[p, 2 * blk + 1], 0.0, 0.0
+                r0 = block[0][0] * n0 + block[0][1] * n1
+                r1 = block[1][0] * n0 + block[1][1] * n1
+            else:
+                n0, n1, d0, d1, r0, r1 = _block_change(
+                    block, modes[p, 2 * blk], modes[p, 2 * blk + 1], tau
+                )
             mode_z[p, 2 * blk], mode_z[p, 2 * blk + 1] = n0, n1
             mode_w[p, 2 * blk], mode_w[p, 2 * blk + 1] = r0, r1
             for row in range(d):  # z = X flow, w = X rate, without allocating
