@@ -412,8 +412,8 @@ def _phase(
 @njit(borrow=True, inline=True)
 def _evaluate_arrays(
     tau,
-    p_from,
-    p_to,
+    count,
+    every_ball,
     cids,
     lows,
     highs,
@@ -438,8 +438,9 @@ def _evaluate_arrays(
     shift_x,
     shift_v,
 ):
-    """Heights, velocities, accelerations of the balls of phase clusters p_from to p_to - 1 (all:
-    0, count) at tau into the phase (into x, v, a), each such cluster's z and w = z' (into
+    """Heights, velocities, accelerations of the balls of the phase's count clusters at tau into
+    the phase (into x, v, a; with every_ball False only the accelerations of the balls at
+    either end of a cluster, all that the step loop reads), each cluster's z and w = z' (into
     shape_z, shape_w) and their block (mode)
     coordinates X^-1 z and X^-1 w (into mode_z, mode_w), from the phase's (:func:`_phase`) and
     the store's arrays, passed one by one: the step loop reads them once per phase. Written
@@ -458,9 +459,7 @@ def _evaluate_arrays(
     shape, offset, eta_rest = store.shape, store.offset, store.eta_rest
     gravity_below = 0.0  # -tau^2/2 (or 0) in the height of the ball below, and its rate
     gravity_rate_below = 0.0
-    if p_from > 0 and not grounded[p_from - 1]:
-        gravity_below, gravity_rate_below = -0.5 * tau * tau, -tau
-    for p in range(p_from, p_to):
+    for p in range(count):
         cid = cids[p]
         k = contacts[cid]
         d = 2 * k
@@ -475,9 +474,14 @@ def _evaluate_arrays(
                 (blocks[cid, blk, 0, 0], blocks[cid, blk, 0, 1]),
                 (blocks[cid, blk, 1, 0], blocks[cid, blk, 1, 1]),
             )
-            n0, n1, d0, d1, r0, r1 = _block_change(
-                block, modes[p, 2 * blk], modes[p, 2 * blk + 1], tau
-            )
+            if tau == 0.0:  # a phase's start: the values _block_change gives there, at no cost
+                n0, n1, d0, d1 = modes[p, 2 * blk], modes[p, 2 * blk + 1], 0.0, 0.0
+                r0 = block[0][0] * n0 + block[0][1] * n1
+                r1 = block[1][0] * n0 + block[1][1] * n1
+            else:
+                n0, n1, d0, d1, r0, r1 = _block_change(
+                    block, modes[p, 2 * blk], modes[p, 2 * blk + 1], tau
+                )
             mode_z[p, 2 * blk], mode_z[p, 2 * blk + 1] = n0, n1
             mode_w[p, 2 * blk], mode_w[p, 2 * blk + 1] = r0, r1
             for row in range(d):  # z = X flow, w = X rate, without allocating
@@ -497,19 +501,24 @@ def _evaluate_arrays(
             gravity, gravity_rate = -0.5 * tau * tau, -tau
         first = 0 if grounded[p] else lows[p] + 1
         for ball in range(lows[p], highs[p] + 1):
+            if not (every_ball or ball == lows[p] or ball == highs[p]):
+                continue
             jl = ball - lows[p]
-            xs = vs = acc = moved = moved_rate = 0.0
+            acc = moved = moved_rate = 0.0
             for i in range(k):
                 coefficient = shape[cid, jl, i]
-                xs += coefficient * shape_z[p, i]
-                vs += coefficient * shape_z[p, k + i]
                 acc += coefficient * shape_w[p, k + i]
                 moved += coefficient * (change_z[p, i] - tau * de0[first + i])
                 moved_rate += coefficient * change_z[p, k + i]
-            x[ball] = base_x + offset[cid, jl] + xs
-            v[ball] = base_v + vs
             a[ball] = base_a + acc
             shift_x[ball], shift_v[ball] = moved, moved_rate
+            if every_ball:
+                xs = vs = 0.0
+                for i in range(k):
+                    xs += shape[cid, jl, i] * shape_z[p, i]
+                    vs += shape[cid, jl, i] * shape_z[p, k + i]
+                x[ball] = base_x + offset[cid, jl] + xs
+                v[ball] = base_v + vs
         for i in range(k):  # the active contacts: start plus change, or rest plus value
             c = first + i
             if size_change[p, i] <= abs(eta_rest[cid, i]) + size_value[p, i]:
@@ -527,6 +536,109 @@ def _evaluate_arrays(
             e[c] = e0[c] + (tau * de0[c] + (shift_x[c] - below_x) + (gravity - gravity_below))
             de[c] = de0[c] + ((shift_v[c] - below_v) + (gravity_rate - gravity_rate_below))
         gravity_below, gravity_rate_below = gravity, gravity_rate
+
+
+@njit(borrow=True, inline=True)
+def _evaluate_contact(
+    tau,
+    c,
+    is_active,
+    cids,
+    lows,
+    grounded,
+    modes,
+    of_ball,
+    store,
+    e0,
+    de0,
+    a,
+    shape_w,
+    mode_w,
+    e,
+    de,
+    change_z,
+):
+    """What :func:`_check_contact` reads of contact c at tau, and nothing else: the rows of
+    :func:`_evaluate_arrays` that c's overlap, rate and curvature are formed from, summed in the
+    same order (so to the same bits), and the rates of its clusters' modes (mode_w, for their
+    sizes). Active, the two rows of c in its cluster; inactive, the shifts and accelerations of
+    the two balls it joins. A step that approaches one contact's root (most do: docs/stacks.md,
+    "What grows with N") then costs O(k) per cluster of k contacts for an active contact, not
+    the O(k^2) of the cluster's every row and ball."""
+    contacts, blocks, big_x = store.contacts, store.blocks, store.x
+    shape, eta_rest = store.shape, store.eta_rest
+    upper = of_ball[c]
+    if is_active:
+        cid = cids[upper]
+        k = contacts[cid]
+        i = c - (0 if grounded[upper] else lows[upper] + 1)
+        z0 = z1 = w1 = change0 = change1 = size0 = size1 = value0 = value1 = 0.0
+        for blk in range(k):
+            block = (
+                (blocks[cid, blk, 0, 0], blocks[cid, blk, 0, 1]),
+                (blocks[cid, blk, 1, 0], blocks[cid, blk, 1, 1]),
+            )
+            n0, n1, d0, d1, r0, r1 = _block_change(
+                block, modes[upper, 2 * blk], modes[upper, 2 * blk + 1], tau
+            )
+            mode_w[upper, 2 * blk], mode_w[upper, 2 * blk + 1] = r0, r1
+            left, right = big_x[cid, i, 2 * blk], big_x[cid, i, 2 * blk + 1]
+            z0 += left * n0 + right * n1
+            change0 += left * d0 + right * d1
+            size0 += abs(left * d0) + abs(right * d1)
+            value0 += abs(left * n0) + abs(right * n1)
+            left, right = big_x[cid, k + i, 2 * blk], big_x[cid, k + i, 2 * blk + 1]
+            z1 += left * n0 + right * n1
+            w1 += left * r0 + right * r1
+            change1 += left * d0 + right * d1
+            size1 += abs(left * d0) + abs(right * d1)
+            value1 += abs(left * n0) + abs(right * n1)
+        shape_w[upper, k + i] = w1
+        if size0 <= abs(eta_rest[cid, i]) + value0:
+            e[c] = e0[c] + change0
+        else:
+            e[c] = eta_rest[cid, i] + z0
+        de[c] = de0[c] + change1 if size1 <= value1 else z1
+        return
+    below_x = below_v = gravity_below = gravity_rate_below = 0.0
+    for p in range(of_ball[c - 1] if c >= 1 else upper, upper + 1):
+        ball = c if p == upper else c - 1
+        cid = cids[p]
+        k = contacts[cid]
+        for row in range(2 * k):
+            change_z[p, row] = 0.0
+        for row in range(k, 2 * k):
+            shape_w[p, row] = 0.0
+        for blk in range(k):
+            block = (
+                (blocks[cid, blk, 0, 0], blocks[cid, blk, 0, 1]),
+                (blocks[cid, blk, 1, 0], blocks[cid, blk, 1, 1]),
+            )
+            n0, n1, d0, d1, r0, r1 = _block_change(
+                block, modes[p, 2 * blk], modes[p, 2 * blk + 1], tau
+            )
+            mode_w[p, 2 * blk], mode_w[p, 2 * blk + 1] = r0, r1
+            for row in range(2 * k):
+                left, right = big_x[cid, row, 2 * blk], big_x[cid, row, 2 * blk + 1]
+                change_z[p, row] += left * d0 + right * d1
+                if row >= k:
+                    shape_w[p, row] += left * r0 + right * r1
+        first = 0 if grounded[p] else lows[p] + 1
+        jl = ball - lows[p]
+        acc = moved = moved_rate = 0.0
+        for i in range(k):
+            coefficient = shape[cid, jl, i]
+            acc += coefficient * shape_w[p, k + i]
+            moved += coefficient * (change_z[p, i] - tau * de0[first + i])
+            moved_rate += coefficient * change_z[p, k + i]
+        a[ball] = (0.0 if grounded[p] else -1.0) + acc
+        if p != upper:
+            below_x, below_v = moved, moved_rate
+            if not grounded[p]:
+                gravity_below, gravity_rate_below = -0.5 * tau * tau, -tau
+        else:
+            e[c] = e0[c] + (tau * de0[c] + (moved - below_x) + (-0.5 * tau * tau - gravity_below))
+            de[c] = de0[c] + ((moved_rate - below_v) + (-tau - gravity_rate_below))
 
 
 @njit(borrow=True, inline=True)

@@ -17,6 +17,7 @@ from twoball.kernels.clusters import (
     _clusters_ready,
     _ensure_clusters,
     _evaluate_arrays,
+    _evaluate_contact,
     _phase,
     _rest_rounding,
     _sizes,
@@ -186,7 +187,7 @@ def advance_phase(
         sized[c] = -1
     steps = 0
     for _ in range(MAX_STEPS_PER_PHASE):
-        _evaluate(tau, 0, count, work, store, e0, de0, e, de)
+        _evaluate(tau, count, False, work, store, e0, de0, e, de)
         clock = 1.0 + t + tau
         step = horizon - tau
         others = step  # the smallest certified step but that of the contact that limits step
@@ -246,7 +247,7 @@ def advance_phase(
         if event < 0 and early_contact >= 0 and early <= tau + step:
             event, best = early_contact, early
         if event >= 0:
-            _evaluate(best, 0, count, work, store, e0, de0, e, de)
+            _evaluate(best, count, False, work, store, e0, de0, e, de)
             return EVENT_SWITCH, event, best
         if everything:
             margin_ok = True
@@ -265,7 +266,7 @@ def advance_phase(
             if margin_ok:
                 return EVENT_REST, -1, tau
         if tau + step >= horizon:
-            _evaluate(horizon, 0, count, work, store, e0, de0, e, de)
+            _evaluate(horizon, count, False, work, store, e0, de0, e, de)
             if horizon_contact >= 0:
                 return EVENT_SWITCH, horizon_contact, horizon
             if horizon_ball >= 0:
@@ -277,14 +278,32 @@ def advance_phase(
             return EVENT_STUCK, -1, tau
         if limit >= 0 and others > 2.0 * step and not everything:
             # Every other contact is certified until tau + others: step the one that limits
-            # the step on its own until then, evaluating only its clusters (most steps approach
-            # the root of the contact that then switches). Its switch, if found before, ends
-            # the phase; else the whole stack is looked at again from there.
+            # the step on its own until then, evaluating only the rows it reads
+            # (_evaluate_contact; most steps approach the root of the contact that then
+            # switches). Its switch, if found before, ends the phase; else the whole stack is
+            # looked at again from there.
             reach = tau + others
-            low = of_ball[limit - 1] if limit >= 1 and not active[limit] else of_ball[limit]
             at, inner = tau + step, step
             while True:
-                _evaluate(at, low, of_ball[limit] + 1, work, store, e0, de0, e, de)
+                _evaluate_contact(
+                    at,
+                    limit,
+                    active[limit],
+                    cids,
+                    work.lo,
+                    grounded,
+                    work.modes,
+                    of_ball,
+                    store,
+                    e0,
+                    de0,
+                    work.a,
+                    work.shape_w,
+                    work.mode_w,
+                    e,
+                    de,
+                    work.change_z,
+                )
                 steps += 1
                 value, rate, tol, tol_rate, h, error = _check(
                     limit,
@@ -307,7 +326,7 @@ def advance_phase(
                 elif rate < -tol_rate and error <= tol / 512.0:
                     found = at + value / -rate
                 if found >= 0.0 and found <= reach:
-                    _evaluate(found, 0, count, work, store, e0, de0, e, de)
+                    _evaluate(found, count, False, work, store, e0, de0, e, de)
                     return EVENT_SWITCH, limit, found
                 if found >= 0.0 or not h > 0.0 or at + h >= reach:
                     break  # looked at again with the others, from here
@@ -322,13 +341,13 @@ def advance_phase(
 
 
 @njit(borrow=True, inline=True)
-def _evaluate(tau, p_from, p_to, work, store, e0, de0, e, de):
-    """:func:`_evaluate_arrays` of phase clusters p_from to p_to - 1 at tau, from the
-    workspace's and the store's arrays."""
+def _evaluate(tau, count, every_ball, work, store, e0, de0, e, de):
+    """:func:`_evaluate_arrays` of the phase's count clusters at tau, from the workspace's and
+    the store's arrays."""
     _evaluate_arrays(
         tau,
-        p_from,
-        p_to,
+        count,
+        every_ball,
         work.cid,
         work.lo,
         work.hi,
@@ -505,15 +524,16 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
             pair,
             work,
         )
-        e, e_next = e_next, e  # the phase's end is the next one's start
-        de, de_next = de_next, de
+        for c in range(n):  # the phase's end is the next one's start (copied: swapping the
+            e[c], de[c] = e_next[c], de_next[c]  # arrays counted 8 references a phase)
         phase_apexes = n_apex
         for ball in range(n - 1):
             free = not active[ball] and not active[ball + 1]
             rise = speeds[ball]
             if free and not apex_passed[ball] and 0.0 < rise <= tau:
                 apex_passed[ball] = True
-                apexes = _room_for_one(apexes, n_apex)
+                if n_apex == apexes.shape[0]:  # only then: each call counts references
+                    apexes = _room_for_one(apexes, n_apex)
                 row = n_apex  # in order of time among this phase's apexes
                 while row > phase_apexes and apexes[row - 1, 1] > t + rise:
                     apexes[row] = apexes[row - 1]
@@ -528,13 +548,16 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
             grounded_top += 1
         if grounded_top > 0:
             cid = _cluster_id(0, grounded_top, True, n)
-            offset = np.abs(store.eta_rest[cid, : grounded_top + 1]).sum()
+            offset = 0.0  # summed in a loop: a slice and np.abs allocated and counted
+            for c in range(grounded_top + 1):
+                offset += abs(store.eta_rest[cid, c])
             carried = max(carried, ROUNDING * store.noise[cid] * offset)
         entered_by = index if event == EVENT_SWITCH else -1
         t += tau
         if event == EVENT_SWITCH:
             if active[index]:
-                contacts = _room_for_one(contacts, n_contacts)
+                if n_contacts == contacts.shape[0]:
+                    contacts = _room_for_one(contacts, n_contacts)
                 contacts[n_contacts, 0], contacts[n_contacts, 1] = index, opened[index]
                 contacts[n_contacts, 2] = t
                 n_contacts += 1
@@ -631,7 +654,7 @@ def sample(phases, times, masses, zeta):
             current = index
         tau = times[s] - phases[index, 0]
         _evaluate(
-            tau, 0, count, work, store, phases[index, 2 : 2 + n], phases[index, 2 + n :], e, de
+            tau, count, True, work, store, phases[index, 2 : 2 + n], phases[index, 2 + n :], e, de
         )
         x, v = work.x, work.v
         heights[s] = x

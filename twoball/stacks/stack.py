@@ -5,8 +5,10 @@ method, and why no contact can be missed, in :mod:`twoball.kernels.clusters`), t
 
 from __future__ import annotations
 
+import gc
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from functools import partial
 
 import numpy as np
@@ -130,8 +132,12 @@ def solve_linear(
         _store_for(stack),
     )
     apexes: list[list[tuple[float, float]]] = [[] for _ in range(stack.balls)]
-    for ball, when, where in out.apexes.tolist():
-        apexes[int(ball)].append((when, where))
+    with _collector_paused():
+        # tolist: Python floats at once, not a numpy scalar per value (a third of the
+        # three-ball drop's time outside the kernel)
+        for ball, when, where in out.apexes.tolist():
+            apexes[int(ball)].append((when, where))
+        contacts = [ContactInterval(int(c), s, e) for c, s, e in out.contacts.tolist()]
     trajectory = None
     if times is not None:
         heights, speeds, forces = kernel.sample(out.phases, times, stack.masses, stack.zeta)
@@ -141,15 +147,30 @@ def solve_linear(
         force="linear",
         method="compiled",
         apexes=apexes,
-        # tolist: Python floats at once, not a numpy scalar per value (a third of the
-        # three-ball drop's time outside the kernel)
-        contacts=[ContactInterval(int(c), s, e) for c, s, e in out.contacts.tolist()],
+        contacts=contacts,
         contacts_first=[int(count) for count in out.contacts_first],
         end_time=float(out.end_time),
         status=Status(out.status),
         trajectory=trajectory,
         stats=RunStats(phases=out.phase_count),
     )
+
+
+@contextmanager
+def _collector_paused() -> Iterator[None]:
+    """Python's cycle collector paused while a run's apexes and contact intervals are built:
+    thousands of each (about 6 000 and 7 000 to the eight-ball drop's second apex), each
+    tracked, set off collections that promoted them all to the oldest generation, and so a
+    full collection of every object the process holds (numba's own, over 100 000) every few
+    drops: a sixth of the eight-ball drop's time (docs/performance.md, "Stacks of N balls").
+    They hold no cycles."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
 
 
 def _solve_hertz(
