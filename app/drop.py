@@ -35,7 +35,7 @@ from twoball.units import units_named
 
 from .animation import Animation, FramePlayer
 from .collisions import collisions
-from .scene import Scene, Text, answers_pending, draw, for_a_room, later, on_screen, readable
+from .scene import Scene, Text, answers_pending, draw, later, on_screen, player_for_a_room, readable
 from .worksheet import drop_csv
 
 FLIGHT_FRAMES = 240  # evenly spread over the drop
@@ -226,7 +226,7 @@ class DropScene(Scene):
         # played in the browser (app/animation.py)
         self.animated = Animation(self.balls, self.cursor, self.animation.title, self.trail)
         self.player = FramePlayer(
-            self.animated, end=FLIGHT_FRAMES - 1, stylesheets=for_a_room(self.state.presentation)
+            self.animated, end=FLIGHT_FRAMES - 1, **player_for_a_room(self.state.presentation)
         )
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)

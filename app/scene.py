@@ -167,10 +167,20 @@ class Text(pn.pane.Markdown):
     style sheets among them, each resolved from a file path) and set them on the model again:
     the drop scene's summary took 44 % of the scene's update, a tenth of a slider move's server
     CPU (py-spy, 200 served moves). Only the text depends on what changes here (the object, or
-    how it is rendered: Panel's ``_rerender_params``), so only the text is set."""
+    how it is rendered: Panel's ``_rerender_params``), so only the text is set, after a first
+    update of each model in full: that one also brings the design's style sheets, which a
+    pane's model does not have when it is made (without them the text stood 20 px lower)."""
+
+    def __init__(self, object=None, **params):
+        super().__init__(object, **params)
+        self._styled: set[str] = set()  # the models (by root ref) updated once in full
 
     def _update(self, ref: str, model) -> None:
-        model.text = self._transform_object(self.object)["object"]
+        if ref in self._styled:
+            model.text = self._transform_object(self.object)["object"]
+        else:
+            super()._update(ref, model)
+            self._styled.add(ref)
 
 
 class AnsweringMarkdown(Text):
@@ -201,9 +211,19 @@ PROJECTED_INPUTS = (
 )
 
 
+PROJECTED_PLAYER_HEIGHT = 112  # (Panel's 80 px: the larger buttons ran under what follows)
+
+
 def for_a_room(presentation: bool) -> list[str]:
     """The ``stylesheets`` of a select or a player: large for a room, else the widget's own."""
     return [PROJECTED_INPUTS] if presentation else []
+
+
+def player_for_a_room(presentation: bool) -> dict:
+    """A player's options: its buttons large for a room and the room to hold them."""
+    if not presentation:
+        return {}
+    return {"stylesheets": for_a_room(True), "height": PROJECTED_PLAYER_HEIGHT}
 
 
 def readable(fig, presentation: bool) -> None:

@@ -39,7 +39,7 @@ from .drop import (
     stage,
     underneath,
 )
-from .scene import Scene, Text, answers_pending, draw, for_a_room, on_screen, readable
+from .scene import Scene, Text, answers_pending, draw, on_screen, player_for_a_room, readable
 from .state import contact_eps
 
 # Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first (all
@@ -60,7 +60,7 @@ CAPTION_HELP = (
 )
 
 
-PROJECTOR_PLOT_HEIGHT = 330  # presentation mode (scene.py): plots and player in 720 px, with
+PROJECTOR_PLOT_HEIGHT = 300  # presentation mode (scene.py): plots and player in 720 px, with
 # room to spare for a touch screen's taller buttons; the legend stands right of the curves
 # there (below them, at 310 px, it left the curves 115 px)
 
@@ -146,7 +146,7 @@ class StackScene(Scene):
         # played in the browser (app/animation.py)
         self.animated = Animation(self.balls_drawn, self.cursor, self.animation.title)
         self.player = FramePlayer(
-            self.animated, end=1, stylesheets=for_a_room(self.state.presentation)
+            self.animated, end=1, **player_for_a_room(self.state.presentation)
         )
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)

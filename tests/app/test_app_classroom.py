@@ -236,6 +236,14 @@ def test_presentation_mode_fits_a_projector(browser, app_server, artifacts):
         context.close()
 
 
+# the top margin of each paragraph that starts the drop's summary ("h1 = ...")
+SUMMARY_MARGINS_JS = """() => { const out = []; const walk = (root) => {
+  for (const el of root.querySelectorAll("*")) { if (el.shadowRoot) walk(el.shadowRoot);
+    if (el.tagName === "P" && el.innerText.startsWith("h1 = "))
+      out.push(getComputedStyle(el).marginTop); } };
+  walk(document); return out; }"""
+
+
 @pytest.mark.parametrize("size", [(1280, 720), (1366, 768)], ids=["1280x720", "1366x768"])
 @pytest.mark.parametrize("scene", list(SCENE_REGISTRY))
 def test_presentation_mode_shows_each_scene_on_one_screen(
@@ -271,6 +279,14 @@ def test_presentation_mode_shows_each_scene_on_one_screen(
         buttons = [b for b in deep_query(page, "button.play, button.pause") if b["visible"]]
         assert len(buttons) == 2 * len(players), buttons
         assert all(b["height"] >= 36 and b["width"] >= 50 for b in buttons), buttons
+        if scene == "drop":  # the summary styled as Panel styles Markdown (app.scene.Text)
+            margins = page.evaluate(SUMMARY_MARGINS_JS)
+            assert margins == ["0px"], margins
+        # and nothing drawn over them (Pin and Download covered their lower half)
+        under = [b for b in deep_query(page, "button") if b["visible"] and "drop" in b["text"]]
+        assert all(u["top"] >= b["bottom"] - 1 for u in under for b in buttons), [
+            (round(u["top"]), round(b["bottom"])) for u in under for b in buttons
+        ]
         assert page.evaluate("parseFloat(getComputedStyle(document.body).fontSize)") >= 18
         shots = artifacts / "projector"
         shots.mkdir(exist_ok=True)

@@ -732,9 +732,16 @@ def test_a_text_pane_sends_what_panels_markdown_pane_sends():
 
     text, markdown = Text("**one**"), pn.pane.Markdown("**one**")
     models = [pane.get_root(Document()) for pane in (text, markdown)]
+
+    def sheets(model) -> list[str]:
+        return [getattr(sheet, "url", sheet) for sheet in model.stylesheets]
+
     for new in ("**two** and *three*", "| a | b |\n| --- | --- |\n| 1 | 2 |", ""):
         text.object = markdown.object = new
         assert models[0].text == models[1].text
+        # the design's style sheets too, which the first update brings (the text stood 20 px
+        # lower without them)
+        assert sheets(models[0]) == sheets(models[1])
     assert "table" not in models[0].text  # (the last object, empty, was rendered too)
     text.object = "| a | b |\n| --- | --- |\n| 1 | 2 |"
     assert "&lt;table&gt;" in models[0].text  # (Panel sends the HTML escaped)
