@@ -372,8 +372,8 @@ def test_sample_times_past_the_end_are_nan_when_asked():
         for m in ("compiled", "DOP853")
     ]
     assert runs[0].apexes == unsampled.apexes and runs[0].end_time == unsampled.end_time
-    # to h1 within 1e-7 of it (DOP853 is off by 2e-8 there); after, within DOP853's own error in h2 (up to 2e-3 of it on
-    # the seeded drops, docs/accuracy.md, "The Hertz stack")
+    # to h1 within 1e-7 of it (DOP853 is off by 2e-8 there); after, within DOP853's own error
+    # in h2 (up to 2e-3 of it on the seeded drops, docs/accuracy.md, "The Hertz stack")
     early = times <= unsampled.apex_t[0]
     x, reference = runs[0].trajectory.x, runs[1].trajectory.x
     assert np.allclose(x[early], reference[early], rtol=0, atol=1e-7 * unsampled.h1)
