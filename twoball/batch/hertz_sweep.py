@@ -176,6 +176,6 @@ def annotate(dataset, height: float) -> None:
                 "(twoball/batch/hertz_sweep.py)"
             ),
             "solver": SOLVER + " (compiled Taylor series in dt = sqrt(delta) dtau on the contact "
-            "forces' displacement, certified steps; docs/stacks.md)",
+            "forces' displacement, switches found on the series; docs/stacks.md)",
         }
     )

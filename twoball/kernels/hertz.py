@@ -28,16 +28,25 @@ with a contact active is integrated by Taylor series of order :data:`ORDER` (doc
   dense output, at the step's accuracy): a switch is found on it by regula falsi, an apex or
   a sample time by Newton's method on the clock's series.
 
-No touch or release is stepped over: the certified steps of :mod:`twoball.stacks.hertz` (the
-energy, which never rises, bounds every force; with the contacts active in a phase that bounds
-eta'' towards each switch; each step keeps eta + eta' h - M h^2 / 2 on its side), ported as they
-are, cut each step on the clock; a span certified so holds for every step inside it, so
+No touch or release is stepped over, and most are stepped to in one step, found on the series
+(docs/stacks.md, "How each force is solved"): an open contact's overlap is concave in time (its
+eta'' is minus its neighbours' forces over their masses, and no force pulls), so if it is open
+at both ends of a step it is open throughout, and a touch shows as the overlap's sign at the
+step's end; a contact in the series keeps rho > 0 over the step or has rho' < 0 there, bounded
+from its coefficients (:func:`_releases_shown`), so its release is the one root of rho in the
+step. Past a release the clock runs back: every switching function is looked at again at the
+first root found. Where these do not hold (a contact open but still overlapping, after a clamp;
+a rho that may dip through zero and back), the certified steps of :mod:`twoball.stacks.hertz`
+(the energy, which never rises, bounds every force; with the contacts active in a phase that
+bounds eta'' towards each switch; each step keeps eta + eta' h - M h^2 / 2 on its side), ported
+as they are, cut the step on the clock; a span certified so holds for every step inside it, so
 :data:`AHEAD` steps are certified at once. The clamp (1 + lam delta' = 0) is looked for at
-:data:`PROBES` points of each step in which a proven bound on eta'' lets it be reached, and
-refined by bisection: estimated, not proven (as in :mod:`twoball.stacks.hertz`). A contact
-touching with neither compression nor speed (balls released touching) would stall the time
-change (rho = rho' = 0, so J = 0): it is left out of one first step short enough that its force,
-bounded as in the certified steps, could not move anything by a thousandth of the tolerance.
+:data:`PROBES` points of each step in which eta', bounded from its series, can reach 1 / lam,
+and refined by regula falsi: estimated, not proven (as in :mod:`twoball.stacks.hertz`). A
+contact touching with neither compression nor speed (balls released touching) would stall the
+time change (rho = rho' = 0, so J = 0): it is left out of one first step short enough that its
+force, bounded as in the certified steps, could not move anything by a thousandth of the
+tolerance.
 """
 
 from __future__ import annotations
@@ -254,14 +263,75 @@ def certified_step(masses, lam, x, eta, deta, t, force_bound, active, wanted, wo
 
 
 @njit
-def _clamp_possible(lam, deta, span, both) -> bool:
-    """Whether a clamp (lam eta' = 1) can be reached within ``span``, with |eta''| <= ``both``
-    over it (as :func:`certified_step` leaves it), so |eta'| <= |eta'_0| + both span. Without
-    one, every switch is a root of an overlap, which the certified step shows at the step's end."""
-    possible = False
+def _needs_certifying(eta, deta, active, rho_scales, speed_scales) -> bool:
+    """Whether a contact's switch could be stepped over unseen by the series alone: an open
+    contact still overlapping (clamped, its re-push), or an active one that would stall the time
+    change (it is left out of the series, :data:`STALL`). Any other open contact's overlap is
+    concave in time (its eta'' is minus its neighbours' forces over their masses, none
+    pulling), so if it is open at both ends of a step it is open throughout."""
+    for c in range(eta.size):
+        if active[c]:
+            rho = math.sqrt(max(-eta[c], 0.0))
+            if rho <= STALL * rho_scales[c] and deta[c] >= -STALL * speed_scales[c]:
+                return True
+        elif eta[c] < 0.0:
+            return True
+    return False
+
+
+@njit
+def _recertified(masses, lam, x, eta, deta, t, force_bound, active, certified, h_abs, work, bounds):
+    """The end of a certified span (:func:`certified_step`) holding at t,
+    a span certified before reused (it holds for every step inside it), else a few steps
+    ahead certified at once; ``bounds`` holds |eta''| bounds over it."""
+    if t + h_abs > certified:
+        span = certified_step(
+            masses, lam, x, eta, deta, t, force_bound, active, AHEAD * h_abs, work
+        )
+        certified = t + span
+        bounds[:] = work[0]
+    return certified
+
+
+@njit
+def _releases_shown(S, on, count, R, tau) -> bool:
+    """Whether each contact in the series keeps rho > 0 over [0, tau] or has rho' < 0 there (so
+    its release, if any, is the one root of rho, shown at the step's end), from bounds on the
+    coefficients: rho >= r0 + r1 u - B u^2 / tau^2 (B the negative terms' sum at tau), concave,
+    so least at an end; rho' <= r1 + the positive terms' sum."""
+    for i in range(count):
+        row = R + on[i]
+        r0, r1 = S[row, 0], S[row, 1]
+        negative, rising = 0.0, 0.0
+        power = tau
+        for k in range(2, ORDER + 1):
+            power *= tau
+            term = S[row, k] * power
+            negative += min(term, 0.0)
+            rising += k * max(term, 0.0) / tau
+        if not ((r0 >= 0.0 and r0 + r1 * tau + negative > 0.0) or r1 + rising < 0.0):
+            return False
+    return True
+
+
+@njit
+def _clamp_reachable(lam, used, active, eta0, D, tau) -> bool:
+    """Whether a clamp (lam eta' = 1) can be reached within [0, tau] of the step: a contact in
+    the series whose eta' (its series ``D``) can reach 1 / lam there, bounded by its positive
+    coefficients, or an open contact still overlapping (its re-push). Without one, every switch
+    is a root of an overlap (or of rho), shown at the step's end."""
     for c in range(lam.size):
-        possible = possible or lam[c] * (abs(deta[c]) + both[c] * span) >= 1.0
-    return possible
+        if used[c]:
+            highest = D[c, 0]
+            power = 1.0
+            for k in range(1, ORDER):
+                power *= tau
+                highest += max(D[c, k], 0.0) * power
+            if lam[c] * highest >= 1.0:
+                return True
+        elif not active[c] and eta0[c] < 0.0:
+            return True
+    return False
 
 
 @njit
@@ -489,15 +559,13 @@ def contact_phase(
         if c >= 0:
             return K_SWITCH, c, t, t_low, steps, next_sample, h_abs
         at_start = False
-        if t + h_abs > certified:
-            # a certified span holds for every step inside it (no overlap can reach its root
-            # unseen there), so certify a few steps ahead at once
-            span = certified_step(
-                masses, lam, x, eta, deta, t, force_bound, active, AHEAD * h_abs, work
-            )
-            certified = t + span
-            bounds[:] = work[0]
-        max_step = min(certified - t, t_end - t)
+        # the certified span only where a step's series cannot show the switch (see the
+        # module): an open contact still overlapping (clamped), or one that would stall
+        max_step = t_end - t
+        if _needs_certifying(eta, deta, active, scales[R : R + n], scales[U : U + n]):
+            certified = _recertified(masses, lam, x, eta, deta, t, force_bound, active,
+                                            certified, h_abs, work, bounds)  # fmt: skip
+            max_step = min(certified - t, max_step)
         eta0[:], deta0[:] = eta, deta
         # the series and their values now; a contact touching with neither compression nor
         # speed (balls released touching) would stall the time change (rho = rho' = 0): it is
@@ -544,6 +612,12 @@ def contact_phase(
                 if not _value(S, 0, tau) < max_step:
                     break
                 tau *= 2.0
+        # a release shown by the step's series (each used rho at most once through zero in it),
+        # else the certified span
+        if not _releases_shown(S, on, count, R, tau):
+            certified = _recertified(masses, lam, x, eta, deta, t, force_bound, active,
+                                            certified, h_abs, work, bounds)  # fmt: skip
+            max_step = min(certified - t, max_step)
         # the step's span on the clock; past a release (in the step) the clock runs back
         natural = _value(S, 0, tau)
         spacing = 10.0 * (np.nextafter(t, np.inf) - t)
@@ -559,8 +633,7 @@ def contact_phase(
         for c in range(n):
             if active[c] and not used[c]:
                 before[c], after[c] = 1.0, 1.0  # left out for this step
-        span = natural if 0.0 < natural <= max_step else max_step
-        damped = _clamp_possible(lam, deta, span, bounds)
+        damped = _clamp_reachable(lam, used, active, eta0, D, tau)
         root, kind, index = tau, K_TIME, -1
         probes = PROBES + 1 if damped else 1
         low_tau = 0.0
@@ -584,6 +657,21 @@ def contact_phase(
                 break
             before[:] = now
             low_tau = probe_tau
+        # past a release in the step the clock runs back, and an overlap that closed before it
+        # may open again by the step's end: every function at the first root found, until none
+        # has fallen through zero before it
+        for _ in range(n):
+            if kind != K_SWITCH:
+                break
+            _functions(lam, used, moving, S, root, eta0, deta0, z, now)
+            earlier = False
+            for c in range(n):
+                if c != index and before[c] >= 0.0 and now[c] < 0.0 and (used[c] or not active[c]):
+                    when = _function_root(lam, used, moving, S, c, low_tau, root, eta0, deta0)
+                    if when < root:
+                        root, index, earlier = when, c, True
+            if not earlier:
+                break
         s_root = _value(S, 0, root)
         if not s_root <= max_step:
             # cut at the certified span's end (the clock rises up to the first event)

@@ -23,10 +23,11 @@ lam = Lambda / v at its *calibration speed* v: the closing speed of its collisio
 chain (sqrt(2H) for the floor). A slower contact is bouncier (1 - e ~ lam v), as real balls
 are. The floor contact time tau_f, which sets the gaps, is that of the calibrated floor contact.
 
-**Solution.** The default is the compiled path of :mod:`twoball.kernels.hertz` (the same
-certified steps, with Taylor series of the time-changed motion on the contact forces'
-displacement, accurate to rounding). This module's own, ``method="DOP853"``, is kept as a
-reference. Free flight is exact: with no contact active,
+**Solution.** The default is the compiled path of :mod:`twoball.kernels.hertz` (Taylor series
+of the time-changed motion on the contact forces' displacement, accurate to rounding, its
+switches found on the series, and these certified steps only where the series cannot show
+them). This module's own, ``method="DOP853"``, is kept as a reference. Free flight is exact:
+with no contact active,
 every ball is a parabola and the next touch, clamp or apex is a root of a polynomial of degree
 at most two. A phase with a contact active is integrated with scipy's DOP853 (rtol 1e-12), whose
 every step is bounded so that no touch or release (a root of some overlap eta) can be stepped

@@ -38,6 +38,7 @@ def simulate_stack(
     force: str = "linear",
     until: str | float = "second",
     t_eval: object = None,
+    nan_past_end: bool = False,
     throw: bool = True,
     method: str = "compiled",
 ) -> StackResult:
@@ -62,6 +63,10 @@ def simulate_stack(
         The top ball's apex to run to, or a dimensionless time.
     t_eval : array_like, optional
         Times at which ``StackResult.trajectory`` samples heights, velocities and forces.
+    nan_past_end : bool
+        Times of ``t_eval`` past the run's end (when it did not end at rest) give NaN instead of
+        a ParameterError: a run to an apex, whose time is not known beforehand, sampled in the
+        same pass.
     throw : bool
         A run that fails raises :class:`~twoball.errors.SolverError`; with False the result says
         so (``success``, ``status``).
@@ -101,9 +106,11 @@ def simulate_stack(
         check_span("t_eval", times, math.inf, False)  # no time before the release
     result = solvers[method](stack, apexes_wanted, t_end, times)
     stack = result.stack  # with the Hertz force its gaps are in units of the Hertz floor contact
-    if times is not None and result.status.success:
-        # after the end the closed form (linear) would be extrapolated, or nothing sampled
-        # (Hertz); after a proven rest every later state is that rest's
+    # after the end the closed form (linear) would be extrapolated, or nothing sampled (Hertz);
+    # after a proven rest every later state is that rest's
+    if times is not None and nan_past_end and result.status is not Status.REST:
+        _blank_past(result.trajectory, result.end_time)
+    elif times is not None and result.status.success:
         check_span("t_eval", times, result.end_time, result.status is Status.REST)
     bound = _apex_bound(stack, force)
     if any(beyond_bound(h, bound) for h in result.apex_h):
@@ -114,6 +121,13 @@ def simulate_stack(
     if throw and not result.success:
         raise SolverError(f"the stack run failed on {stack}: {result.reason}", result)
     return result
+
+
+def _blank_past(trajectory: StackTrajectory, end_time: float) -> None:
+    """NaN in every sample after ``end_time`` (with check_span's few ulp of slack)."""
+    past = trajectory.t > end_time + 1e-12 * max(abs(end_time), 1.0)
+    for rows in (trajectory.x, trajectory.v, trajectory.f):
+        rows[past] = np.nan
 
 
 def solve_linear(
