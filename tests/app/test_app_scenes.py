@@ -288,6 +288,29 @@ def test_a_class_at_one_drop_measures_the_accuracy_once(monkeypatch):
     app.accuracy.measured.cache_clear()
 
 
+def test_accuracy_measured_while_compiling_is_measured_again_once_compiled(monkeypatch):
+    """Run times taken on the kernels' Python stand-ins (a first start) are not shown for the
+    rest of the server's life: once the kernels are compiled the drop is measured again."""
+    import app.accuracy
+    from twoball import jit
+
+    calls = []
+    monkeypatch.setattr(app.accuracy, "work_precision", lambda *a, **k: calls.append(a) or [])
+    app.accuracy.measured.cache_clear()
+    query = {"scene": "accuracy", "eps": "0.7", "mu": "0.2", "tau_ratio": "0.5"}
+    monkeypatch.setattr(jit, "state", "python")
+    rendered(query)
+    rendered(query)
+    assert len(calls) == 1
+    monkeypatch.setattr(jit, "state", "compiled")
+    page = rendered(query)
+    assert len(calls) == 2
+    page.state.scene = "drop"  # away and back: nothing new to measure
+    page.state.scene = "accuracy"
+    assert len(calls) == 2
+    app.accuracy.measured.cache_clear()
+
+
 def test_the_accuracy_of_the_last_drop_is_dimmed_while_the_next_is_measured(monkeypatch):
     """While a new drop is measured (seconds, in a thread under a server) the plot and table
     of the drop before stay on screen dimmed, not at full strength as if current."""
