@@ -311,7 +311,9 @@ class Controls(Built):
 
         def opened(event: param.parameterized.Event) -> None:
             if not event.new and not advanced.objects:
-                advanced.objects = [self.height, self.eps12, self.typed_message]
+                # the message above the boxes: below them, a laptop showed it under the
+                # window's edge (y = 865 of 768), and a wrong H seemed silently undone
+                advanced.objects = [self.typed_message, self.height, self.eps12]
 
         advanced.param.watch(opened, "collapsed")
         # the URL's message box joins the page when it first has something to say

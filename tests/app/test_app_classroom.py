@@ -357,6 +357,26 @@ def test_a_laptop_shows_the_collision_and_the_map_without_scrolling(
         context.close()
 
 
+def test_a_bad_typed_height_is_said_where_a_laptop_shows_it(browser, app_server):
+    """A drop height typed out of range on a 1366x768 laptop: the message that says so, and
+    what was kept, is inside the window (it was 100 px below its edge)."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app", viewport=(1366, 768))
+    try:
+        page.get_by_role("button", name="advanced").click()
+        box = page.get_by_label("H (dimensionless drop height)")
+        box.wait_for()
+        box.fill("-5")
+        box.press("Enter")
+        message = page.get_by_text("H: height must be", exact=False)
+        message.wait_for()
+        shown = message.bounding_box()
+        assert shown is not None and 0 <= shown["y"] and shown["y"] + shown["height"] <= 768
+        assert errors == []
+    finally:
+        context.close()
+
+
 def test_the_map_hover_says_mu_and_tau_ratio_not_their_logarithms(browser, app_server):
     """The map is drawn on log10 axes; its hover quotes the values a student sets (it showed
     'log10 mu: -2')."""
