@@ -417,9 +417,15 @@ class MapScene(Scene):
                 f"Slice of the shipped cube at **eps = {self.slice_eps:g}** (nearest to "
                 f"{s.eps:g}), H = {attrs.get('height'):g}, eps12 = eps"
             )
+        click = "Click the map to set mu and tau_d/tau_f."
+        if name != CUBE:  # (a new user clicked here and read a linear drop as this map's)
+            click = (
+                "Click the map to set mu and tau_d/tau_f for the other scenes, whose drops "
+                "use the **linear** force (the Stack scene offers the Hertz force)."
+            )
         lines = [
             f"{source}. Black outlines: delayed rebound (h2 > h1); star: current parameters. "
-            "Click the map to set mu and tau_d/tau_f."
+            + click
         ]
         for name, what in (("mu", "mu"), ("tau_ratio", "tau_d/tau_f")):
             low, high = float(cube[name].min()), float(cube[name].max())

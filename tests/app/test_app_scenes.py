@@ -489,6 +489,8 @@ def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
     note = scene._note()
     assert "Hertz force" in note and "Hertz length unit" in note and "hertz-h1e4" in note
     assert "Hertz floor contact" in note
+    assert "use the **linear** force" in note  # where a click on it leads (the drop scenes)
+    assert "linear" not in scene._note() or scene.state.map_force == "hertz"
     assert url_query(explorer.state)["map_force"] == "hertz"
     assert read_query(url_query(explorer.state), explorer.state)[0]["map_force"] == "hertz"
     # every pixel of the image is one of the slice's cells (none interpolated)
