@@ -227,18 +227,27 @@ class _Phase:
         return high
 
 
-def solve_stack_truth(masses, zeta, x_start, apexes: int = 2) -> StackTruth:
+def solve_stack_truth(
+    masses, zeta, x_start, apexes: int = 2, start: tuple | None = None, trace: list | None = None
+) -> StackTruth:
     """The top ball's first ``apexes`` apexes and every contact interval of one linear stack
     drop at 40 digits, independently of the compiled kernel. Raises RuntimeError if they are
-    not reached within MAX_PHASES phases or MAX_STEPS steps (e.g. the stack came to rest)."""
+    not reached within MAX_PHASES phases or MAX_STEPS steps (e.g. the stack came to rest).
+
+    ``start`` = (t, y, active) continues a drop from state y (heights, velocities, 1; mpmath
+    numbers) at time t instead of the release (contacts_first then counts from there); each
+    event is appended to ``trace`` as (t, event, y) if given: the audit of
+    benchmarks/stack_audit.py."""
     n = len(masses)
     with mpmath.workdps(DIGITS):
         m = [mpmath.mpf(float(v)) for v in masses]
         z = [mpmath.mpf(float(v)) for v in zeta]
         y = [mpmath.mpf(float(v)) for v in x_start] + [mpmath.mpf(0)] * n + [mpmath.mpf(1)]
         active = tuple(False for _ in range(n))
-        phases: dict = {}
         t = mpmath.mpf(0)
+        if start is not None:
+            t, y, active = mpmath.mpf(start[0]), list(start[1]), tuple(start[2])
+        phases: dict = {}
         started = [None] * n
         apex_t, apex_h, contacts = [], [], []
         first = [0] * n
@@ -269,6 +278,8 @@ def solve_stack_truth(masses, zeta, x_start, apexes: int = 2) -> StackTruth:
                     break
                 y = y_next
                 t += phase.dt
+            if trace is not None:
+                trace.append((t, event, list(y)))
             if event == APEX:
                 apex_t.append(t)
                 apex_h.append(y[n - 1])
