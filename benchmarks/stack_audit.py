@@ -15,6 +15,7 @@ the error in h2 that the kernel has made before phase K.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import pickle
 from pathlib import Path
@@ -73,10 +74,8 @@ def local_errors(phases: np.ndarray, masses, zeta, x_start) -> None:
         trace = _OneEvent()
         active = [(int(phases[k, 1]) >> c) & 1 == 1 for c in range(n)]
         start = (0, absolute(phases[k, 2 : 2 + n], phases[k, 2 + n :]), active)
-        try:
+        with contextlib.suppress(StopIteration):
             stack_truth.solve_stack_truth(masses, zeta, x_start, start=start, trace=trace)
-        except StopIteration:
-            pass
         tau, event, y = trace[0]
         e_ref, de_ref = relative(y, n)
         cells = []
@@ -95,12 +94,16 @@ def local_errors(phases: np.ndarray, masses, zeta, x_start) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("case", type=int)
+    parser.add_argument("case", help="an index into stack_truth.cases(), or RATIOS,EPS,GAP,H")
     parser.add_argument("--continue", dest="starts", type=int, nargs="*", default=[])
     parser.add_argument("--local", action="store_true", help="each phase's own error")
     parser.add_argument("--cache", help="a file keeping the reference's trace between runs")
     args = parser.parse_args()
-    case = stack_truth.cases()[args.case]
+    if args.case.isdigit():
+        case = stack_truth.cases()[int(args.case)]
+    else:
+        *ratios, eps, gap, height = (float(v) for v in args.case.split(","))
+        case = {"mass_ratios": ratios, "eps": eps, "tau_ratios": gap, "height": height}
     masses, zeta, x_start = stack_truth.inputs(
         case["mass_ratios"], case["eps"], case["tau_ratios"], case["height"]
     )
@@ -131,7 +134,9 @@ def main() -> None:
             for name, mine, ref, column in (("e", e, e_ref, 2), ("e'", de, de_ref, 2 + n)):
                 for c in range(n):
                     ulp = math.ulp(np.abs(around[:, column + c]).max())
-                    cells.append(f"{name}{c} {float((mpmath.mpf(float(mine[c])) - ref[c]) / ulp):7.1f}")
+                    cells.append(
+                        f"{name}{c} {float((mpmath.mpf(float(mine[c])) - ref[c]) / ulp):7.1f}"
+                    )
             dt = float(mpmath.mpf(float(phases[k, 0])) - t_ref)
             print(
                 f"{k:3d} event {event:2d} on {on(bits, n)} t {float(t_ref):10.5f} "

@@ -60,6 +60,20 @@ def test_the_kernel_against_the_40_digit_reference():
     assert outside <= listed_outside <= 3
 
 
+def test_a_closing_contact_starts_at_zero_overlap():
+    """The four-ball drop of the table (eps 0.73, H = 676) against its stored 40-digit h2: its
+    top ball lands on the settled stack after ~70 time units in flight, the overlap at that
+    root rounded to an ulp of the ~4700 it fell (9.1e-13, docs/accuracy.md, "The linear
+    stack"); carried into the contact it put h2 16 times its conditioning off (2.6e-14). Taken
+    as exact, h2 is within 2.2 times (3.6e-15)."""
+    from twoball.studies.stack_comparison import stack_against
+
+    stored = _stored_references()[5]
+    assert (stored["balls"], stored["contacts_first_truth"]) == ("4", "8 13 4 1")
+    row = stack_against(_case(stored), stored, (float(stored["cond_h1"]), float(stored["cond_h2"])))
+    assert row.rel_err_h2 <= 4.0 * row.cond_h2, row
+
+
 def test_the_rule_refuses_what_it_should():
     from twoball.studies.stack_comparison import StackComparison
 
