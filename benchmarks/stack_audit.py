@@ -1,7 +1,7 @@
 """Where the linear stack kernel loses accuracy, phase by phase (docs/accuracy.md, "The linear
 stack").
 
-Runs one seeded drop (twoball.studies.stack_truth.cases, by index) through the kernel with its
+Runs one drop through the kernel with its
 phases recorded and through the 40-digit reference with its events traced, and prints at each
 phase start the kernel's clock and relative state (each contact's overlap e_c and rate e_c')
 against the reference's at the same event, in units of the coordinate's own ulp: where the
@@ -10,6 +10,11 @@ from the kernel's state at phase start K and prints the h2 that gives against th
 the error in h2 that the kernel has made before phase K.
 
     .venv/bin/python benchmarks/stack_audit.py CASE [--continue K ...] [--cache FILE]
+    .venv/bin/python benchmarks/stack_audit.py CASE --local | --orders
+
+CASE is an index into stack_truth.cases() or RATIOS,EPS,GAP,H (e.g. 0.2,0.2,0.9,0.2,1e4).
+``--local``: each phase's own error (the reference from the kernel's start of the phase to its
+first event). ``--orders``: the contact order at H moved by 1 to 2^16 ulps.
 """
 
 from __future__ import annotations
@@ -92,11 +97,37 @@ def local_errors(phases: np.ndarray, masses, zeta, x_start) -> None:
         )
 
 
+def orders(case: dict) -> None:
+    """H moved by 1 to 2^16 ulps up and down, by the kernel: the contacts before h2, the first
+    that differs in order from the drop's own, and h2's relative move. Where the order changes
+    at every size, a difference quotient over them measures a secant across jumps."""
+    from twoball.stacks import simulate_stack
+
+    def run(height: float) -> tuple:
+        result = simulate_stack(case["mass_ratios"], case["eps"], case["tau_ratios"], height=height)
+        ordered = sorted(result.contacts, key=lambda c: c.start)
+        return [c.contact for c in ordered if c.start < result.t2], result.h2
+
+    base, h2 = run(case["height"])
+    print(f"{len(base)} contacts before h2")
+    for power in (0, 4, 8, 12, 16):
+        for sign in (1, -1):
+            moved, h = run(case["height"] + sign * 2.0**power * math.ulp(case["height"]))
+            first = next(
+                (i for i, (a, b) in enumerate(zip(moved, base, strict=False)) if a != b), None
+            )
+            print(
+                f"H {'+-'[sign < 0]}2^{power} ulps: {len(moved)} contacts, order differs "
+                f"from contact {first}, h2 moves by {abs(h / h2 - 1):.1e}"
+            )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("case", help="an index into stack_truth.cases(), or RATIOS,EPS,GAP,H")
     parser.add_argument("--continue", dest="starts", type=int, nargs="*", default=[])
     parser.add_argument("--local", action="store_true", help="each phase's own error")
+    parser.add_argument("--orders", action="store_true", help="contact orders at moved H")
     parser.add_argument("--cache", help="a file keeping the reference's trace between runs")
     args = parser.parse_args()
     if args.case.isdigit():
@@ -109,6 +140,9 @@ def main() -> None:
     )
     n = masses.size
     phases, out = kernel_phases(case)
+    if args.orders:
+        orders(case)
+        return
     if args.local:
         with mpmath.workdps(40):
             local_errors(phases, masses, zeta, x_start)
