@@ -16,9 +16,10 @@ cluster resting on the floor through an active floor contact is *grounded*.
   B = X diag(B_1..B_k) X^-1 with 2x2 blocks, each advanced exactly on every damping branch
   (:func:`twoball.kernels.phases._block_flow`).
   One contact: X = I. Two contacts: the refined mode split of the two-ball solver
-  (:func:`twoball.kernels.closed_forms._split_modes`). More: eigenvectors, complex pairs as
-  rotations and real eigenvalues paired in order; a near-defective pair then costs accuracy in
-  proportion to the condition of X, which the tolerance carries.
+  (:func:`twoball.kernels.closed_forms._split_modes`). More: eigenvectors, each pair refined
+  by Newton's method (:func:`_refine_eigenpair`), complex pairs as rotations and real
+  eigenvalues paired in order; a near-defective pair then costs accuracy in proportion to the
+  condition of X, which the tolerance carries.
 
 Why no contact can be missed: the certified steps of :mod:`twoball.kernels.phases`. Every switching
 function is linear in the heights and velocities of at most two balls; its second derivative is
