@@ -43,6 +43,21 @@ def test_a_switch_found_by_its_own_steps_is_not_taken_back_to_the_phase_start():
     assert result.success, result.status
 
 
+def test_a_top_ball_released_by_rounding_is_not_lifted_to_zero_overlap():
+    """Eight balls, the top one ~1e-9 of ball 0 resting on the next with its static overlap
+    (-9e-10): a release within the rounding is closed again at once there. Lifting that overlap
+    to zero as a closing root (twoball.kernels.stack.run keeps that for a contact whose overlap
+    fell through zero) released it again at the same state, for ever: the phase limit (5 of the
+    10 000 stacks below, 2026-11-26)."""
+    ratios = [0.20128676369022747, 0.04548235132398381, 0.01917131829629157]
+    ratios += [0.014615566832794906, 0.041598919813815555, 0.4224540430477405]
+    ratios += [0.022408763976632932]
+    result = simulate_stack(
+        ratios, 0.4291713707857872, 0.010170382666936307, height=1.4617378684574416
+    )
+    assert result.success, result.status
+
+
 @pytest.mark.parametrize(
     "count", [1_000, pytest.param(STACKS, marks=pytest.mark.slow)], ids=["1000", "10000"]
 )

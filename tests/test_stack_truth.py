@@ -60,6 +60,20 @@ def test_the_kernel_against_the_40_digit_reference():
     assert outside <= listed_outside <= 3
 
 
+def test_a_closing_contact_starts_at_zero_overlap():
+    """The four-ball drop of the table (eps 0.73, H = 676) against its stored 40-digit h2: its
+    top ball lands on the settled stack after ~70 time units in flight, the overlap at that
+    root rounded to an ulp of the ~4700 it fell (9.1e-13, docs/accuracy.md, "The linear
+    stack"); carried into the contact it put h2 16 times its conditioning off (2.6e-14). Taken
+    as exact, h2 is within 2.2 times (3.6e-15)."""
+    from twoball.studies.stack_comparison import stack_against
+
+    stored = _stored_references()[5]
+    assert (stored["balls"], stored["contacts_first_truth"]) == ("4", "8 13 4 1")
+    row = stack_against(_case(stored), stored, (float(stored["cond_h1"]), float(stored["cond_h2"])))
+    assert row.rel_err_h2 <= 4.0 * row.cond_h2, row
+
+
 def test_the_rule_refuses_what_it_should():
     from twoball.studies.stack_comparison import StackComparison
 
@@ -103,3 +117,38 @@ def test_one_reference_value_recomputed():
     with mpmath.workdps(40):
         for name in ("h1_truth", "h2_truth"):
             assert abs(mpmath.mpf(fresh[name]) / mpmath.mpf(stored[name]) - 1) < 1e-24
+
+
+@pytest.mark.parametrize("balls", [3, 4, 6])
+def test_the_modes_of_a_closed_stack_to_an_ulp(balls):
+    """The block eigenvalues of the grounded cluster of every contact (twoball.kernels.clusters,
+    _real_blocks) against mpmath's at 40 digits of the same matrix, light balls on top (ratio
+    0.3, eps 0.9): within 2 ulps relative. LAPACK's alone were 5 to 16 ulps off on the slow
+    modes (docs/accuracy.md, "The linear stack"), which cost the four-ball drop at H = 1e4 a
+    tenth of its h2 digits' worth (1.7e-10 against 1.5e-11)."""
+    import mpmath
+    import numpy as np
+
+    from twoball.kernels.clusters import _real_blocks
+    from twoball.stacks import check_stack
+
+    stack = check_stack([0.3] * (balls - 1), 0.9, 0.2)
+    m, zeta, k = stack.masses, stack.zeta, balls
+    b = np.zeros((2 * k, 2 * k))
+    for i in range(k):  # B = [[0, I], [-W, -2 W Z]], W = D M^-1 D^T (docs/stacks.md)
+        b[i, k + i] = 1.0
+        w_row = np.zeros(k)
+        w_row[i] = 1.0 / m[i] + (1.0 / m[i - 1] if i >= 1 else 0.0)
+        if i + 1 < k:
+            w_row[i + 1] = -1.0 / m[i]
+        if i >= 1:
+            w_row[i - 1] = -1.0 / m[i - 1]
+        b[k + i, :k] = -w_row
+        b[k + i, k:] = -w_row * 2.0 * zeta
+    _, _, blocks = _real_blocks(b, k)
+    with mpmath.workdps(40):
+        exact, _ = mpmath.eig(mpmath.matrix(b.tolist()))
+        for block in blocks:
+            lam = mpmath.mpc(block[0, 0], block[0, 1])
+            nearest = min(abs(lam - e) / abs(e) for e in exact)
+            assert nearest < 2 * 2.0**-52, (balls, complex(lam), float(nearest))

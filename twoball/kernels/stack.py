@@ -562,6 +562,18 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
                 contacts[n_contacts, 2] = t
                 n_contacts += 1
             else:
+                # A contact closing as its overlap falls through zero (e' < 0 at the switch;
+                # closing through g = e + 2 zeta e' instead, it touches at e = -2 zeta e' < 0 with
+                # e' > 0) meets it at zero; found as a root it is zero only to the rounding of
+                # its terms (a ball falling from thousands above: ~1e-12). The root is taken as
+                # exact, as in twoball.kernels.runs.run (docs/accuracy.md, "The linear stack").
+                # The overlap must have been a gap, or opening, at the phase's start (e_next,
+                # de_next): a ball resting on another at its static overlap and released within
+                # the rounding closes again at once, still overlapping; lifted to zero it would
+                # be released there again, for ever.
+                opening = e_next[index] > 0.0 or de_next[index] > 0.0
+                if de[index] < 0.0 and opening:
+                    e[index] = 0.0
                 opened[index] = t
                 if top_apexes == 0:
                     first[index] += 1
