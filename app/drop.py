@@ -233,6 +233,14 @@ class DropScene(Scene):
         if self.state.presentation:  # 1280x720: under the header, tabs and summary, the player
             self.heights.height = self.animation.height = PROJECTOR_PLOT_HEIGHT
 
+    @param.depends("state.revealed", "state.step", watch=True)
+    def _answer_replaces_summary(self) -> None:
+        """On a projector, a lesson's revealed answer (a large line above the scene) stands in
+        for the summary, whose numbers the plot's labels also give: with both, the player
+        was pushed below a 720 px screen."""
+        s = self.state
+        self.summary.visible = not (s.presentation and s.step > 0 and s.revealed)
+
     def _heights_figure(self):
         fig = figure(
             height=400,

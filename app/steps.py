@@ -41,12 +41,14 @@ STEPS = (
         question="How high does the small ball go, compared with the height it was dropped from?",
         choices=("Back to the same height", "Twice as high", "About 4 times", "About 8 to 9 times"),
         answer=3,
-        explanation="About 8.5 times: dropped from 1.04 m, it rises to 8.8 m. The textbook "
-        "argument (the independent contact model): the big ball bounces off the floor first "
-        "and meets the small ball still falling; "
+        explanation="About 8.5 times: dropped from 1.04 m, it rises to 8.8 m (the question's "
+        "1 m is 1.04 m rounded). The textbook argument (the independent contact model): the "
+        "big ball bounces off the floor first and meets the small ball still falling; "
         "seen from the big ball, the small ball comes in at twice the fall speed and leaves at "
         "twice it, so it goes up at three times the fall speed: 3 x 3 = 9 times the height for "
-        "a very light ball.",
+        "a very light ball. (Its second bounce goes higher still, to 21.1 m, when the balls "
+        "meet again: the summary calls any h2 > h1 a delayed rebound. The surprise of step 3 "
+        "is another: a first bounce far below the textbook's.)",
     ),
     Step(
         title="A tennis ball on a basketball",
@@ -100,7 +102,10 @@ STEPS = (
         explanation="4 times. The small ball is hit while the big one is still being squashed, "
         "bounces off, falls back and is hit again, each time before the big ball has given "
         "back its energy. It leaves with little of it: the small first bounce. The energy left "
-        "in the big ball comes back at the next collision: the high second bounce.",
+        "in the big ball comes back at the next collision: the high second bounce. (A tennis "
+        "ball held touching, the tennis preset, is hit once only, but also while the big ball "
+        "is still squashed: its first bounce is small and its second higher, for the same "
+        "reason.)",
     ),
     Step(
         title="Where delayed rebounds happen",

@@ -371,7 +371,7 @@ def test_a_bad_typed_height_is_said_where_a_laptop_shows_it(browser, app_server)
         message = page.get_by_text("H: height must be", exact=False)
         message.wait_for()
         shown = message.bounding_box()
-        assert shown is not None and 0 <= shown["y"] and shown["y"] + shown["height"] <= 768
+        assert shown is not None and shown["y"] >= 0 and shown["y"] + shown["height"] <= 768
         assert errors == []
     finally:
         context.close()

@@ -41,6 +41,12 @@ def test_the_answers_quote_the_solver():
     pair = f"{ping_pong.h2 * metres:.1f} m against {ping_pong.h1 * metres:.2f} m"
     assert pair in STEPS[2].explanation and round(ping_pong.x2_0 * metres) == 1
     assert f"{ping_pong.h_icm * metres:.1f} m" in STEPS[2].explanation
+    # step 1's second bounce, higher still; the tennis preset: one contact, a delayed rebound
+    assert textbook.delayed_rebound and f"to {textbook.h2 * metres:.1f} m" in STEPS[0].explanation
+    touching = presets.PRESETS["tennis"]
+    preset = twoball.simulate(touching.eps, touching.mu, touching.tau_ratio, eps12=touching.eps12)
+    assert preset.contacts_first[BALLS] == 1 and preset.delayed_rebound
+    assert preset.h1_over_drop < 1 and "hit once only" in STEPS[3].explanation
     map_drop = _result(STEPS[4])
     assert map_drop.delayed_rebound and STEPS[4].drop["height"] == 1e4  # on the shipped map
 
@@ -217,6 +223,9 @@ def test_a_projected_step_asks_large_and_answers_in_one_large_line(
         page.wait_for_timeout(1500)
         plots = [c for c in _scene_canvases(page) if c["width"] > 100 and c["height"] > 100]
         assert plots and all(c["bottom"] <= 720 and c["right"] <= 1280 for c in plots), plots
+        players = [b for b in deep_query(page, "button.play") if b["visible"]]
+        assert len(players) == (step.scene == "drop"), players  # the drop's player on screen
+        assert all(b["bottom"] <= 700 for b in players), players  # (with room to spare)
         page.screenshot(path=shots / f"step{number}-projected-revealed.png")
         assert errors == []
     finally:
