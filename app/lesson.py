@@ -16,6 +16,8 @@ from .scene import Built, alert, later
 from .state import ExplorerState
 from .steps import STEPS
 
+# what the lesson sets and gives back at its end: the drop, the scene and the units
+BEFORE_THE_LESSON = ("eps", "eps12", "mu", "tau_ratio", "height", "scene", "units")
 # presentation mode: the question, its choices and the answer read from the back of a room
 PROJECTED = {"font-size": "30px", "line-height": "1.3"}
 PROJECTED_CHOICES = ":host { font-size: 30px; } :host input { width: 26px; height: 26px; }"
@@ -71,22 +73,28 @@ class Lesson(Built):
         self._asking = pn.Column(
             self.question, self.choices, self.reveal, sizing_mode="stretch_width", visible=False
         )
+        self._before: dict = {}  # the state when the lesson began (_begin)
         self._show()
 
     def _begin(self) -> None:
         """The lesson's first step, in metres and seconds: a class thinks in them (the
-        dimensionless view stays one click away, in the controls)."""
+        dimensionless view stays one click away, in the controls). What was on screen before
+        is kept, to come back to at the lesson's end."""
+        self._before = {name: getattr(self.state, name) for name in BEFORE_THE_LESSON}
         self.state.units = "SI"
         self._go(1)
 
     def _go(self, step: int) -> None:
-        """Go to ``step`` (1..len(STEPS)), setting its drop and scene; 0 leaves the lesson."""
+        """Go to ``step`` (1..len(STEPS)), setting its drop and scene; 0 leaves the lesson,
+        back to the drop, scene and units on screen when it began (a teacher's own set-up was
+        replaced by the last step's), if it began on this page."""
         step = min(max(step, 0), len(STEPS))
         if step:
             shown = STEPS[step - 1]
             self.state.param.update(**shown.drop, scene=shown.scene, step=step, revealed=False)
         else:
-            self.state.param.update(step=0, revealed=False)
+            self.state.param.update(**self._before, step=0, revealed=False)
+            self._before = {}
 
     def _chosen(self, event: param.parameterized.Event) -> None:
         self.reveal.disabled = self._waits_for_a_choice() or self.answer.visible

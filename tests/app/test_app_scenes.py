@@ -413,6 +413,27 @@ def test_a_lesson_step_covers_its_scene_until_the_answer_is_revealed():
     assert not rendered().cover.visible
 
 
+def test_the_end_of_the_lesson_gives_back_the_teachers_drop():
+    """A teacher's own drop, scene and units before Start come back at the lesson's end (the
+    last step's drop and scene stayed, a new user's set-up lost)."""
+    explorer = rendered({"eps": "0.5", "mu": "0.2", "tau_ratio": "2", "scene": "closeup"})
+    before = {name: getattr(explorer.state, name) for name in ("eps", "mu", "tau_ratio")}
+    lesson = explorer.lesson
+    lesson._begin()
+    assert explorer.state.units == "SI" and explorer.state.eps != 0.5
+    for step in range(2, 7):
+        lesson._go(step)
+    assert explorer.state.scene == "accuracy"
+    lesson._go(0)
+    after = {name: getattr(explorer.state, name) for name in before}
+    assert after == before and explorer.state.scene == "closeup"
+    assert explorer.state.units == "dimensionless" and explorer.state.step == 0
+    # a lesson opened from its URL (?step=3) has nothing to give back: its end stays put
+    shared = rendered({"step": "3"})
+    shared.lesson._go(0)
+    assert shared.state.step == 0 and shared.state.scene == "drop"
+
+
 def test_a_stack_outside_the_solver_is_refused_with_a_message():
     """Six balls at the smallest mass ratio make the top ball 1e-10 of the bottom one: the
     scene says so instead of raising, draws nothing, and draws again for a valid ratio."""
