@@ -76,6 +76,7 @@ class StackScene(Scene):
         "stack_gap",
         "force",
         "stack_eps_contacts",
+        "units",  # (only the summary's note that this scene has none)
     )
 
     def __init__(self, **params):
@@ -118,8 +119,10 @@ class StackScene(Scene):
         # eps per contact, under "advanced" (collapsed: the one eps slider is the lesson's)
         self.eps_contacts = pn.widgets.TextInput.from_param(
             state.stack_eps_contacts,
-            name="eps per contact: floor, 1-2, 2-3, ... (comma-separated; empty: the eps slider)",
-            placeholder="e.g. 0.9, 0.8, 0.7",
+            # (short: a longer title was cut in the sidebar; the placeholder and the message
+            # of a wrong entry say the rest)
+            name="eps per contact: floor, 1-2, 2-3, ...",
+            placeholder="e.g. 0.9, 0.8, 0.7 (empty: the eps slider's)",
             sizing_mode="stretch_width",
         )
         self.eps_message = pn.pane.Alert(alert_type="warning", visible=False, margin=(0, 5))
@@ -351,16 +354,25 @@ class StackScene(Scene):
         )
         ratio = "" if r.h1 is None else f" (h1/chain = {r.h1 / icm:.3f})"
         eps = [float(e) for e in r.stack.eps]
-        if len(set(eps)) > 1:  # typed under "advanced"
+        if contact_eps(s.stack_eps_contacts, s.balls)[0] is not None:  # typed, "advanced"
+            # (said even when all are equal: 0.5 typed for every contact left the slider's 0.9
+            # on screen, with nothing saying it was not used)
             first = f"eps per contact {', '.join(f'{e:g}' for e in eps)}; {first}"
         # (on a projector the contact counts are left out: eight balls' list took the summary
         # to five lines, and the player off the screen)
         contacts = (
             "" if s.presentation else f" Contacts before h1 (floor, then each pair): {counts}."
         )
+        # (the switch in the sidebar says metres, seconds: say here that this scene has none)
+        units = (
+            " Dimensionless heights and times: the stacks have no metres."
+            if s.units == "SI"
+            else ""
+        )
         return (
             f"{s.balls} balls, {s.force} force: {first}{second}.  \n"
-            f"Chain of independent collisions (dotted green): {number_text(icm)}{ratio}.{contacts}"
+            f"Chain of independent collisions (dotted green): {number_text(icm)}{ratio}."
+            f"{contacts}{units}"
         )
 
     def own_controls(self) -> pn.viewable.Viewable:

@@ -258,7 +258,9 @@ def url_query(state: ExplorerState) -> dict[str, str]:
     if state.scene == "stack":
         query |= {key: f"{getattr(state, name):.12g}" for name, key in STACK_URL_KEYS.items()}
         query["force"] = state.force
-        if state.stack_eps_contacts.strip():
+        # only an entry the scene uses (a wrong one, which it shows as wrong, stays out of a
+        # link: it was shared as eps_contacts=abc)
+        if contact_eps(state.stack_eps_contacts, state.balls)[0] is not None:
             query["eps_contacts"] = state.stack_eps_contacts.strip()
     if state.scene == "map" and state.map_force != "linear":
         query["map_force"] = state.map_force

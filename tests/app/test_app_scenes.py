@@ -550,8 +550,14 @@ def test_the_stack_scene_takes_eight_balls_and_eps_per_contact_under_advanced():
     scene.eps_contacts.value = "0.9, 0.8"  # two values for eight balls
     assert scene.eps_message.visible and "give 8 values for 8 balls" in scene.eps_message.object
     assert scene.result.h1 == twoball.simulate_stack([0.3] * 7, 0.9, 0.2).h1  # the slider's
+    assert "eps_contacts" not in url_query(explorer.state)  # a wrong entry is not shared
+    scene.eps_contacts.value = ", ".join(["0.5"] * 8)  # all equal, not the slider's 0.9
+    assert scene.result.h1 == twoball.simulate_stack([0.3] * 7, 0.5, 0.2).h1
+    assert "eps per contact 0.5, 0.5" in scene.summary.object  # said, though all are equal
     scene.eps_contacts.value = ""
-    assert not scene.eps_message.visible
+    assert not scene.eps_message.visible and "eps per contact" not in scene.summary.object
+    explorer.state.units = "SI"  # switched in another scene: this one says it has no metres
+    assert "the stacks have no metres" in scene.summary.object
 
 
 def test_a_page_opened_on_a_lesson_step_shows_its_units_on_the_switch():
