@@ -268,7 +268,7 @@ class Controls(Built):
 
     def _take_eps12(self, text: str) -> None:
         value, message = validate("eps12", text, self.state.eps12)
-        self.show_messages([f"eps12: {message}"] if message else [], typed=True)
+        self.show_messages([message] if message else [], typed=True)  # (it names eps12)
         self.state.eps12 = value
         self._show_state()
 
