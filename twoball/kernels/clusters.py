@@ -745,9 +745,10 @@ def _check_contact(
     # (touching, unloaded) would otherwise switch on and off with the rounding
     tol_rate = ROUNDING * tol_rate * (1.0 + 2.0 * zeta_c)
     error, land = np.inf, 0.0
-    if not (rate < 0.0 or h < need):
+    if not (h < need or (rate < 0.0 and value < -2.0 * rate * h)):
         return value, rate, tol, tol_rate, h, error, land
-    # the third derivatives (formed only here: most contacts need neither)
+    # the third derivatives, formed only for a step to lengthen or a landing within reach (a
+    # Newton step less than twice the certified step): most contacts need neither
     if is_active:
         i = c - (0 if grounded[upper] else lows[upper] + 1)
         dddeta = _third(store, cid_u, k_u, i, mode_w, upper)
@@ -794,62 +795,30 @@ def _check_contact(
 
 
 @njit(inline=True)
-def _cubic_value(s, f, fp, fpp, m3):
-    """f + fp s + fpp s^2/2 - m3 s^3/6."""
-    return f + s * (fp + s * (0.5 * fpp - s * m3 / 6.0))
+def _quadratic_root(f, fp, fpp):
+    """First positive root of f + fp s + fpp s^2/2 for f > 0 (inf if none)."""
+    disc = fp * fp - 2.0 * fpp * f
+    if disc < 0.0:
+        return np.inf
+    if fp < 0.0:
+        return 2.0 * f / (math.sqrt(disc) - fp)
+    return (fp + math.sqrt(disc)) / -fpp if fpp < 0.0 else np.inf
 
 
-@njit
+@njit(inline=True)
 def _cubic_step(f, fp, fpp, m3):
-    """Largest h with f + fp s + fpp s^2/2 - m3 s^3/6 > 0 on [0, h), for f > 0, m3 >= 0: the
-    first positive root of the cubic (docs/stacks.md, "A third-order certified step"), bracketed
-    where the cubic falls and closed in by Newton steps from both ends; the lower end, where the
-    cubic is positive, is returned."""
-    if m3 <= 0.0:  # the quadratic's first positive root
-        disc = fp * fp - 2.0 * fpp * f
-        if disc < 0.0:
-            return np.inf
-        if fp < 0.0:
-            return 2.0 * f / (math.sqrt(disc) - fp)
-        return (fp + math.sqrt(disc)) / -fpp if fpp < 0.0 else np.inf
-    lo, hi = 0.0, np.inf
-    disc = fpp * fpp + 2.0 * m3 * fp  # of the derivative fp + fpp s - m3 s^2/2
-    if disc > 0.0:
-        root = math.sqrt(disc)
-        first, second = (fpp - root) / m3, (fpp + root) / m3
-        if first > 0.0 and _cubic_value(first, f, fp, fpp, m3) <= 0.0:
-            hi = first
-        elif second > 0.0:
-            lo = second
-    if hi == np.inf:  # beyond lo + u the cubic is below zero
-        top = _cubic_value(lo, f, fp, fpp, m3)
-        bend = max(fpp - m3 * lo, 0.0)
-        hi = lo + max((12.0 * top / m3) ** (1.0 / 3.0), 6.0 * bend / m3)
-    bend = fpp / m3  # convex before it, concave after
-    if lo < bend < hi:
-        if _cubic_value(bend, f, fp, fpp, m3) > 0.0:
-            lo = bend
-        else:
-            hi = bend
-    convex = hi <= bend
-    low, high = _cubic_value(lo, f, fp, fpp, m3), _cubic_value(hi, f, fp, fpp, m3)
-    for _ in range(40):
-        if hi - lo <= 1e-12 * hi:
-            break
-        # A tangent lands on the near side of the root from the end where the cubic bends away
-        # from its chord, and the chord on the other side: one end each.
-        end, value = (lo, low) if convex else (hi, high)
-        slope = fp + end * (fpp - 0.5 * m3 * end)
-        chord = lo + low * (hi - lo) / (low - high)
-        for guess in (end - value / slope if slope < 0.0 else chord, chord):
-            if not lo < guess < hi:
-                guess = 0.5 * (lo + hi)
-            at = _cubic_value(guess, f, fp, fpp, m3)
-            if at > 0.0:
-                lo, low = guess, at
-            else:
-                hi, high = guess, at
-    return lo
+    """A step h with f + fp s + fpp s^2/2 - m3 s^3/6 > 0 on [0, h), for f > 0, m3 >= 0
+    (docs/stacks.md, "A third-order certified step"): on [0, S], -m3 s^3/6 >= -(m3 S/3) s^2/2, so
+    the quadratic f + fp s + (fpp - m3 S/3) s^2/2 bounds the cubic from below there, and h is
+    the lesser of S and its first root; S is the Taylor quadratic's first root, a quarter
+    longer (or the cubic term's own scale where that quadratic has none)."""
+    root = _quadratic_root(f, fp, fpp)
+    if m3 <= 0.0:
+        return root
+    span = 1.25 * root
+    if span == np.inf:
+        span = (6.0 * f / m3) ** (1.0 / 3.0)
+    return min(span, _quadratic_root(f, fp, fpp - m3 * span / 3.0))
 
 
 @njit(borrow=True, inline=True)
