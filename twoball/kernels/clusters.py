@@ -82,13 +82,6 @@ class Clusters(NamedTuple):
     w_eta: np.ndarray
     w_g: np.ndarray
     w_rest: np.ndarray
-    # the same for the third derivatives (x''', g''' of each ball's contacts, eta''' and g''' of
-    # each active contact) on w: the rows above times B (the third-order certified step)
-    w_x3: np.ndarray
-    w_g3_low: np.ndarray
-    w_g3_up: np.ndarray
-    w_eta3: np.ndarray
-    w_g3: np.ndarray
     noise: np.ndarray  # (ids,) condition of X
 
 
@@ -115,11 +108,6 @@ def new_clusters(n):
         np.zeros((ids, n)),
         np.zeros((ids, n, n)),
         np.zeros((ids, n)),
-        np.zeros((ids, n, n, 2)),
-        np.zeros((ids, n, n, 2)),
-        np.zeros((ids, n, n, 2)),
-        np.zeros((ids, n, n, 2)),
-        np.zeros((ids, n, n, 2)),
         np.zeros((ids, n, n, 2)),
         np.zeros((ids, n, n, 2)),
         np.zeros((ids, n, n, 2)),
@@ -293,30 +281,23 @@ def _build_cluster(store, cid, lo, hi, grounded, masses, zeta):
         for jl in range(balls):
             store.offset[cid, jl] = store.eta_rest[cid, : jl + 1].sum()
     b2 = b @ b
-    b3 = b2 @ b
     for jl in range(balls):
         j = lo + jl
         row = np.zeros(2 * k)
         row[:k] = store.shape[cid, jl, :k]
         r1 = row @ b  # x'' = r1 . w
         r2 = row @ b2  # x''' = r2 . w
-        r3 = row @ b3  # x'''' = r3 . w
         _store_weights(store.w_x2, store, cid, jl, r1, k)
         _store_weights(store.w_g_low, store, cid, jl, r1 + 2.0 * zeta[j] * r2, k)
         above = zeta[j + 1] if j + 1 < n else 0.0
         _store_weights(store.w_g_up, store, cid, jl, r1 + 2.0 * above * r2, k)
-        _store_weights(store.w_x3, store, cid, jl, r2, k)
-        _store_weights(store.w_g3_low, store, cid, jl, r2 + 2.0 * zeta[j] * r3, k)
-        _store_weights(store.w_g3_up, store, cid, jl, r2 + 2.0 * above * r3, k)
     for i in range(k):
         c = first + i
         row = np.zeros(2 * k)
         row[i] = 1.0
         _store_weights(store.w_eta, store, cid, i, row @ b, k)
-        _store_weights(store.w_eta3, store, cid, i, row @ b2, k)
         row[k + i] = 2.0 * zeta[c]
         _store_weights(store.w_g, store, cid, i, row @ b, k)
-        _store_weights(store.w_g3, store, cid, i, row @ b2, k)
         _store_weights(store.w_rest, store, cid, i, row, k)  # g - g_rest on z
     store.ready[cid] = True
 
@@ -683,17 +664,12 @@ def _check_contact(
     sizes_w,
     sized,
     stamp,
-    need,
 ):
     """Contact c's switching function at tau from the evaluated phase (:func:`_evaluate_arrays`
-    of its clusters): (F, F', tol, tol of the rate, certified step, the error of a landing on
-    the root or inf if F does not fall, that landing's distance), by :func:`_contact_switch3`.
-    Its bounds on F'' and F''' are formed from its clusters' block sizes of w (:func:`_sizes`,
-    each cluster's once per ``stamp``: ``sized`` holds the stamp they were formed at). The
-    landing is one Newton step (error M2 s^2/2) or the root of F's Taylor quadratic (error
-    M3 s^3/6), whichever bound is smaller (docs/stacks.md, "A third-order certified step"). A
-    certified step of ``need`` or more changes nothing for the caller: one that long is not
-    lengthened."""
+    of its clusters): (F, F', tol, tol of the rate, certified step, the error of one Newton step
+    to the root or inf if F does not fall), by :func:`twoball.kernels.phases.contact_switch`.
+    Its curvature bounds are formed from its clusters' block sizes of w (:func:`_sizes`, each
+    cluster's once per ``stamp``: ``sized`` holds the stamp they were formed at)."""
     contacts, noise, kinds, blocks = store.contacts, store.noise, store.kind, store.blocks
     companions, rates, w_x2, w_g_low = store.companion, store.rates, store.w_x2, store.w_g_low
     w_g_up, w_eta, w_g = store.w_g_up, store.w_eta, store.w_g
@@ -744,140 +720,12 @@ def _check_contact(
     # a rate within the rounding of the velocities has no sign: balls moving together
     # (touching, unloaded) would otherwise switch on and off with the rounding
     tol_rate = ROUNDING * tol_rate * (1.0 + 2.0 * zeta_c)
-    error, land = np.inf, 0.0
-    if not (h < need or (rate < 0.0 and value < -2.0 * rate * h)):
-        return value, rate, tol, tol_rate, h, error, land
-    # the third derivatives, formed only for a step to lengthen or a landing within reach (a
-    # Newton step less than twice the certified step): most contacts need neither
-    if is_active:
-        i = c - (0 if grounded[upper] else lows[upper] + 1)
-        dddeta = _third(store, cid_u, k_u, i, mode_w, upper)
-        bound3_eta = _bound(store.w_eta3, cid_u, i, sizes_w, upper, k_u)
-        bound3_g = _bound(store.w_g3, cid_u, i, sizes_w, upper, k_u)
-    else:  # gravity has no x'''
-        jl = c - lows[upper]
-        dddeta = _jerk(store, cid_u, k_u, jl, mode_w, upper)
-        bound3_eta = _bound(store.w_x3, cid_u, jl, sizes_w, upper, k_u)
-        bound3_g = _bound(store.w_g3_low, cid_u, jl, sizes_w, upper, k_u)
-        if c >= 1:
-            lower = of_ball[c - 1]
-            cid_l = cids[lower]
-            k_l = contacts[cid_l]
-            jl = c - 1 - lows[lower]
-            dddeta -= _jerk(store, cid_l, k_l, jl, mode_w, lower)
-            bound3_eta += _bound(store.w_x3, cid_l, jl, sizes_w, lower, k_l)
-            bound3_g += _bound(store.w_g3_up, cid_l, jl, sizes_w, lower, k_l)
-    h, curve, bound3 = _third_order(
-        is_active,
-        eta,
-        deta,
-        ddeta,
-        dddeta,
-        zeta_c,
-        bound3_eta,
-        bound3_g,
-        tol_state,
-        clock,
-        h,
-        need,
-    )
+    error = np.inf
     if rate < 0.0:
         g_part = is_active or eta < eta + 2.0 * zeta_c * deta
-        land = value / -rate
-        error = 0.5 * (bound_g if g_part else bound_eta) * land * land
-        disc = rate * rate - 2.0 * curve * value
-        if disc >= 0.0:
-            root = 2.0 * value / (math.sqrt(disc) - rate)
-            error3 = bound3 * abs(root) * root * root / 6.0
-            if error3 < error:
-                error, land = error3, root
-    return value, rate, tol, tol_rate, h, error, land
-
-
-@njit(inline=True)
-def _quadratic_root(f, fp, fpp):
-    """First positive root of f + fp s + fpp s^2/2 for f > 0 (inf if none)."""
-    disc = fp * fp - 2.0 * fpp * f
-    if disc < 0.0:
-        return np.inf
-    if fp < 0.0:
-        return 2.0 * f / (math.sqrt(disc) - fp)
-    return (fp + math.sqrt(disc)) / -fpp if fpp < 0.0 else np.inf
-
-
-@njit(inline=True)
-def _cubic_step(f, fp, fpp, m3):
-    """A step h with f + fp s + fpp s^2/2 - m3 s^3/6 > 0 on [0, h), for f > 0, m3 >= 0
-    (docs/stacks.md, "A third-order certified step"): on [0, S], -m3 s^3/6 >= -(m3 S/3) s^2/2, so
-    the quadratic f + fp s + (fpp - m3 S/3) s^2/2 bounds the cubic from below there, and h is
-    the lesser of S and its first root; S is the Taylor quadratic's first root, a quarter
-    longer (or the cubic term's own scale where that quadratic has none)."""
-    root = _quadratic_root(f, fp, fpp)
-    if m3 <= 0.0:
-        return root
-    span = 1.25 * root
-    if span == np.inf:
-        span = (6.0 * f / m3) ** (1.0 / 3.0)
-    return min(span, _quadratic_root(f, fp, fpp - m3 * span / 3.0))
-
-
-@njit(borrow=True, inline=True)
-def _third(store, cid, k, i, mode_w, p):
-    """eta''' of the cluster's active contact i: row k + i of w' = B w = X diag(B_j) X^-1 w,
-    from its modes' rates X^-1 w (mode_w[p])."""
-    blocks, big_x = store.blocks, store.x
-    total = 0.0
-    for blk in range(k):
-        r0, r1 = mode_w[p, 2 * blk], mode_w[p, 2 * blk + 1]
-        q0 = blocks[cid, blk, 0, 0] * r0 + blocks[cid, blk, 0, 1] * r1
-        q1 = blocks[cid, blk, 1, 0] * r0 + blocks[cid, blk, 1, 1] * r1
-        total += big_x[cid, k + i, 2 * blk] * q0 + big_x[cid, k + i, 2 * blk + 1] * q1
-    return total
-
-
-@njit(borrow=True, inline=True)
-def _jerk(store, cid, k, jl, mode_w, p):
-    """x''' of the cluster's ball jl (local): its shape row on each contact's eta''' (gravity
-    adds none)."""
-    total = 0.0
-    for i in range(k):
-        total += store.shape[cid, jl, i] * _third(store, cid, k, i, mode_w, p)
-    return total
-
-
-@njit(inline=True)
-def _third_order(
-    active,
-    eta,
-    deta,
-    ddeta,
-    dddeta,
-    zeta,
-    bound3_eta,
-    bound3_g,
-    tol_state,
-    clock,
-    h,
-    need,
-):
-    """The certified step h of :func:`twoball.kernels.phases.contact_switch`, lengthened, if it is
-    shorter than ``need``, to where F + F' s + F'' s^2/2 - M3 s^3/6 (F'' exact, M3 bounding |F'''|
-    for the rest of the phase) reaches -tol (docs/stacks.md, "A third-order certified step");
-    with F'' and M3 of F's part (eta or g, as contact_switch takes it)."""
-    g, dg, ddg = eta + 2.0 * zeta * deta, deta + 2.0 * zeta * ddeta, ddeta + 2.0 * zeta * dddeta
-    tol_g = tol_state + ROUNDING * abs(dg) * clock
-    if active:
-        if -g > -tol_g and h < need:
-            h = max(h, _cubic_step(tol_g - g, -dg, -ddg, bound3_g))
-        return h, -ddg, bound3_g
-    tol_eta = tol_state + ROUNDING * abs(deta) * clock
-    if eta > -tol_eta and h < need:
-        h = max(h, _cubic_step(eta + tol_eta, deta, ddeta, bound3_eta))
-    if g > -tol_g and h < need:
-        h = max(h, _cubic_step(g + tol_g, dg, ddg, bound3_g))
-    if eta >= g:
-        return h, ddeta, bound3_eta
-    return h, ddg, bound3_g
+        s = value / -rate
+        error = 0.5 * (bound_g if g_part else bound_eta) * s * s
+    return value, rate, tol, tol_rate, h, error
 
 
 @njit(borrow=True, inline=True)

@@ -198,8 +198,8 @@ def advance_phase(
         for c in range(n):
             if solved[c] and tau > 0.0:
                 continue  # its end is the horizon, or beyond it
-            value, rate, tol, tol_rate, h, error, land = _check(
-                c, tau, clock, active[c], zeta[c], carried, e, de, work, store, steps, 0.0
+            value, rate, tol, tol_rate, h, error = _check(
+                c, tau, clock, active[c], zeta[c], carried, e, de, work, store, steps
             )
             fresh = c == entered_by and tau == 0.0
             if value <= -tol or (value <= tol and rate < -tol_rate and not fresh):
@@ -242,26 +242,8 @@ def advance_phase(
                 # certified step h exceeds s then). tol bounds the rounding generously (16 ulps
                 # of every term), so a 512th of it is asked for.
                 closing = rate < -tol_rate and not fresh and error <= tol / 512.0
-                if closing and tau + land < early:
-                    early, early_contact = tau + land, c
-        if event < 0 and limit >= 0 and others > step:
-            # the third-order step only for the contact that limits the step (most approach a
-            # root): the others' second-order steps are certified as they are
-            h = _check(
-                limit,
-                tau,
-                clock,
-                active[limit],
-                zeta[limit],
-                carried,
-                e,
-                de,
-                work,
-                store,
-                steps,
-                others,
-            )[4]
-            step = min(max(step, h), others)
+                if closing and tau + value / -rate < early:
+                    early, early_contact = tau + value / -rate, c
         if event < 0 and early_contact >= 0 and early <= tau + step:
             event, best = early_contact, early
         if event >= 0:
@@ -323,7 +305,7 @@ def advance_phase(
                     work.change_z,
                 )
                 steps += 1
-                value, rate, tol, tol_rate, h, error, land = _check(
+                value, rate, tol, tol_rate, h, error = _check(
                     limit,
                     at,
                     1.0 + t + at,
@@ -335,7 +317,6 @@ def advance_phase(
                     work,
                     store,
                     steps,
-                    reach - at,
                 )
                 found = -1.0
                 if value <= -tol or (value <= tol and rate < -tol_rate):
@@ -343,7 +324,7 @@ def advance_phase(
                     if limit == entered_by and found <= 0.0:
                         found = at  # as in the loop above: never back to the phase's start
                 elif rate < -tol_rate and error <= tol / 512.0:
-                    found = at + land
+                    found = at + value / -rate
                 if found >= 0.0 and found <= reach:
                     _evaluate(found, count, False, work, store, e0, de0, e, de)
                     return EVENT_SWITCH, limit, found
@@ -394,9 +375,8 @@ def _evaluate(tau, count, every_ball, work, store, e0, de0, e, de):
 
 
 @njit(borrow=True, inline=True)
-def _check(c, tau, clock, is_active, zeta_c, carried, e, de, work, store, stamp, need):
-    """:func:`_check_contact` of contact c at tau from the evaluated workspace (a certified step
-    of ``need`` is long enough)."""
+def _check(c, tau, clock, is_active, zeta_c, carried, e, de, work, store, stamp):
+    """:func:`_check_contact` of contact c at tau from the evaluated workspace."""
     return _check_contact(
         c,
         tau,
@@ -419,7 +399,6 @@ def _check(c, tau, clock, is_active, zeta_c, carried, e, de, work, store, stamp,
         work.sizes_w,
         work.sized,
         stamp,
-        need,
     )
 
 
