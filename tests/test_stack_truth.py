@@ -129,7 +129,7 @@ def test_the_modes_of_a_closed_stack_to_an_ulp(balls):
     import mpmath
     import numpy as np
 
-    from twoball.kernels.clusters import _real_blocks
+    from twoball.kernels.modes import _real_blocks
     from twoball.stacks import check_stack
 
     stack = check_stack([0.3] * (balls - 1), 0.9, 0.2)

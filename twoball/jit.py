@@ -46,6 +46,7 @@ KERNEL_MODULES = (
     "twoball.kernels.closed_forms",
     "twoball.kernels.phases",
     "twoball.kernels.runs",
+    "twoball.kernels.modes",
     "twoball.kernels.clusters",
     "twoball.kernels.stack",
     "twoball.kernels.taylor",

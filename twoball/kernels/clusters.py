@@ -17,7 +17,7 @@ cluster resting on the floor through an active floor contact is *grounded*.
   (:func:`twoball.kernels.phases._block_flow`).
   One contact: X = I. Two contacts: the refined mode split of the two-ball solver
   (:func:`twoball.kernels.closed_forms._split_modes`). More: eigenvectors, each pair refined
-  by Newton's method (:func:`_refine_eigenpair`), complex pairs as rotations and real
+  by Newton's method (:mod:`twoball.kernels.modes`), complex pairs as rotations and real
   eigenvalues paired in order; a near-defective pair then costs accuracy in proportion to the
   condition of X, which the tolerance carries.
 
@@ -51,9 +51,9 @@ from twoball.kernels.closed_forms import (
     _companion,
     _companion_row,
     _overdamped_rates,
-    _split_modes,
 )
 from twoball.kernels.codes import ROUNDING
+from twoball.kernels.modes import _real_blocks
 from twoball.kernels.phases import _block_change, contact_switch
 
 # How a block's future is bounded (:func:`_block_kind`).
@@ -117,85 +117,6 @@ def new_clusters(n):
         np.zeros((ids, n, n, 2)),
         np.zeros(ids),
     )
-
-
-@njit
-def _refine_eigenpair(b, lam, v, sweeps=2):
-    """lam refined, and v in place, by Newton's method on B v = lam v (v's largest component
-    held). The QR algorithm's eigenvalues are accurate to eps ||B||: 5 to 16 ulps for the slow
-    modes of three or four balls under a light top ball, whose stiff contact makes ||B|| large
-    where the slow modes barely move it. A residual formed in double precision is accurate to
-    eps |B| |v|, componentwise, so Newton's steps reach that (docs/accuracy.md, "The linear
-    stack")."""
-    d = b.shape[0]
-    big = np.argmax(np.abs(v))
-    matrix = np.zeros((d + 1, d + 1), dtype=np.complex128)
-    rhs = np.zeros(d + 1, dtype=np.complex128)
-    for _ in range(sweeps):
-        for i in range(d):
-            total = -lam * v[i]
-            for j in range(d):
-                total += b[i, j] * v[j]
-                matrix[i, j] = b[i, j]
-            matrix[i, i] -= lam
-            matrix[i, d] = -v[i]
-            rhs[i] = -total
-        matrix[d, :] = 0.0
-        matrix[d, big] = 1.0
-        rhs[d] = 0.0
-        step = np.linalg.solve(matrix, rhs)
-        for i in range(d):
-            v[i] += step[i]
-        lam += step[d]
-    return lam
-
-
-@njit
-def _real_blocks(b, k):
-    """X, X^-1 and k 2x2 blocks with B = X diag(blocks) X^-1 (see the module docstring)."""
-    d = 2 * k
-    x = np.zeros((d, d))
-    blocks = np.zeros((k, 2, 2))
-    if k == 1:
-        x[0, 0] = x[1, 1] = 1.0
-        blocks[0] = b
-        return x, x.copy(), blocks
-    if k == 2:
-        x4, x4_inv, blocks2 = _split_modes(b)
-        return x4, x4_inv, blocks2
-    lam, vec = np.linalg.eig(b.astype(np.complex128))
-    for i in range(d):
-        lam[i] = _refine_eigenpair(b, lam[i], vec[:, i])
-    scale = np.abs(lam).max()
-    used = np.zeros(d, dtype=np.bool_)
-    count = 0
-    for i in range(d):
-        if used[i] or abs(lam[i].imag) <= 1e-12 * scale:
-            continue
-        partner, gap = -1, np.inf
-        for j in range(d):
-            if j != i and not used[j] and abs(lam[j] - np.conj(lam[i])) < gap:
-                partner, gap = j, abs(lam[j] - np.conj(lam[i]))
-        used[i] = used[partner] = True
-        top = i if lam[i].imag > 0.0 else partner
-        x[:, 2 * count] = vec[:, top].real
-        x[:, 2 * count + 1] = vec[:, top].imag
-        re, im = lam[top].real, lam[top].imag
-        blocks[count, 0, 0], blocks[count, 0, 1] = re, im
-        blocks[count, 1, 0], blocks[count, 1, 1] = -im, re
-        count += 1
-    real_index = np.array([i for i in range(d) if not used[i]], dtype=np.int64)
-    order = real_index[np.argsort(lam[real_index].real)]
-    for p in range(0, order.size, 2):
-        for q in range(2):
-            v = vec[:, order[p + q]]
-            big = np.argmax(np.abs(v))
-            phase = np.conj(v[big]) / abs(v[big])  # a real eigenvector times a phase
-            x[:, 2 * count + q] = (v * phase).real
-        blocks[count, 0, 0] = lam[order[p]].real
-        blocks[count, 1, 1] = lam[order[p + 1]].real
-        count += 1
-    return x, np.linalg.inv(x), blocks
 
 
 @njit
@@ -573,6 +494,20 @@ def _evaluate_arrays(
 
 
 @njit(borrow=True, inline=True)
+def _mode_step(blocks, cid, blk, modes, mode_w, cluster, tau):
+    """Mode pair ``blk`` of cluster ``cluster`` (of kind ``cid``) over ``tau``:
+    :func:`_block_change` of its 2x2 block, its rates kept in ``mode_w``
+    (docs/stacks.md, "How each force is solved")."""
+    block = (
+        (blocks[cid, blk, 0, 0], blocks[cid, blk, 0, 1]),
+        (blocks[cid, blk, 1, 0], blocks[cid, blk, 1, 1]),
+    )
+    changes = _block_change(block, modes[cluster, 2 * blk], modes[cluster, 2 * blk + 1], tau)
+    mode_w[cluster, 2 * blk], mode_w[cluster, 2 * blk + 1] = changes[4], changes[5]
+    return changes
+
+
+@njit(borrow=True, inline=True)
 def _evaluate_contact(
     tau,
     c,
@@ -608,14 +543,7 @@ def _evaluate_contact(
         i = c - (0 if grounded[upper] else lows[upper] + 1)
         z0 = z1 = w1 = change0 = change1 = size0 = size1 = value0 = value1 = 0.0
         for blk in range(k):
-            block = (
-                (blocks[cid, blk, 0, 0], blocks[cid, blk, 0, 1]),
-                (blocks[cid, blk, 1, 0], blocks[cid, blk, 1, 1]),
-            )
-            n0, n1, d0, d1, r0, r1 = _block_change(
-                block, modes[upper, 2 * blk], modes[upper, 2 * blk + 1], tau
-            )
-            mode_w[upper, 2 * blk], mode_w[upper, 2 * blk + 1] = r0, r1
+            n0, n1, d0, d1, r0, r1 = _mode_step(blocks, cid, blk, modes, mode_w, upper, tau)
             left, right = big_x[cid, i, 2 * blk], big_x[cid, i, 2 * blk + 1]
             z0 += left * n0 + right * n1
             change0 += left * d0 + right * d1
@@ -644,14 +572,7 @@ def _evaluate_contact(
         for row in range(k, 2 * k):
             shape_w[p, row] = 0.0
         for blk in range(k):
-            block = (
-                (blocks[cid, blk, 0, 0], blocks[cid, blk, 0, 1]),
-                (blocks[cid, blk, 1, 0], blocks[cid, blk, 1, 1]),
-            )
-            n0, n1, d0, d1, r0, r1 = _block_change(
-                block, modes[p, 2 * blk], modes[p, 2 * blk + 1], tau
-            )
-            mode_w[p, 2 * blk], mode_w[p, 2 * blk + 1] = r0, r1
+            n0, n1, d0, d1, r0, r1 = _mode_step(blocks, cid, blk, modes, mode_w, p, tau)
             for row in range(2 * k):
                 left, right = big_x[cid, row, 2 * blk], big_x[cid, row, 2 * blk + 1]
                 change_z[p, row] += left * d0 + right * d1

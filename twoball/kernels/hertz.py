@@ -61,9 +61,11 @@ from twoball.kernels.runs import _room_for_one
 from twoball.kernels.taylor import (
     ORDER,
     TOLERANCE,
+    _clamp_reachable,
     _function_root,
     _functions,
     _motion,
+    _releases_shown,
     _series,
     _taylor_step,
     _time_root,
@@ -291,47 +293,6 @@ def _recertified(masses, lam, x, eta, deta, t, force_bound, active, certified, h
         certified = t + span
         bounds[:] = work[0]
     return certified
-
-
-@njit
-def _releases_shown(S, on, count, R, tau) -> bool:
-    """Whether each contact in the series keeps rho > 0 over [0, tau] or has rho' < 0 there (so
-    its release, if any, is the one root of rho, shown at the step's end), from bounds on the
-    coefficients: rho >= r0 + r1 u - B u^2 / tau^2 (B the negative terms' sum at tau), concave,
-    so least at an end; rho' <= r1 + the positive terms' sum."""
-    for i in range(count):
-        row = R + on[i]
-        r0, r1 = S[row, 0], S[row, 1]
-        negative, rising = 0.0, 0.0
-        power = tau
-        for k in range(2, ORDER + 1):
-            power *= tau
-            term = S[row, k] * power
-            negative += min(term, 0.0)
-            rising += k * max(term, 0.0) / tau
-        if not ((r0 >= 0.0 and r0 + r1 * tau + negative > 0.0) or r1 + rising < 0.0):
-            return False
-    return True
-
-
-@njit
-def _clamp_reachable(lam, used, active, eta0, D, tau) -> bool:
-    """Whether a clamp (lam eta' = 1) can be reached within [0, tau] of the step: a contact in
-    the series whose eta' (its series ``D``) can reach 1 / lam there, bounded by its positive
-    coefficients, or an open contact still overlapping (its re-push). Without one, every switch
-    is a root of an overlap (or of rho), shown at the step's end."""
-    for c in range(lam.size):
-        if used[c]:
-            highest = D[c, 0]
-            power = 1.0
-            for k in range(1, ORDER):
-                power *= tau
-                highest += max(D[c, k], 0.0) * power
-            if lam[c] * highest >= 1.0:
-                return True
-        elif not active[c] and eta0[c] < 0.0:
-            return True
-    return False
 
 
 @njit

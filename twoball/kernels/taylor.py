@@ -9,7 +9,9 @@ is Jorba and Zou's, the last term of every series at :data:`TOLERANCE` of its sc
 radius of convergence taken from the last :data:`LAST` coefficients (:func:`_taylor_step`). The
 series are each step's dense output: the contacts' switching functions on them
 (:func:`_functions`), a switch found by regula falsi (:func:`_function_root`), a moment of the
-clock by Newton's method (:func:`_time_root`).
+clock by Newton's method (:func:`_time_root`). Bounds from a step's coefficients say where no
+switch needs certifying: each release the one root of rho in the step (:func:`_releases_shown`),
+no clamp within reach (:func:`_clamp_reachable`).
 """
 
 from __future__ import annotations
@@ -237,3 +239,44 @@ def _function_root(lam, used, moving, S, c, low, high, eta0, deta0) -> float:
                 f_high *= 0.5
             side = 1
     return high
+
+
+@njit
+def _releases_shown(S, on, count, R, tau) -> bool:
+    """Whether each contact in the series keeps rho > 0 over [0, tau] or has rho' < 0 there (so
+    its release, if any, is the one root of rho, shown at the step's end), from bounds on the
+    coefficients: rho >= r0 + r1 u - B u^2 / tau^2 (B the negative terms' sum at tau), concave,
+    so least at an end; rho' <= r1 + the positive terms' sum."""
+    for i in range(count):
+        row = R + on[i]
+        r0, r1 = S[row, 0], S[row, 1]
+        negative, rising = 0.0, 0.0
+        power = tau
+        for k in range(2, ORDER + 1):
+            power *= tau
+            term = S[row, k] * power
+            negative += min(term, 0.0)
+            rising += k * max(term, 0.0) / tau
+        if not ((r0 >= 0.0 and r0 + r1 * tau + negative > 0.0) or r1 + rising < 0.0):
+            return False
+    return True
+
+
+@njit
+def _clamp_reachable(lam, used, active, eta0, D, tau) -> bool:
+    """Whether a clamp (lam eta' = 1) can be reached within [0, tau] of the step: a contact in
+    the series whose eta' (its series ``D``) can reach 1 / lam there, bounded by its positive
+    coefficients, or an open contact still overlapping (its re-push). Without one, every switch
+    is a root of an overlap (or of rho), shown at the step's end."""
+    for c in range(lam.size):
+        if used[c]:
+            highest = D[c, 0]
+            power = 1.0
+            for k in range(1, ORDER):
+                power *= tau
+                highest += max(D[c, k], 0.0) * power
+            if lam[c] * highest >= 1.0:
+                return True
+        elif not active[c] and eta0[c] < 0.0:
+            return True
+    return False
