@@ -459,12 +459,9 @@ def _evaluate_arrays(
             if not (every_ball or ball == lows[p] or ball == highs[p]):
                 continue
             jl = ball - lows[p]
-            acc = moved = moved_rate = 0.0
-            for i in range(k):
-                coefficient = shape[cid, jl, i]
-                acc += coefficient * shape_w[p, k + i]
-                moved += coefficient * (change_z[p, i] - tau * de0[first + i])
-                moved_rate += coefficient * change_z[p, k + i]
+            acc, moved, moved_rate = _ball_sums(
+                shape[cid, jl], shape_w[p], change_z[p], de0, first, k, tau
+            )
             a[ball] = base_a + acc
             shift_x[ball], shift_v[ball] = moved, moved_rate
             if every_ball:
@@ -491,6 +488,20 @@ def _evaluate_arrays(
             e[c] = e0[c] + (tau * de0[c] + (shift_x[c] - below_x) + (gravity - gravity_below))
             de[c] = de0[c] + ((shift_v[c] - below_v) + (gravity_rate - gravity_rate_below))
         gravity_below, gravity_rate_below = gravity, gravity_rate
+
+
+@njit(borrow=True, inline=True)
+def _ball_sums(shape_row, shape_w, change_z, de0, first, k, tau):
+    """A ball's acceleration from its cluster's modes, and its height's and speed's change
+    over ``tau`` (``shape_row``: the ball's row of the cluster's shape; docs/stacks.md, "How
+    each force is solved")."""
+    acc = moved = moved_rate = 0.0
+    for i in range(k):
+        coefficient = shape_row[i]
+        acc += coefficient * shape_w[k + i]
+        moved += coefficient * (change_z[i] - tau * de0[first + i])
+        moved_rate += coefficient * change_z[k + i]
+    return acc, moved, moved_rate
 
 
 @njit(borrow=True, inline=True)
@@ -579,13 +590,9 @@ def _evaluate_contact(
                 if row >= k:
                     shape_w[p, row] += left * r0 + right * r1
         first = 0 if grounded[p] else lows[p] + 1
-        jl = ball - lows[p]
-        acc = moved = moved_rate = 0.0
-        for i in range(k):
-            coefficient = shape[cid, jl, i]
-            acc += coefficient * shape_w[p, k + i]
-            moved += coefficient * (change_z[p, i] - tau * de0[first + i])
-            moved_rate += coefficient * change_z[p, k + i]
+        acc, moved, moved_rate = _ball_sums(
+            shape[cid, ball - lows[p]], shape_w[p], change_z[p], de0, first, k, tau
+        )
         a[ball] = (0.0 if grounded[p] else -1.0) + acc
         if p != upper:
             below_x, below_v = moved, moved_rate
