@@ -25,6 +25,7 @@ from tornado.websocket import WebSocketClosedError
 
 from twoball import warmup
 
+from .bokeh_defaults import cache_property_defaults
 from .delayed_map import map_cube
 from .scenes import SCENE_REGISTRY
 
@@ -97,7 +98,7 @@ def closed_socket_handler(previous):
 
 def on_server_loaded(server_context) -> None:
     """Serve at once on the Python kernels, compile in the background; open the map cube; drop
-    messages to pages that have closed."""
+    messages to pages that have closed; Bokeh's property defaults worked out once per class."""
     sys.set_int_max_str_digits(QUERY_DIGITS)
     panel.config.session_key_func = page_kind
     # Bokeh checks every new session's document for mistakes of construction (a renderer
@@ -105,6 +106,7 @@ def on_server_loaded(server_context) -> None:
     # pages are the same for every session, and tests/app/test_app_state.py checks each scene's
     # document once (test_every_scene_builds_a_valid_document)
     bokeh_settings.perform_document_validation.set_value(False)
+    cache_property_defaults()
     drop_messages_to_closed_sockets()
     loop = IOLoop.current().asyncio_loop
     loop.set_exception_handler(closed_socket_handler(loop.get_exception_handler()))

@@ -8,6 +8,9 @@ pages; CPU time of the process (``time.process_time``).
 
     .venv/bin/python benchmarks/app_open.py [--pages 10] [--scene drop closeup] [--profile drop]
 
+The server's setup is applied (Bokeh's defaults cached per class, app/bokeh_defaults.py) unless
+``--bokeh-as-shipped``.
+
 ``--served``: the same pages opened one at a time from ``twoball serve --num-procs 1`` by a
 protocol client (tools/bokehclient.py), the server's CPU per page read from /proc (after each
 page, a second for its onload callbacks and the URL's rewrite).
@@ -135,6 +138,11 @@ def main() -> None:
     parser.add_argument("--present", action="store_true", help="presentation mode (?present=1)")
     parser.add_argument("--profile", help="profile the pages of this scene instead")
     parser.add_argument("--served", action="store_true", help="from twoball serve, one by one")
+    parser.add_argument(
+        "--bokeh-as-shipped",
+        action="store_true",
+        help="without the server's per-class cache of Bokeh's defaults (app/bokeh_defaults.py)",
+    )
     args = parser.parse_args()
     if args.served:
         for scene in args.scene:
@@ -145,7 +153,11 @@ def main() -> None:
             )
         return
     pn.extension()
+    from app.bokeh_defaults import cache_property_defaults
     from twoball import warmup
+
+    if not args.bokeh_as_shipped:
+        cache_property_defaults()  # as the server does (app/app_hooks.py)
 
     warmup.warm_up()  # compiled kernels, as a running server has them
     extra = {"present": "1"} if args.present else {}

@@ -113,3 +113,78 @@ def test_a_server_process_accepts_one_waiting_connection_per_wake_up(monkeypatch
         finally:
             for connection in [*clients, *accepted]:
                 connection.close()
+
+
+def _same_default(value, other) -> bool:
+    """Equal defaults: models (built fresh for each default) of the same type, anything else
+    equal, inside lists, tuples and dicts too."""
+    from bokeh.core.has_props import HasProps
+
+    if type(value) is not type(other):
+        return False
+    if isinstance(value, HasProps):
+        return True
+    if isinstance(value, (list, tuple)):
+        return len(value) == len(other) and all(map(_same_default, value, other))
+    if isinstance(value, dict):
+        return value.keys() == other.keys() and all(
+            _same_default(value[k], other[k]) for k in value
+        )
+    if value != value:  # NaN (DataRange1d's start and end)
+        return other != other
+    return value == other or (callable(value) and type(value) is type(other))
+
+
+def test_cached_bokeh_defaults_equal_bokehs_own_for_every_model_class(monkeypatch):
+    """app/bokeh_defaults.py answers each property's default from a per-class cache: every
+    property of every model class (Bokeh's and Panel's) gets what Bokeh itself computes, asked
+    twice (the second answer from the cache), and defaults that can change in place are still
+    fresh per model."""
+    import panel.models  # noqa: F401  (Panel's model classes registered beside Bokeh's)
+    from bokeh.core.has_props import HasProps, is_abstract
+    from bokeh.core.property.bases import Property
+    from bokeh.core.property.descriptors import PropertyDescriptor
+    from bokeh.model import Model
+    from bokeh.models import ColumnDataSource, Slider
+
+    from app.bokeh_defaults import cache_property_defaults
+
+    def answers() -> dict:
+        """Each concrete class's overridden defaults, and each property's default and whether
+        it is kept per model, as the classes answer them now."""
+        found = {}
+        for cls in set(Model.model_class_reverse_map.values()):
+            if is_abstract(cls):  # (never built; some of Bokeh's own answers raise)
+                continue
+            bare = object.__new__(cls)  # (has_unstable_default reads the class's overrides)
+            found[cls] = (
+                dict(cls._overridden_defaults()),
+                {
+                    name: (
+                        cls.lookup(name).property.themed_default(cls, name, None),
+                        cls.lookup(name).has_unstable_default(bare),
+                    )
+                    for name in cls.properties()
+                },
+            )
+        return found
+
+    own = answers()
+    own_default = Property.themed_default
+    for owner, name in [
+        (Property, "themed_default"),
+        (PropertyDescriptor, "has_unstable_default"),
+        (HasProps, "_overridden_defaults"),
+    ]:
+        monkeypatch.setattr(owner, name, getattr(owner, name))  # restored after the test
+    cache_property_defaults()
+    cache_property_defaults()  # (idempotent: a second call wraps nothing twice)
+    assert Property.themed_default.__wrapped__ is own_default
+    for _ in range(2):  # (the second time from the cache)
+        assert _same_default(answers(), own)
+    assert sum(len(properties) for _, properties in own.values()) > 5000  # (~400 classes)
+    # changeable defaults are never shared between models
+    assert ColumnDataSource().data is not ColumnDataSource().data
+    first, second = Slider(start=0, end=1, value=0), Slider(start=0, end=1, value=0)
+    first.css_classes.append("moved")
+    assert second.css_classes == []
