@@ -101,12 +101,7 @@ def on_server_loaded(server_context) -> None:
     messages to pages that have closed; Bokeh's property defaults worked out once per class."""
     sys.set_int_max_str_digits(QUERY_DIGITS)
     panel.config.session_key_func = page_kind
-    # Bokeh checks every new session's document for mistakes of construction (a renderer
-    # without a glyph, a layout without children), about 7 % of a page's opening cost; the
-    # pages are the same for every session, and tests/app/test_app_state.py checks each scene's
-    # document once (test_every_scene_builds_a_valid_document)
-    bokeh_settings.perform_document_validation.set_value(False)
-    cache_property_defaults()
+    bokeh_as_served()
     drop_messages_to_closed_sockets()
     loop = IOLoop.current().asyncio_loop
     loop.set_exception_handler(closed_socket_handler(loop.get_exception_handler()))
@@ -122,6 +117,23 @@ def on_server_loaded(server_context) -> None:
         log.warning("the map cube could not be opened: %s", error)
     exempt_the_server_from_collection()
     accept_one_connection_at_a_time()
+
+
+def bokeh_as_served() -> None:
+    """Bokeh without the checks and recomputations that are the same for every session (the
+    benchmarks of a page's cost apply this too)."""
+    # Bokeh checks every new session's document for mistakes of construction (a renderer
+    # without a glyph, a layout without children), about 7 % of a page's opening cost; the
+    # pages are the same for every session, and tests/app/test_app_state.py checks each scene's
+    # document once (test_every_scene_builds_a_valid_document)
+    bokeh_settings.perform_document_validation.set_value(False)
+    # its "error diagnostics" check each callback's signature as it is registered (Panel's
+    # own, about 200 a page) and answer each missing attribute with close matches from difflib
+    # (Panel asks hasattr of models often): 4-6 % of a page's opening cost (app_open.py, two
+    # runs alternating, drop 164/174 -> 158/163 ms); a mistake of ours still raises, its message
+    # without the suggestions
+    bokeh_settings.perform_error_diagnostics.set_value(False)
+    cache_property_defaults()
 
 
 def accept_one_connection_at_a_time() -> None:

@@ -96,9 +96,11 @@ def main() -> None:
     parser.add_argument("--moves", type=int, default=40)
     args = parser.parse_args()
     pn.extension()
+    from app.app_hooks import bokeh_as_served
     from twoball import warmup
 
     warmup.warm_up()  # compiled kernels, as a running server has them
+    bokeh_as_served()  # and Bokeh set up as the server sets it up
     rows = [("baseline (10-point line)", *baseline_moves(args.moves))]
     rows += [(scene, *scene_moves(scene, args.moves)) for scene in MOVES]
     print(f"server CPU per slider move, median of {args.moves} (ms), and the patch sent (bytes)")

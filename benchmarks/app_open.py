@@ -8,8 +8,8 @@ pages; CPU time of the process (``time.process_time``).
 
     .venv/bin/python benchmarks/app_open.py [--pages 10] [--scene drop closeup] [--profile drop]
 
-The server's setup is applied (Bokeh's defaults cached per class, app/bokeh_defaults.py) unless
-``--bokeh-as-shipped``.
+Bokeh is set up as the server sets it up (``app_hooks.bokeh_as_served``: its defaults cached per
+class, no per-session diagnostics) unless ``--bokeh-as-shipped``.
 
 ``--served``: the same pages opened one at a time from ``twoball serve --num-procs 1`` by a
 protocol client (tools/bokehclient.py), the server's CPU per page read from /proc (after each
@@ -141,7 +141,7 @@ def main() -> None:
     parser.add_argument(
         "--bokeh-as-shipped",
         action="store_true",
-        help="without the server's per-class cache of Bokeh's defaults (app/bokeh_defaults.py)",
+        help="Bokeh as installed, not as the server sets it up (app_hooks.bokeh_as_served)",
     )
     args = parser.parse_args()
     if args.served:
@@ -153,11 +153,11 @@ def main() -> None:
             )
         return
     pn.extension()
-    from app.bokeh_defaults import cache_property_defaults
+    from app.app_hooks import bokeh_as_served
     from twoball import warmup
 
     if not args.bokeh_as_shipped:
-        cache_property_defaults()  # as the server does (app/app_hooks.py)
+        bokeh_as_served()  # as the server does (app/app_hooks.py)
 
     warmup.warm_up()  # compiled kernels, as a running server has them
     extra = {"present": "1"} if args.present else {}
