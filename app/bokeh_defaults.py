@@ -7,9 +7,11 @@ transformed (``Property.themed_default``), and whether that default must be kept
 class and the property, yet Bokeh 3.9 redoes it for each model and again when the document is
 serialised: about a sixth of a page's opening cost here (benchmarks/app_open.py prints both).
 
-:func:`cache_property_defaults` keeps each answer per (class, property), and only answers
-that cannot be changed in place (numbers, strings, None, tuples of them): a list, a dict or a
-model default is still built fresh for each instance, as Bokeh does. A theme's own value for a
+:func:`cache_property_defaults` keeps each answer per (class, property): an answer that cannot
+be changed in place (numbers, strings, None, tuples of them) is shared; an empty list, dict or
+set (a third of the questions: every model's tags, style sheets, callbacks) is built again,
+empty, for each model; any other default (a model, a list with items) is computed by Bokeh for
+each model, as before. A theme's own value for a
 property (a document theme) still goes through Bokeh's code. tests/app/test_app_hooks.py
 compares every property of every model class with Bokeh's own answers.
 """
@@ -21,8 +23,9 @@ from typing import Any
 from bokeh.core.has_props import HasProps
 from bokeh.core.property.bases import Property
 from bokeh.core.property.descriptors import PropertyDescriptor
+from bokeh.core.property.singletons import UndefinedType
 
-_IMMUTABLE = (int, float, str, bool, type(None))
+_IMMUTABLE = (int, float, str, bool, type(None), UndefinedType)
 
 
 def unchangeable(value: Any) -> bool:
@@ -30,6 +33,12 @@ def unchangeable(value: Any) -> bool:
     if isinstance(value, _IMMUTABLE):
         return True
     return isinstance(value, tuple) and all(unchangeable(item) for item in value)
+
+
+def empty_container(value: Any) -> bool:
+    """Whether ``value`` is an empty list, dict or set that its type builds again with no
+    arguments (Bokeh's property containers too): each model then gets a new one."""
+    return isinstance(value, (list, dict, set)) and not value and type(value)() == value
 
 
 def cache_property_defaults() -> None:
@@ -51,10 +60,13 @@ def cache_property_defaults() -> None:
         key = (id(self), cls, name, no_eval)
         entry = defaults.get(key)
         if entry is not None and entry[0] is self:
-            return entry[1]
+            shared, value = entry[1:]
+            return value if shared else type(value)()
         value = themed_default(self, cls, name, theme_overrides, no_eval=no_eval)
         if unchangeable(value):
-            defaults[key] = (self, value)
+            defaults[key] = (self, True, value)
+        elif empty_container(value):
+            defaults[key] = (self, False, value)
         return value
 
     def cached_has_unstable_default(self, obj):

@@ -187,4 +187,6 @@ def test_cached_bokeh_defaults_equal_bokehs_own_for_every_model_class(monkeypatc
     assert ColumnDataSource().data is not ColumnDataSource().data
     first, second = Slider(start=0, end=1, value=0), Slider(start=0, end=1, value=0)
     first.css_classes.append("moved")
-    assert second.css_classes == []
+    first.js_property_callbacks["value"] = []
+    first.tags.append("moved")
+    assert second.css_classes == [] and second.js_property_callbacks == {} and second.tags == []
