@@ -187,6 +187,41 @@ def outlined(delayed: np.ndarray, smallest: int = SMALLEST_OUTLINED) -> np.ndarr
     return kept
 
 
+def slice_image(slice_: xr.Dataset, variable: str) -> tuple[tuple, tuple | None]:
+    """The slice's ``variable`` on the map's log grid (log10 mu, log10 tau_ratio, the values
+    with rows tau_ratio and columns mu: :func:`on_log_grid`), and its colour limits: for a
+    ratio, symmetric about 1 on a log scale out to the 98th percentile (so that outliers do
+    not wash it out); None for the others (the values' own range)."""
+    values = slice_[variable].transpose("tau_ratio", "mu").values
+    shown = on_log_grid(slice_, values)
+    if variable not in RATIO_CENTRES:
+        return shown, None
+    finite = values[np.isfinite(values) & (values > 0)]
+    spread = float(np.percentile(np.abs(np.log10(finite)), 98)) if finite.size else 1.0
+    spread = max(spread, 0.05)
+    return shown, (10**-spread, 10**spread)
+
+
+def outline_path(flags: xr.DataArray) -> hv.Contours:
+    """The outline of delayed rebounds (``flags``: h2 > h1 over mu and tau_ratio), as paths
+    on the log grid."""
+    delayed = outlined(flags.transpose("tau_ratio", "mu").values)
+    image = hv.Image(on_log_grid(flags, delayed.astype(float)), ["log_mu", "log_tau_ratio"])
+    return contours(image, levels=[0.5])
+
+
+@functools.lru_cache(maxsize=256)  # shared by every session, as the slices are
+def outline_of(name: str, eps: float, drop: tuple[float, float | None] | None) -> hv.Contours:
+    """The outline of the slice at ``eps`` of the cube ``name``, or (``drop``: its H and eps12)
+    of the slice computed for that drop. (HoloViews' contour operation is most of an eps move's
+    cost: every session moving eps asks for the same few outlines.)"""
+    if drop is None:
+        flags = shown_cube(name)["delayed_rebound"].sel(eps=eps)
+    else:
+        flags = computed_slice(eps, *drop)["delayed_rebound"]
+    return outline_path(flags)
+
+
 def _decade_ticks(cube: xr.Dataset) -> dict[str, list[tuple[float, str]]]:
     """Ticks at the powers of ten inside each log axis, labelled with the value itself."""
     ticks = {}
@@ -236,6 +271,7 @@ class MapScene(Scene):
         default="h2_over_h1", objects=list(SHOWN), doc="The quantity coloured on the map."
     )
     moved = param.Event(doc="mu or tau_ratio changed while the map is on screen: the star moves.")
+    reframe = param.Event(doc="HoloViews draws the map's frame again (a slice on a new grid).")
 
     watched = (*Scene.watched, "map_force")
 
@@ -268,9 +304,13 @@ class MapScene(Scene):
         # the star (current mu, tau_ratio): a glyph of its own on the figure, moved by its data
         # alone; as a HoloViews layer each move re-rendered the whole overlay (~120 ms of
         # server CPU), and bound to mu directly it did so on every scene. Each figure gets a
-        # source of its own (:meth:`_draw_star`): one shared by an old and a new figure was, in
+        # source of its own (:meth:`_on_figure`): one shared by an old and a new figure was, in
         # the browser, dropped with the old one ("reference ... isn't known" on the next move).
         self.star: ColumnDataSource | None = None
+        # the Bokeh models of the figure on screen that a new slice changes (_push_slice)
+        self._image_source: ColumnDataSource | None = None
+        self._colour_mapper = None
+        self._outline_source: ColumnDataSource | None = None
         # a new figure per variable (its colour scale and label change); within one, the
         # figure's DynamicMaps follow the state
         # (and per force: the Hertz cubes' axes are not the map cube's)
@@ -287,14 +327,14 @@ class MapScene(Scene):
 
     def _figure(self, variable: str, force: str = "linear") -> hv.DynamicMap:
         ticks = _decade_ticks(shown_cube(self.cube_name()))
-        image = hv.DynamicMap(pn.bind(self._image, self.param.revision, variable))
-        outline = hv.DynamicMap(pn.bind(self._outline, self.param.revision))
+        image = hv.DynamicMap(pn.bind(self._image, self.param.reframe, variable))
+        outline = hv.DynamicMap(pn.bind(self._outline, self.param.reframe))
         # the stream before the overlay that shows the image: HoloViews links it at creation,
         # and only to a DynamicMap of one element (not of an overlay)
         self.tap = hv.streams.Tap(source=image, x=None, y=None)
         self.tap.param.watch(self._tapped, ["x", "y"])
         return (image * outline).opts(
-            hooks=[weak_hook(self._draw_star)],
+            hooks=[weak_hook(self._on_figure)],
             xticks=ticks["mu"],
             yticks=ticks["tau_ratio"],
             xlabel="mu = m2/m1 (log scale)",
@@ -330,16 +370,24 @@ class MapScene(Scene):
 
         Only a real move is sent. Bokeh sends a new ``data`` even when equal, and on the map's
         first visit that change reached the browser before the figure holding the star did
-        (built with the star already in place by :meth:`_draw_star`): "reference ... isn't
+        (built with the star already in place by :meth:`_on_figure`): "reference ... isn't
         known" in the browser's console."""
         position = self._star_position()
         if self.star is not None and dict(self.star.data) != position:
             self.star.data = position
         self.param.trigger("moved")
 
-    def _draw_star(self, plot, element) -> None:
+    def _on_figure(self, plot, element) -> None:
         """HoloViews hook: the star's glyph on the map's Bokeh figure, once per figure, with a
-        source of its own; and the figure's height from the window's (FIT_STYLES)."""
+        source of its own; the figure's height from the window's (FIT_STYLES); and the image's
+        and outline's models, which later slices change directly (:meth:`_push_slice`)."""
+        for layer in plot.subplots.values():
+            handles = layer.handles
+            if "color_mapper" in handles:
+                self._image_source = handles["source"]
+                self._colour_mapper = handles["color_mapper"]
+            else:
+                self._outline_source = handles["source"]
         figure = plot.state
         if not self.state.presentation:  # (a projector's map has a fixed height)
             figure.styles = FIT_STYLES
@@ -350,6 +398,44 @@ class MapScene(Scene):
                 "x", "y", source=self.star, marker="star", size=26, line_width=2, name="star",
                 fill_color="yellow", line_color="black",
             )  # fmt: skip
+
+    @param.depends("revision", watch=True)
+    def _draw_slice(self) -> None:
+        """The slice on screen: pushed into the figure's models where it fits them, else drawn
+        again by HoloViews."""
+        if self.active and not self._push_slice():
+            self.param.trigger("reframe")
+
+    def _push_slice(self) -> bool:
+        """Send the current slice's values, colour range and outline to the figure's Bokeh
+        models, as HoloViews would draw them; False if they do not fit (no figure drawn yet,
+        or a slice on another grid), where HoloViews must draw the frame.
+
+        HoloViews' own update of the overlay cost about 150 ms of server CPU an eps move
+        (``benchmarks/app_cpu.py``, "map (eps slice)"): two DynamicMaps, each re-rendering the
+        whole overlay. The figure's frame (axes, ranges, colour bar, hover, tap) does not
+        change with the slice, only these three models' values do."""
+        source, mapper = self._image_source, self._colour_mapper
+        if source is None or mapper is None or self._outline_source is None:
+            return False
+        self.current()
+        if self.slice is None:
+            return False
+        (_, _, shown), clim = slice_image(self.slice, self.variable)
+        (drawn,) = source.data["image"]
+        if drawn.shape != shown.shape:
+            return False
+        source.data = {**source.data, "image": [on_screen(shown)]}
+        if clim is None:  # (HoloViews' range of the values shown)
+            finite = shown[np.isfinite(shown)]
+            clim = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+        mapper.update(low=clim[0], high=clim[1])
+        path = self._outline_of_slice()
+        self._outline_source.data = {
+            "xs": [path.dimension_values(0)] if len(path) else [],
+            "ys": [path.dimension_values(1)] if len(path) else [],
+        }
+        return True
 
     def inputs(self) -> tuple:
         """What the slice depends on: the drop's eps, H and eps12, the cube (force), the
@@ -466,25 +552,14 @@ class MapScene(Scene):
         label = variable_label(variable)
         if self.slice is None:
             return blank_image(mu_dim, tau_dim, variable, shown_cube(self.cube_name()))
-        values = self.slice[variable].transpose("tau_ratio", "mu")
-        log_mu, log_tau, shown = on_log_grid(self.slice, values.values)
+        (log_mu, log_tau, shown), clim = slice_image(self.slice, variable)
         mesh = hv.Image(
             (log_mu, log_tau, on_screen(shown)),
             [mu_dim, tau_dim],
             hv.Dimension(variable, label=label),
         )
         if variable in RATIO_CENTRES:
-            finite = values.values[np.isfinite(values.values) & (values.values > 0)]
-            # symmetric about 1 on a log scale; the 98th percentile, so outliers do not wash out
-            spread = float(np.percentile(np.abs(np.log10(finite)), 98)) if finite.size else 1.0
-            spread = max(spread, 0.05)
-            low, high = 10**-spread, 10**spread
-            opts = dict(
-                cmap="RdBu_r",
-                logz=True,
-                clim=(low, high),
-                colorbar_opts=ratio_colorbar(),
-            )
+            opts = dict(cmap="RdBu_r", logz=True, clim=clim, colorbar_opts=ratio_colorbar())
         else:
             opts = dict(cmap="viridis", logz=False, clim=(np.nan, np.nan))
             if variable == "contacts_first":  # a count: whole numbers on its colour bar
@@ -514,10 +589,14 @@ class MapScene(Scene):
         self.current()
         if self.slice is None:
             return hv.Contours([], dims)
-        delayed = outlined(self.slice["delayed_rebound"].transpose("tau_ratio", "mu").values)
-        flags = hv.Image(on_log_grid(self.slice, delayed.astype(float)), dims)
         width = PROJECTOR_LINE_WIDTH if self.state.presentation else 1.5
-        return contours(flags, levels=[0.5]).opts(color="black", line_width=width)
+        # (a copy: the cached outline is every session's, its options this page's)
+        return self._outline_of_slice().clone().opts(color="black", line_width=width)
+
+    def _outline_of_slice(self) -> hv.Contours:
+        s = self.state
+        drop = (s.height, s.eps12) if self.computed else None
+        return outline_of(self.slice_cube, self.slice_eps, drop)
 
     def _csv(self) -> io.StringIO:
         """The slice on screen for a worksheet (app/worksheet.py)."""

@@ -1,16 +1,61 @@
-"""The map's force switch and the Stack scene's "advanced" eps per contact in Chromium: the
-switch shows the shipped Hertz cube and says so, the URL follows, a bad entry is reported and
-the page goes on. Screenshots go to test-artifacts/map_force/."""
+"""The map's slices and force switch, and the Stack scene's "advanced" eps per contact, in
+Chromium: an eps move shows the new slice, the switch shows the shipped Hertz cube and says so,
+the URL follows, a bad entry is reported and the page goes on. Screenshots go to
+test-artifacts/map_force/."""
 
 from __future__ import annotations
 
 import re
 
+import numpy as np
 import pytest
-from appdriver import fingerprint, open_page, page_query, wait_for_change
+from appdriver import (
+    fingerprint,
+    open_page,
+    page_query,
+    press_slider,
+    sources_with,
+    wait_for_change,
+)
 from playwright.sync_api import expect
 
+from app.delayed_map import eps_slice, nearest_eps, on_screen, slice_image
+
 pytestmark = pytest.mark.browser
+# the map's image (its values, flattened) and its colour mapper's range, in the browser
+IMAGE_JS = """() => {
+  const models = [...Bokeh.documents[0].all_models];
+  const image = models.find((m) => m.constructor.__name__ === "ColumnDataSource"
+    && (m.data instanceof Map ? m.data.has("image") : "image" in m.data));
+  const data = image.data instanceof Map ? image.data.get("image") : image.data.image;
+  const mapper = models.find((m) => m.constructor.__name__.endsWith("ColorMapper"));
+  return [Array.from(data[0], (v) => (Number.isNaN(v) ? null : v)), [mapper.low, mapper.high]];
+}"""
+
+
+def test_an_eps_move_shows_the_new_slice_in_the_browser(browser, app_server, artifacts):
+    """The map's eps move changes the figure's image, colour range and outline in place
+    (app/delayed_map.py, ``_push_slice``): the browser shows the slice the cube holds."""
+    base, _ = app_server
+    folder = artifacts / "map_force"
+    folder.mkdir(exist_ok=True)
+    context, page, errors = open_page(browser, f"{base}/app?scene=map&eps=0.6")
+    try:
+        expect(page.get_by_text("at eps = 0.6 (nearest").first).to_be_visible(timeout=60_000)
+        assert press_slider(page, "eps", key="End") > 0  # eps to its highest: plots changed
+        eps = nearest_eps(float(page.locator(".bk-slider-value").first.inner_text()))
+        expect(page.get_by_text(f"at eps = {eps:g} (nearest").first).to_be_visible()
+        page.wait_for_timeout(500)
+        (_, _, expected), (low, high) = slice_image(eps_slice(eps, "h2_over_h1"), "h2_over_h1")
+        drawn, mapped = page.evaluate(IMAGE_JS)
+        np.testing.assert_array_equal(np.array(drawn, dtype=float), on_screen(expected).ravel())
+        assert mapped == pytest.approx([low, high])
+        (outline,) = sources_with(page, "xs", "ys")
+        assert len(outline["xs"]) == 1
+        page.screenshot(path=folder / "map_eps_moved.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
 
 
 def test_the_map_switches_to_the_hertz_cube(browser, app_server, artifacts):
