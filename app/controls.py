@@ -17,7 +17,7 @@ from bokeh.models import CustomJS, CustomJSTickFormatter
 from twoball import presets
 
 from .scene import PENDING_JS, Built, alert, for_a_room, join, later
-from .state import ExplorerState, app_range, span, validate
+from .state import ExplorerState, app_range, preset_drop, span, validate
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
 POWER_OF_TEN = "return Number((10 ** tick).toPrecision(3)).toString()"
@@ -137,6 +137,7 @@ class Controls(Built):
         self.preset.param.watch(self._apply_preset, "value")
         self._applying_preset = False
         self.preset_source = pn.pane.Markdown("", styles={"font-size": "0.8em"})
+        self.two_ball = pn.Column(self.preset, sizing_mode="stretch_width")
         self.units = pn.widgets.RadioButtonGroup(
             label="Units",
             options={"dimensionless": "dimensionless", "metres, seconds": "SI"},
@@ -154,12 +155,12 @@ class Controls(Built):
         )
         self._show_state()
         self.show_messages(messages or [])
-        self.two_ball = pn.Column(
-            self.preset,
-            self.units,
-            *self.sliders.values(),
-            sizing_mode="stretch_width",
-        )
+        self.two_ball.extend([self.units, *self.sliders.values()])
+        self._syncing = True  # a link's preset (state.read_query): shown, its drop already set
+        try:
+            self.preset.value = self.state.preset
+        finally:
+            self._syncing = False
         self.scene_controls = pn.Column(sizing_mode="stretch_width")
         self.meanings = pn.pane.Markdown(MEANINGS, sizing_mode="stretch_width")
 
@@ -195,29 +196,23 @@ class Controls(Built):
             self.state.param.update(**{name: 10.0**value})
 
     def _apply_preset(self, event: param.parameterized.Event) -> None:
+        """A preset chosen (its drop set, in metres), or shown for a link that names it
+        (``_syncing``: the drop is already the preset's); "(custom)" forgets it."""
+        self.state.preset = event.new
         preset = presets.PRESETS.get(event.new)
         if preset is None:
             self.preset_source.object = ""
             return
-        self.show_messages([])
-        self._applying_preset = True
-        try:
-            self._set_preset(preset)
-        finally:
-            self._applying_preset = False
+        if not self._syncing:
+            self.show_messages([])
+            self._applying_preset = True
+            try:
+                self.state.param.update(**preset_drop(event.new), units="SI")  # real balls
+            finally:
+                self._applying_preset = False
         join(self.two_ball, self.preset_source, at=1)
         self.preset_source.object = (
             f"Drop from {presets.DEFAULT_DROP_METRES:g} m. Sources: {preset.source}"
-        )
-
-    def _set_preset(self, preset: presets.Preset) -> None:
-        self.state.param.update(
-            eps=preset.eps,
-            eps12=preset.eps12,
-            mu=preset.mu,
-            tau_ratio=preset.tau_ratio,
-            height=presets.height_from_metres(presets.DEFAULT_DROP_METRES),
-            units="SI",  # real balls: shown in metres and seconds
         )
 
     def _height_typed(self, event: param.parameterized.Event) -> None:

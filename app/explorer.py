@@ -159,7 +159,7 @@ class Explorer(Built):
                 document.add_timeout_callback(write, URL_DELAY_MS)
 
         stack = ["balls", "stack_ratio", "stack_eps", "stack_gap", "force", "stack_eps_contacts"]
-        watched = [*MODEL_PARAMETERS, "scene", "units", "step", "map_force", *stack]
+        watched = [*MODEL_PARAMETERS, "preset", "scene", "units", "step", "map_force", *stack]
         self.state.param.watch(changed, watched)
         pn.state.onload(write)  # once the browser has reported its own URL
 

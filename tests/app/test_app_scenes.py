@@ -19,6 +19,7 @@ import twoball
 from app.delayed_map import map_cube
 from app.explorer import Explorer
 from app.scenes import SCENE_REGISTRY, SCENES
+from app.state import url_query
 from twoball import presets
 from twoball.observables import BALLS, FLOOR
 
@@ -383,6 +384,22 @@ def test_a_preset_sets_the_parameters_and_the_sliders():
     assert explorer.state.height == pytest.approx(presets.height_from_metres(1.0))
     assert "ITTF" in explorer.controls.preset_source.object
     assert explorer.scenes["drop"].result.drop.mu == preset.mu
+
+
+def test_a_shared_link_shows_its_preset_until_a_slider_moves():
+    """The preset chosen is in the link, and a page opened from it shows the preset and its
+    sources; a slider moved there forgets it (in the page and in its link)."""
+    chosen = rendered()
+    chosen.controls.preset.value = "tennis"
+    shared = rendered(url_query(chosen.state))
+    assert shared.controls.preset.value == "tennis" and shared.state.units == "SI"
+    assert "ITF" in shared.controls.preset_source.object
+    assert shared.controls.message.visible is False
+    with param.edit_constant(shared.controls.sliders["mu"]):
+        shared.controls.sliders["mu"].value_throttled = -1.5  # (as a release sets it)
+    assert shared.state.mu == pytest.approx(10**-1.5)
+    assert shared.controls.preset.value == "" and shared.controls.preset_source.object == ""
+    assert "preset" not in url_query(shared.state)
 
 
 def test_choosing_contacts_reads_their_slice_and_matches_the_solver():
