@@ -42,11 +42,19 @@ MEANINGS = """
 **tau_d/tau_f**: how far apart the balls start: the time the gap takes to close, over one
 floor contact's duration (0.01: nearly touching).
 
-**H**: the drop height in units of the lower ball's squash under its own weight, m1 g / k.
+{height}
 
 **ICM** (dotted green line): the textbook prediction, one contact after the other (floor,
 then ball): up to 9 times the drop height for elastic balls and a very light upper ball.
 """
+# the drop height's meaning in the units shown (in metres it spoke of a dimensionless height)
+HEIGHT_MEANINGS = {
+    "dimensionless": "**H**: the drop height in units of the lower ball's squash under its own "
+    "weight, m1 g / k.",
+    "SI": "**drop height [m]**: in metres (the model's H counts it in units of the lower "
+    f"ball's squash under its own weight, m1 g / k = {presets.length_scale() * 1e3:.2g} mm "
+    "for this basketball).",
+}
 
 
 class Released:
@@ -149,6 +157,7 @@ class Controls(Built):
         self.height.param.watch(self._height_typed, "value")
         self.eps12.param.watch(self._eps12_typed, "value")
         self._syncing = False  # True while the widgets follow the state
+        self.meanings = pn.pane.Markdown(self._meanings(), sizing_mode="stretch_width")
         # (a watcher, not @param.depends: _show_state reads which parameters changed)
         self.state.param.watch(
             self._show_state, ["eps", "mu", "tau_ratio", "height", "eps12", "units"]
@@ -162,7 +171,6 @@ class Controls(Built):
         finally:
             self._syncing = False
         self.scene_controls = pn.Column(sizing_mode="stretch_width")
-        self.meanings = pn.pane.Markdown(MEANINGS, sizing_mode="stretch_width")
 
     @staticmethod
     def _log_slider(label: str, name: str) -> pn.widgets.FloatSlider:
@@ -291,13 +299,30 @@ class Controls(Built):
                 slider.param.update(value=shown, value_throttled=shown)
         si = s.units == "SI"
         self.height.label = "drop height [m]" if si else "H (dimensionless drop height)"
-        height = presets.metres_from_height(s.height) if si else s.height
+        if self.meanings.object != self._meanings():
+            self.meanings.object = self._meanings()
+        # metres to three digits (the default H read 0.994898 m), H to six; a height typed
+        # stays as typed while it is the drop's
+        if not self._shows_height(self.height.value):
+            metres = presets.metres_from_height(s.height)
+            self.height.value = f"{metres:.3g}" if si else f"{s.height:.6g}"
         # set only when changed: param's update reads every parameter of the widget first
         # (0.3 ms at every slider move, for inputs that rarely change)
         eps12 = "" if s.eps12 is None else f"{s.eps12:.6g}"
-        for box, text in ((self.height, f"{height:.6g}"), (self.eps12, eps12)):
-            if box.value != text:
-                box.value = text
+        if self.eps12.value != eps12:
+            self.eps12.value = eps12
+
+    def _meanings(self) -> str:
+        return MEANINGS.format(height=HEIGHT_MEANINGS[self.state.units])
+
+    def _shows_height(self, text: str) -> bool:
+        """Whether the drop height box's ``text`` is the drop's height in the units shown."""
+        try:
+            typed = float(text)
+        except ValueError:
+            return False
+        height = presets.height_from_metres(typed) if self.state.units == "SI" else typed
+        return math.isclose(height, self.state.height, rel_tol=1e-12)
 
     def layout(self) -> pn.viewable.Viewable:
         # its inputs join the page when it is first opened (a folded card's Bokeh models

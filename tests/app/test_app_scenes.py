@@ -179,6 +179,22 @@ def test_si_units_scale_heights_and_times():
     assert explorer.state.height == pytest.approx(presets.height_from_metres(1.0))
 
 
+def test_the_drop_height_reads_round_metres_and_its_meaning_speaks_metres():
+    """In metres the default H read 0.994898 m and its meaning spoke of a dimensionless
+    height: three digits, a meaning in metres, and a typed height kept as typed."""
+    explorer = rendered({"units": "SI"})
+    controls = explorer.controls
+    assert controls.height.value == "0.995" and explorer.state.height == 1e4
+    assert "**drop height [m]**: in metres" in controls.meanings.object
+    assert "**H**" not in controls.meanings.object
+    controls.height.value = "1.2345"  # (more digits than shown: kept, and used)
+    assert controls.height.value == "1.2345"
+    assert explorer.state.height == pytest.approx(presets.height_from_metres(1.2345))
+    controls.units.value = "dimensionless"
+    assert controls.height.value == f"{presets.height_from_metres(1.2345):.6g}"
+    assert "**H**: the drop height in units of" in controls.meanings.object
+
+
 def test_closeup_shows_the_four_contacts_and_forces_only_inside_them():
     explorer = rendered({**PAPER, "scene": "closeup"})
     scene = explorer.scenes["closeup"]
