@@ -432,18 +432,22 @@ def test_choosing_contacts_reads_their_slice_and_matches_the_solver():
 def test_a_lesson_step_covers_its_scene_until_the_answer_is_revealed():
     """A class predicts before it sees: the scene (computed underneath) is shown on reveal, and
     covered again on the next step; without the lesson nothing is covered."""
+
+    def asked(explorer: Explorer) -> bool:  # the step's question, in place of the scene
+        return bool(explorer.stage.objects) and explorer.stage.objects[0].visible
+
     explorer = rendered({"step": "3"})
-    assert explorer.cover.visible and not explorer.tabs.visible
+    assert asked(explorer) and not explorer.tabs.visible
     assert explorer.scenes["drop"].computations == 1  # ready underneath
     lesson = explorer.lesson
     lesson.choices.value = lesson.choices.options[1]
     lesson._reveal()
-    assert not explorer.cover.visible and explorer.tabs.visible
+    assert not asked(explorer) and explorer.tabs.visible
     lesson._go(4)
-    assert explorer.cover.visible and not explorer.tabs.visible
+    assert asked(explorer) and not explorer.tabs.visible
     lesson._go(0)
-    assert not explorer.cover.visible and explorer.tabs.visible
-    assert not rendered().cover.visible
+    assert not asked(explorer) and explorer.tabs.visible
+    assert not asked(rendered())
 
 
 def test_the_end_of_the_lesson_gives_back_the_teachers_drop():
