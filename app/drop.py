@@ -270,15 +270,23 @@ class DropScene(Scene):
         )
         for span in (self.drop_line, self.icm_line, self.cursor):
             fig.add_layout(span)
+        # above the plot, in a row under its title: inside, top left, it covered the curves'
+        # start whenever the release was the highest point (a phone has no width to spare
+        # for a legend beside the plot)
         fig.add_layout(
             Legend(
                 items=[
                     LegendItem(label="lower ball", renderers=[lower]),
                     LegendItem(label="upper ball", renderers=[upper]),
                 ],
-                location="top_left",  # inside: a phone has no width to spare
-                background_fill_alpha=0.7,
+                orientation="horizontal",
+                location="top_left",
+                padding=0,
+                margin=4,
+                spacing=16,
+                border_line_alpha=0,
             ),
+            "above",
         )
         return fig
 

@@ -423,3 +423,58 @@ def test_a_long_query_string_gets_the_page_and_a_short_message(browser, app_serv
         assert errors == []
     finally:
         context.close()
+
+
+# Where a plot's legend lies and how many of its curves' points it covers, in canvas pixels:
+# {legend: [left, top, right, bottom], frame: [...], covered: n, points: n}.
+LEGEND_COVERS_JS = """([title, columns]) => {
+  const models = [...Bokeh.documents[0].all_models];
+  const plot = models.find((m) => m.title && m.title.text === title && Array.isArray(m.renderers));
+  const view = Bokeh.index.find_one(plot);
+  const legend = [...plot.above, ...plot.center, ...plot.below, ...plot.left, ...plot.right]
+    .find((m) => m.constructor.__name__ === "Legend");
+  const box = Bokeh.index.find_one(legend).bbox;
+  const [xs, ys] = [view.frame.x_scale, view.frame.y_scale];
+  let covered = 0, points = 0;
+  for (const r of plot.renderers) {
+    const data = r.data_source && r.data_source.data;
+    const get = (c) => data instanceof Map ? data.get(c) : data && data[c];
+    if (!get(columns[0])) continue;
+    for (const column of columns.slice(1)) {
+      const [x, y] = [Array.from(get(columns[0])), Array.from(get(column) || [])];
+      for (let i = 0; i < y.length; i++) {
+        const [sx, sy] = [xs.compute(x[i]), ys.compute(y[i])];
+        points += 1;
+        if (box.left <= sx && sx <= box.right && box.top <= sy && sy <= box.bottom) covered += 1;
+      }
+    }
+  }
+  const f = view.frame.bbox;
+  return {legend: [box.left, box.top, box.right, box.bottom], covered, points,
+          frame: [f.left, f.top, f.right, f.bottom]};
+}"""
+
+
+@pytest.mark.parametrize(
+    "query",
+    ["eps=0.3&mu=0.01&tau_ratio=0.01", "eps=0.9&mu=0.01&tau_ratio=0.01", "preset=tennis"],
+    ids=["release-highest", "paper", "tennis"],
+)
+@pytest.mark.parametrize("size", [(1366, 768), (390, 844)], ids=["laptop", "phone"])
+def test_the_drop_legend_covers_no_curve(browser, app_server, artifacts, query, size):
+    """The Drop scene's legend stood inside the plot, top left, over the curves' start when
+    the release was the highest point (a low eps): it lies outside the plot area now, and
+    covers no point of the curves at any drop."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?{query}", viewport=size)
+    try:
+        page.wait_for_timeout(500)
+        found = page.evaluate(LEGEND_COVERS_JS, ["Heights to the second apex", ["t", "x1", "x2"]])
+        assert found["points"] > 100 and found["covered"] == 0, found
+        assert found["legend"][3] <= found["frame"][1], found  # above the plot area
+        shots = artifacts / "legend"
+        shots.mkdir(exist_ok=True)
+        page.screenshot(path=shots / f"drop-{query.split('&')[0]}-{size[0]}.png")
+        assert errors == []
+    finally:
+        context.close()
