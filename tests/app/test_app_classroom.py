@@ -18,6 +18,7 @@ from appdriver import (
     sources_with,
     wait_for_change,
 )
+from playwright.sync_api import expect
 
 from app.scenes import SCENE_REGISTRY
 
@@ -475,6 +476,35 @@ def test_the_drop_legend_covers_no_curve(browser, app_server, artifacts, query, 
         shots = artifacts / "legend"
         shots.mkdir(exist_ok=True)
         page.screenshot(path=shots / f"drop-{query.split('&')[0]}-{size[0]}.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
+# The trails' renderers (lines drawn from a source with the balls' tops): [visible, ...]
+TRAILS_SHOWN_JS = """() => [...Bokeh.documents[0].all_models]
+  .filter((m) => m.constructor.__name__ === "GlyphRenderer" && m.data_source.data
+    && (m.data_source.data instanceof Map ? m.data_source.data.has("top0")
+        : "top0" in m.data_source.data))
+  .map((m) => m.visible)"""
+
+
+def test_the_trails_label_toggles_them(browser, app_server, artifacts):
+    """Clicking the words 'trails (...)', not only the box, turns the trails on and off (the
+    label did nothing); they are drawn behind the balls (screenshot), not beside them."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app", viewport=(1366, 768))
+    try:
+        box = page.get_by_role("checkbox", name="trails (the path of each ball's top)")
+        page.get_by_text("trails (the path of each ball's top)", exact=True).click()
+        expect(box).to_be_checked()
+        page.wait_for_function(f"() => ({TRAILS_SHOWN_JS})().some((v) => v)")
+        page.locator("button.play").click()
+        page.wait_for_timeout(2500)
+        page.screenshot(path=artifacts / "trails_behind_the_balls.png")
+        page.get_by_text("trails (the path of each ball's top)", exact=True).click()
+        expect(box).not_to_be_checked()
+        page.wait_for_function(f"() => !({TRAILS_SHOWN_JS})().some((v) => v)")
         assert errors == []
     finally:
         context.close()

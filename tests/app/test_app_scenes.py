@@ -17,6 +17,7 @@ from bokeh.models import ColorBar
 
 import twoball
 from app.delayed_map import map_cube
+from app.drop import TRAILS
 from app.explorer import Explorer
 from app.scenes import SCENE_REGISTRY, SCENES
 from app.state import url_query
@@ -612,15 +613,17 @@ def test_trails_are_drawn_under_the_balls_when_first_asked_for():
     explorer = rendered()
     scene = explorer.scenes["drop"]
     before = len(scene.animation.renderers)
-    scene.trails.value = True
+    scene.trails.value = [TRAILS]
     renderers = scene.animation.renderers
     assert len(renderers) == before + 2
     assert [r.data_source for r in renderers[:2]] == [scene.trail, scene.trail]  # underneath
     assert scene.animated.on_frame.args["trail_lines"] == renderers[:2]
     assert all(line.visible for line in renderers[:2])
-    scene.trails.value = False
+    # behind the balls (drawn first, where the balls are), not beside them
+    assert {line.glyph.x for line in renderers[:2]} == set(scene.balls.data["x"]) == {0.0}
+    scene.trails.value = []
     assert not any(line.visible for line in renderers[:2])
-    scene.trails.value = True  # once added, never twice
+    scene.trails.value = [TRAILS]  # once added, never twice
     assert len(scene.animation.renderers) == before + 2
 
 
@@ -631,14 +634,14 @@ def test_trails_asked_for_while_paused_have_their_frames_at_once():
     explorer = rendered()
     scene = explorer.scenes["drop"]
     assert len(scene.animated.frames.data["t"]) == 0  # (not sent: nobody played)
-    scene.trails.value = True
+    scene.trails.value = [TRAILS]
     first = np.asarray(scene.animated.frames.data["y1"]).copy()
     assert first.size == scene.times.size
     explorer.state.eps = 0.8
     scene.current()
     second = np.asarray(scene.animated.frames.data["y1"])
     assert second.size == scene.times.size and not np.array_equal(second[: first.size], first)
-    scene.trails.value = False
+    scene.trails.value = []
     explorer.state.eps = 0.7
     scene.current()
     assert len(scene.animated.frames.data["t"]) == 0  # hidden: back to sending when played
