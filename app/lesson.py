@@ -21,9 +21,17 @@ BEFORE_THE_LESSON = ("eps", "eps12", "mu", "tau_ratio", "height", "scene", "unit
 # the question, its choices and the answer in the main area: large on a laptop or a phone,
 # read from the back of a room in presentation mode
 ASKED = {"font-size": "20px", "line-height": "1.4"}
-ASKED_CHOICES = ":host { font-size: 18px; }"
 PROJECTED = {"font-size": "30px", "line-height": "1.3"}
-PROJECTED_CHOICES = ":host { font-size: 30px; } :host input { width: 26px; height: 26px; }"
+# each circle centred on its words: Bokeh lifts a radio's words by 0.4 em, made for its own
+# 13 px circle and text; larger, the circle sat below them (a third of a line on a projector)
+CENTRED = (
+    ":host label { display: flex; align-items: center; gap: 0.3em; } :host input { flex: none; } "
+    ":host label > input + span { top: 0; }"
+)
+ASKED_CHOICES = f":host {{ font-size: 18px; }} {CENTRED}"
+PROJECTED_CHOICES = (
+    f":host {{ font-size: 30px; }} :host input {{ width: 26px; height: 26px; }} {CENTRED}"
+)
 
 
 class Lesson(Built):

@@ -15,6 +15,17 @@ from twoball import presets
 from twoball.observables import BALLS
 
 SIZES = {"projector": (1366, 768), "desktop": (1920, 1080), "phone": (390, 844)}
+# each radio choice: [its words, the vertical centre of its circle, of its words] in px
+RADIO_CENTRES_JS = """() => { const out = []; const walk = (root) => {
+  for (const el of root.querySelectorAll("*")) {
+    if (el.matches("label") && el.querySelector("input[type=radio]")) {
+      const [circle, words] = [el.querySelector("input"), el.querySelector("span")]
+        .map((e) => e.getBoundingClientRect());
+      out.push([el.innerText, (circle.top + circle.bottom) / 2, (words.top + words.bottom) / 2]);
+    }
+    if (el.shadowRoot) walk(el.shadowRoot);
+  } };
+  walk(document); return out; }"""
 
 
 def _result(step):
@@ -221,6 +232,10 @@ def test_a_projected_step_asks_large_and_answers_in_one_large_line(
             choice_box = page.get_by_text(choice, exact=True).bounding_box()
             assert choice_box["x"] > 330 and choice_box["y"] + choice_box["height"] <= 720
             assert _font_px(page, choice) >= 28
+        # each circle level with its words (they sat 10 px below the words' middle)
+        centres = [c for c in page.evaluate(RADIO_CENTRES_JS) if c[0] in step.choices]
+        assert len(centres) == len(step.choices)
+        assert all(abs(circle - words) <= 2 for _, circle, words in centres), centres
         assert _scene_canvases(page) == []  # covered
         page.screenshot(path=shots / f"step{number}-projected-asked.png")
         page.keyboard.press("PageDown")
