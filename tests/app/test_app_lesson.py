@@ -273,6 +273,10 @@ def test_each_new_step_shows_from_its_title(browser, app_server, artifacts, size
             title = page.get_by_text(f"Step {number} of {len(STEPS)}: {step.title}")
             title.wait_for()
             expect(title).to_be_in_viewport(ratio=1, timeout=10_000)
+            page.wait_for_timeout(600)  # (the page scrolls 300 ms after the click)
+            # below the header, which stays on top of a phone's page (the title was behind it)
+            header = page.locator("#header").bounding_box()
+            assert title.bounding_box()["y"] >= header["y"] + header["height"], number
             page.get_by_text(step.choices[step.answer], exact=True).click()
             page.get_by_role("button", name="Reveal the answer").click()
             page.get_by_text("Right.").wait_for()
