@@ -508,3 +508,49 @@ def test_the_trails_label_toggles_them(browser, app_server, artifacts):
         assert errors == []
     finally:
         context.close()
+
+
+# For each axis of the plots titled as given: the smallest gap in px between two neighbouring
+# tick labels along the axis (negative: they overlap), as Bokeh draws them.
+TICK_GAPS_JS = """(titles) => {
+  const models = [...Bokeh.documents[0].all_models];
+  const out = [];
+  for (const plot of models.filter((m) => m.title && titles.includes(m.title.text))) {
+    for (const axis of [...plot.below, ...plot.left]) {
+      const view = Bokeh.index.find_one(axis);
+      const coords = view.tick_coords.major;
+      const d = view.dimension;
+      const labels = view.compute_labels(coords[d]);
+      labels.visuals = view.visuals.major_label_text.values();
+      labels.base_font_size = view.plot_view.base_font_size;
+      const sizes = labels.items.map((label) => label.size());
+      const at = view.scoords(coords)[d];
+      let gap = Infinity;
+      for (let i = 1; i < at.length; i++) {
+        const half = d == 0 ? (sizes[i].width + sizes[i - 1].width) / 2
+                            : (sizes[i].height + sizes[i - 1].height) / 2;
+        gap = Math.min(gap, Math.abs(at[i] - at[i - 1]) - half);
+      }
+      out.push([plot.title.text, d == 0 ? "x" : "y", at.length, gap]);
+    }
+  }
+  return out;
+}"""
+CLOSEUP_TITLES = ["Positions (negative: compressed)", "Floor force f01", "Ball-ball force f12"]
+
+
+@pytest.mark.parametrize("size", [(390, 844), (1366, 768)], ids=["phone", "laptop"])
+def test_the_first_collision_s_ticks_do_not_crowd(browser, app_server, artifacts, size):
+    """On a phone the first collision's time axis had 8 labels touching each other: every
+    axis keeps 12 px between its tick labels, at both sizes, with at least three ticks."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?scene=closeup", viewport=size)
+    try:
+        page.wait_for_timeout(800)
+        axes = page.evaluate(TICK_GAPS_JS, CLOSEUP_TITLES)
+        assert len(axes) == 6, axes
+        assert all(ticks >= 3 and gap >= 12 for _, _, ticks, gap in axes), axes
+        page.screenshot(path=artifacts / f"closeup-ticks-{size[0]}.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
