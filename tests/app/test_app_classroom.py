@@ -554,3 +554,42 @@ def test_the_first_collision_s_ticks_do_not_crowd(browser, app_server, artifacts
         assert errors == []
     finally:
         context.close()
+
+
+# A plot's frame (where the data are drawn), its legend and the whole figure, in canvas px.
+PLOT_BOXES_JS = """(title) => {
+  const models = [...Bokeh.documents[0].all_models];
+  const plot = models.find((m) => m.title && m.title.text === title && Array.isArray(m.renderers)
+    && Bokeh.index.find_one(m) != null);  // (HoloViews may keep a figure it replaced)
+  const view = Bokeh.index.find_one(plot);
+  const legend = [...plot.above, ...plot.center, ...plot.below, ...plot.left, ...plot.right]
+    .find((m) => m.constructor.__name__ === "Legend");
+  const box = (b) => ({left: b.left, top: b.top, right: b.right, bottom: b.bottom,
+                       width: b.width, height: b.height});
+  const whole = view.el.getBoundingClientRect();
+  return {frame: box(view.frame.bbox), legend: box(Bokeh.index.find_one(legend).bbox),
+          figure: {left: 0, top: 0, right: whole.width, bottom: whole.height,
+                   width: whole.width, height: whole.height}};
+}"""
+
+
+@pytest.mark.parametrize("size", [(390, 844), (1366, 768)], ids=["phone", "laptop"])
+def test_the_accuracy_legend_leaves_the_plot_its_width(browser, app_server, artifacts, size):
+    """On a phone the Accuracy scene's legend, beside the plot, took half its width: it lies
+    below the plot area, which keeps most of the figure's width and all of the methods."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?scene=accuracy", viewport=size)
+    try:
+        page.get_by_text("DOP853").first.wait_for(timeout=120_000)
+        page.get_by_text("Computing: every method").wait_for(state="hidden", timeout=60_000)
+        page.wait_for_timeout(800)
+        boxes = page.evaluate(PLOT_BOXES_JS, "Error against run time")
+        frame, legend, whole = boxes["frame"], boxes["legend"], boxes["figure"]
+        assert frame["width"] >= 0.65 * whole["width"], boxes  # (the axis and tools beside)
+        assert legend["top"] >= frame["bottom"], boxes  # below the data, not over them
+        assert legend["right"] <= whole["right"] and legend["left"] >= 0, boxes  # not cut
+        assert frame["height"] >= 200, boxes
+        page.screenshot(path=artifacts / f"accuracy-legend-{size[0]}.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
