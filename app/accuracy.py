@@ -145,16 +145,21 @@ class AccuracyScene(Scene):
             )
         if not layers:
             layers = [hv.Curve([], time_dim, error_dim)]
+        projected = self.state.presentation
         return hv.Overlay(layers).opts(
             hv.opts.Overlay(
                 logx=True,
                 logy=True,
                 responsive=True,
-                height=PROJECTOR_PLOT_HEIGHT if self.state.presentation else 420,
+                height=PROJECTOR_PLOT_HEIGHT if projected else 480,
                 framewise=True,
                 padding=0.1,  # points at the ends of the axes are not cut in half
                 fontsize=font_sizes(self.state.presentation),
-                legend_position="right",
+                # below the plot, in rows: beside it, on a phone, it took half its width (a
+                # projector has the width, not the height)
+                legend_position="right" if projected else "bottom",
+                legend_cols=1 if projected else 3,
+                legend_opts={"spacing": 6},
                 title="Error against run time",
             )
         )

@@ -78,14 +78,20 @@ class CloseUpScene(Scene):
             self.floor_force.height = self.ball_force.height = PROJECTOR_PLOT_HEIGHT // 2
 
     def _figure(self, title: str, height: int, **shared):
-        """A figure of the scene; ``x_range`` shares the time axis with the first one."""
-        return figure(
+        """A figure of the scene; ``x_range`` shares the time axis with the first one.
+
+        Few ticks: a collision spans a few units of time, which Bokeh's six ticks split into
+        eight labels that touched on a phone; a force plot, half as tall, had seven."""
+        fig = figure(
             title=title,
             height=height,
             sizing_mode="stretch_width",
             tools="pan,box_zoom,wheel_zoom,reset,save",
             **shared,
         )
+        fig.xaxis.ticker.desired_num_ticks = 4
+        fig.yaxis.ticker.desired_num_ticks = 4 if height > 200 else 3
+        return fig
 
     @param.depends("revision", watch=True)
     def _draw(self, *events: param.parameterized.Event) -> None:

@@ -17,7 +17,7 @@ from bokeh.models import CustomJS, CustomJSTickFormatter
 from twoball import presets
 
 from .scene import PENDING_JS, Built, alert, for_a_room, join, later
-from .state import ExplorerState, app_range, span, validate
+from .state import ExplorerState, app_range, preset_drop, span, validate
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
 POWER_OF_TEN = "return Number((10 ** tick).toPrecision(3)).toString()"
@@ -42,11 +42,19 @@ MEANINGS = """
 **tau_d/tau_f**: how far apart the balls start: the time the gap takes to close, over one
 floor contact's duration (0.01: nearly touching).
 
-**H**: the drop height in units of the lower ball's squash under its own weight, m1 g / k.
+{height}
 
 **ICM** (dotted green line): the textbook prediction, one contact after the other (floor,
 then ball): up to 9 times the drop height for elastic balls and a very light upper ball.
 """
+# the drop height's meaning in the units shown (in metres it spoke of a dimensionless height)
+HEIGHT_MEANINGS = {
+    "dimensionless": "**H**: the drop height in units of the lower ball's squash under its own "
+    "weight, m1 g / k.",
+    "SI": "**drop height [m]**: in metres (the model's H counts it in units of the lower "
+    f"ball's squash under its own weight, m1 g / k = {presets.length_scale() * 1e3:.2g} mm "
+    "for this basketball).",
+}
 
 
 class Released:
@@ -137,6 +145,7 @@ class Controls(Built):
         self.preset.param.watch(self._apply_preset, "value")
         self._applying_preset = False
         self.preset_source = pn.pane.Markdown("", styles={"font-size": "0.8em"})
+        self.two_ball = pn.Column(self.preset, sizing_mode="stretch_width")
         self.units = pn.widgets.RadioButtonGroup(
             label="Units",
             options={"dimensionless": "dimensionless", "metres, seconds": "SI"},
@@ -148,20 +157,20 @@ class Controls(Built):
         self.height.param.watch(self._height_typed, "value")
         self.eps12.param.watch(self._eps12_typed, "value")
         self._syncing = False  # True while the widgets follow the state
+        self.meanings = pn.pane.Markdown(self._meanings(), sizing_mode="stretch_width")
         # (a watcher, not @param.depends: _show_state reads which parameters changed)
         self.state.param.watch(
             self._show_state, ["eps", "mu", "tau_ratio", "height", "eps12", "units"]
         )
         self._show_state()
         self.show_messages(messages or [])
-        self.two_ball = pn.Column(
-            self.preset,
-            self.units,
-            *self.sliders.values(),
-            sizing_mode="stretch_width",
-        )
+        self.two_ball.extend([self.units, *self.sliders.values()])
+        self._syncing = True  # a link's preset (state.read_query): shown, its drop already set
+        try:
+            self.preset.value = self.state.preset
+        finally:
+            self._syncing = False
         self.scene_controls = pn.Column(sizing_mode="stretch_width")
-        self.meanings = pn.pane.Markdown(MEANINGS, sizing_mode="stretch_width")
 
     @staticmethod
     def _log_slider(label: str, name: str) -> pn.widgets.FloatSlider:
@@ -195,29 +204,23 @@ class Controls(Built):
             self.state.param.update(**{name: 10.0**value})
 
     def _apply_preset(self, event: param.parameterized.Event) -> None:
+        """A preset chosen (its drop set, in metres), or shown for a link that names it
+        (``_syncing``: the drop is already the preset's); "(custom)" forgets it."""
+        self.state.preset = event.new
         preset = presets.PRESETS.get(event.new)
         if preset is None:
             self.preset_source.object = ""
             return
-        self.show_messages([])
-        self._applying_preset = True
-        try:
-            self._set_preset(preset)
-        finally:
-            self._applying_preset = False
+        if not self._syncing:
+            self.show_messages([])
+            self._applying_preset = True
+            try:
+                self.state.param.update(**preset_drop(event.new), units="SI")  # real balls
+            finally:
+                self._applying_preset = False
         join(self.two_ball, self.preset_source, at=1)
         self.preset_source.object = (
             f"Drop from {presets.DEFAULT_DROP_METRES:g} m. Sources: {preset.source}"
-        )
-
-    def _set_preset(self, preset: presets.Preset) -> None:
-        self.state.param.update(
-            eps=preset.eps,
-            eps12=preset.eps12,
-            mu=preset.mu,
-            tau_ratio=preset.tau_ratio,
-            height=presets.height_from_metres(presets.DEFAULT_DROP_METRES),
-            units="SI",  # real balls: shown in metres and seconds
         )
 
     def _height_typed(self, event: param.parameterized.Event) -> None:
@@ -296,13 +299,30 @@ class Controls(Built):
                 slider.param.update(value=shown, value_throttled=shown)
         si = s.units == "SI"
         self.height.label = "drop height [m]" if si else "H (dimensionless drop height)"
-        height = presets.metres_from_height(s.height) if si else s.height
+        if self.meanings.object != self._meanings():
+            self.meanings.object = self._meanings()
+        # metres to three digits (the default H read 0.994898 m), H to six; a height typed
+        # stays as typed while it is the drop's
+        if not self._shows_height(self.height.value):
+            metres = presets.metres_from_height(s.height)
+            self.height.value = f"{metres:.3g}" if si else f"{s.height:.6g}"
         # set only when changed: param's update reads every parameter of the widget first
         # (0.3 ms at every slider move, for inputs that rarely change)
         eps12 = "" if s.eps12 is None else f"{s.eps12:.6g}"
-        for box, text in ((self.height, f"{height:.6g}"), (self.eps12, eps12)):
-            if box.value != text:
-                box.value = text
+        if self.eps12.value != eps12:
+            self.eps12.value = eps12
+
+    def _meanings(self) -> str:
+        return MEANINGS.format(height=HEIGHT_MEANINGS[self.state.units])
+
+    def _shows_height(self, text: str) -> bool:
+        """Whether the drop height box's ``text`` is the drop's height in the units shown."""
+        try:
+            typed = float(text)
+        except ValueError:
+            return False
+        height = presets.height_from_metres(typed) if self.state.units == "SI" else typed
+        return math.isclose(height, self.state.height, rel_tol=1e-12)
 
     def layout(self) -> pn.viewable.Viewable:
         # its inputs join the page when it is first opened (a folded card's Bokeh models

@@ -49,6 +49,7 @@ COLLISION_FRAMES = 90  # added through each collision: slow motion there
 # play, and nothing visibly moved in its first 7 s)
 SLOW_FRAMES = 360
 MIN_COLLISION_FRAMES = 10
+TRAILS = "trails (the path of each ball's top)"
 # Okabe-Ito blue and vermillion: told apart with every common colour-vision deficiency
 LOWER, UPPER = "#0072B2", "#D55E00"
 BALL_RADIUS = 0.06  # of the plot's height: the lower ball as drawn
@@ -201,7 +202,9 @@ class DropScene(Scene):
         self.times = np.zeros(1)
         self.slow = np.zeros(1, dtype=bool)  # (frames in slow motion: frame_times)
         self.plotted: twoball.Trajectory | None = None  # the drop at the plotted times
-        self.trails = pn.widgets.Checkbox(label="trails (the path of each ball's top)")
+        # a group of one box: its words are the box's <label> and toggle it (Bokeh's
+        # Checkbox draws them beside the box, where a click did nothing)
+        self.trails = pn.widgets.CheckBoxGroup(options=[TRAILS], value=[])
         self.trails.param.watch(self._show_trails, "value")
         self.download = pn.widgets.FileDownload(  # written when clicked, not at every move
             callback=self._csv, filename="drop.csv", label="Download this drop (CSV)", embed=False
@@ -270,15 +273,23 @@ class DropScene(Scene):
         )
         for span in (self.drop_line, self.icm_line, self.cursor):
             fig.add_layout(span)
+        # above the plot, in a row under its title: inside, top left, it covered the curves'
+        # start whenever the release was the highest point (a phone has no width to spare
+        # for a legend beside the plot)
         fig.add_layout(
             Legend(
                 items=[
                     LegendItem(label="lower ball", renderers=[lower]),
                     LegendItem(label="upper ball", renderers=[upper]),
                 ],
-                location="top_left",  # inside: a phone has no width to spare
-                background_fill_alpha=0.7,
+                orientation="horizontal",
+                location="top_left",
+                padding=0,
+                margin=4,
+                spacing=16,
+                border_line_alpha=0,
             ),
+            "above",
         )
         return fig
 
@@ -372,9 +383,11 @@ class DropScene(Scene):
         if self._trail_lines is not None:
             return
         fig = self.animation
+        # behind the balls, where they pass (beside them, at x = -0.6 and 0.6, they read as
+        # two more things on the stage): the upper ball's over the lower's, which is wider
         self._trail_lines = underneath(fig, [
-            draw(fig, Line(x=x, y=column, line_color=color, line_dash="dotted"), self.trail)
-            for x, column, color in ((-0.6, "top0", LOWER), (0.6, "top1", UPPER))
+            draw(fig, Line(x=0.0, y=column, line_color=color, line_width=width), self.trail)
+            for column, color, width in (("top0", LOWER, 8), ("top1", UPPER, 3))
         ])  # fmt: skip
         self.animated.draw_trails_with(self._trail_lines)
 
@@ -418,11 +431,12 @@ class DropScene(Scene):
 
     def _show_trails(self, event: param.parameterized.Event) -> None:
         """Trails on or off (drawn in the browser as the animation plays: app/animation.py)."""
-        if event.new:
+        shown = bool(event.new)
+        if shown:
             self._add_trail_lines()
         for line in self._trail_lines or []:
-            line.visible = event.new
-        if event.new:  # drawn from the frames, at once (a new user saw them only on play)
+            line.visible = shown
+        if shown:  # drawn from the frames, at once (a new user saw them only on play)
             self.animated.send_frames()
 
     def _csv(self) -> io.StringIO:

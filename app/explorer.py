@@ -12,14 +12,10 @@ from twoball import jit
 
 from .controls import Controls
 from .lesson import Lesson
-from .scene import MODEL_PARAMETERS, Built, Scene, alert, join
+from .scene import MODEL_PARAMETERS, Built, Scene, alert
 from .scenes import SCENE_REGISTRY, SCENES
 from .state import ExplorerState, read_query, url_query
 
-COVER_TEXT = (
-    "**Predict first.** Answer the lesson's question (in the Lesson card, beside the scene or "
-    "below it on a phone), then press *Reveal the answer*: the drop appears here."
-)
 URL_DELAY_MS = 300
 # a phone or a narrow window: the controls above the scenes, each the full width
 PAGE_CSS = """
@@ -85,8 +81,7 @@ class Explorer(Built):
             stylesheets=[":host(.bk-above) .bk-headers-wrapper { flex-wrap: wrap; }"],
         )
         self.tabs.param.watch(self._tab_chosen, "active")
-        self.cover = alert(alert_type="info", sizing_mode="stretch_width")
-        self.stage = self.lesson.stage()  # on a projector the question covers the scene
+        self.stage = self.lesson.stage()  # a step's question, in place of its covered scene
         self._cover()
         shown = self.scene(self.state.scene)
         self.controls.show_scene_controls(shown.own_controls())
@@ -117,13 +112,7 @@ class Explorer(Built):
         """A lesson step's scene stays covered until its answer is revealed (it would give the
         answer away); it keeps computing underneath, so it shows at once."""
         covered = self.state.step > 0 and not self.state.revealed
-        if self.state.presentation:
-            self.lesson.ask(covered)
-        elif covered:  # (its text is sent only to a page that follows the lesson)
-            self.cover.object = COVER_TEXT
-        self.cover.visible = covered and not self.state.presentation
-        if self.cover.visible:
-            join(self._layout, self.cover)
+        self.lesson.ask(covered)
         self.tabs.visible = not covered
 
     @param.depends("state.scene", watch=True)
@@ -159,7 +148,7 @@ class Explorer(Built):
                 document.add_timeout_callback(write, URL_DELAY_MS)
 
         stack = ["balls", "stack_ratio", "stack_eps", "stack_gap", "force", "stack_eps_contacts"]
-        watched = [*MODEL_PARAMETERS, "scene", "units", "step", "map_force", *stack]
+        watched = [*MODEL_PARAMETERS, "preset", "scene", "units", "step", "map_force", *stack]
         self.state.param.watch(changed, watched)
         pn.state.onload(write)  # once the browser has reported its own URL
 
@@ -189,13 +178,9 @@ class Explorer(Built):
         return pn.Column(*parts, sizing_mode="stretch_width")
 
     def layout(self) -> pn.viewable.Viewable:
-        """The scenes under their lesson cover (the controls go into the page's sidebar,
-        :meth:`page`)."""
-        # the lesson's cover joins the page when a step first covers the scene (_cover): an
-        # empty pane in every page's first document cost it 0.6 kB
-        projected = self.state.presentation
-        parts = [self.stage] if projected else [self.cover] if self.cover.visible else []
-        return pn.Column(*parts, self.tabs, sizing_mode="stretch_width")
+        """The scenes, below a lesson step's question that covers them until its answer
+        (the controls go into the page's sidebar, :meth:`page`)."""
+        return pn.Column(self.stage, self.tabs, sizing_mode="stretch_width")
 
     def page(self) -> pn.template.BootstrapTemplate:
         """The served page: a template gives the viewport meta tag, a sidebar that folds away

@@ -18,9 +18,20 @@ from .steps import STEPS
 
 # what the lesson sets and gives back at its end: the drop, the scene and the units
 BEFORE_THE_LESSON = ("eps", "eps12", "mu", "tau_ratio", "height", "scene", "units")
-# presentation mode: the question, its choices and the answer read from the back of a room
+# the question, its choices and the answer in the main area: large on a laptop or a phone,
+# read from the back of a room in presentation mode
+ASKED = {"font-size": "20px", "line-height": "1.4"}
 PROJECTED = {"font-size": "30px", "line-height": "1.3"}
-PROJECTED_CHOICES = ":host { font-size: 30px; } :host input { width: 26px; height: 26px; }"
+# each circle centred on its words: Bokeh lifts a radio's words by 0.4 em, made for its own
+# 13 px circle and text; larger, the circle sat below them (a third of a line on a projector)
+CENTRED = (
+    ":host label { display: flex; align-items: center; gap: 0.3em; } :host input { flex: none; } "
+    ":host label > input + span { top: 0; }"
+)
+ASKED_CHOICES = f":host {{ font-size: 18px; }} {CENTRED}"
+PROJECTED_CHOICES = (
+    f":host {{ font-size: 30px; }} :host input {{ width: 26px; height: 26px; }} {CENTRED}"
+)
 
 
 class Lesson(Built):
@@ -30,8 +41,13 @@ class Lesson(Built):
 
     def __init__(self, **params):
         super().__init__(**params)
+        projected = self.state.presentation
+        # the new step's title, which the page shows after Next (lesson.js): the card's on a
+        # projector, else the question's in the main area (on a phone, above the card)
         self.heading = pn.pane.Markdown(
-            sizing_mode="stretch_width", margin=(0, 10), css_classes=["twoball-step-title"]
+            sizing_mode="stretch_width",
+            margin=(0, 10),
+            css_classes=["twoball-step-title"] if projected else [],
         )
         self.choices = pn.widgets.RadioBoxGroup(
             options=[],
@@ -58,18 +74,23 @@ class Lesson(Built):
             button.js_on_click(code="twoballShowStep();")
         self.reveal.js_on_click(code="twoballShowAnswer();")
         self.choices.param.watch(self._chosen, "value")
-        # presentation mode: the question and its choices fill the main area while the class
-        # predicts (:meth:`stage`), and the reveal puts a large one-line answer above the scene
-        self.question = pn.pane.Markdown(sizing_mode="stretch_width", styles=PROJECTED)
+        # the question and its choices fill the main area while the class predicts
+        # (:meth:`stage`; in the 300 px sidebar, beside an empty main area, they were small);
+        # on a projector the reveal puts a large one-line answer above the scene
+        self.question = pn.pane.Markdown(
+            sizing_mode="stretch_width",
+            styles=PROJECTED if projected else ASKED,
+            css_classes=[] if projected else ["twoball-step-title"],
+        )
         self.answer_line = pn.pane.Markdown(
             visible=False, sizing_mode="stretch_width", styles=PROJECTED
         )
-        if self.state.presentation:
-            self.choices.stylesheets = [*self.choices.stylesheets, PROJECTED_CHOICES]
+        choices_css = PROJECTED_CHOICES if projected else ASKED_CHOICES
+        self.choices.stylesheets = [*self.choices.stylesheets, choices_css]
         # The step's widgets join the page when the lesson starts: a page opened without it
         # (most of a class's) does not pay for their Bokeh models (docs/performance.md)
         self._steps = pn.Column(sizing_mode="stretch_width")  # in the card
-        self._projected = pn.Column(sizing_mode="stretch_width")  # in the main area, projected
+        self._stage = pn.Column(sizing_mode="stretch_width")  # in the main area
         self._asking = pn.Column(
             self.question, self.choices, self.reveal, sizing_mode="stretch_width", visible=False
         )
@@ -144,37 +165,46 @@ class Lesson(Built):
             )
             return
         shown = STEPS[step - 1]
-        title = f"**Step {step} of {len(STEPS)}: {shown.title}**"
-        if self.state.presentation:  # the rest is large in the main area (stage)
-            self.heading.object = title
-            self.question.object = f"{shown.look_for}\n\n**{shown.question}**"
-        else:
-            self.heading.object = f"{title}\n\n{shown.look_for}\n\n*{shown.question}*"
+        question = f"{shown.look_for}\n\n**{shown.question}**"
+        if not self.state.presentation:  # (a phone shows the main area above the card)
+            question = f"{self._title()}\n\n{question}"
+        self.question.object = question
+        self._place_title()
         self.choices.param.update(options=list(shown.choices), value=None, disabled=False)
         self.reveal.disabled = self._waits_for_a_choice()
         self.previous.disabled = step == 1
         self.next.label = "Next >" if step < len(STEPS) else "End the lesson"
 
+    def _title(self) -> str:
+        step = self.state.step
+        return f"**Step {step} of {len(STEPS)}: {STEPS[step - 1].title}**"
+
+    def _place_title(self) -> None:
+        """The step's title in the card, except while the question shows it (one title on
+        screen at a time; a projector's question leaves it to the card)."""
+        if self.state.step:
+            asked = self._asking.visible and not self.state.presentation
+            self.heading.object = "" if asked else self._title()
+
     def _add_step_widgets(self) -> None:
-        if self.state.presentation:  # the question large in the main area, the rest here
-            self._projected.objects = [self._asking, self.answer_line]
-            self._steps.objects = [self.answer, self._buttons()]
-        else:
-            self._steps.objects = [self.choices, self.reveal, self.answer, self._buttons()]
+        # the question in the main area (the stage), the answer and the buttons in the card
+        self._stage.objects = [self._asking, self.answer_line]
+        self._steps.objects = [self.answer, self._buttons()]
 
     def _buttons(self) -> pn.Row:
         """Previous and Next, a row that the page scrolls to after a reveal (lesson.js)."""
         return pn.Row(self.previous, self.next, css_classes=["twoball-step-buttons"])
 
     def stage(self) -> pn.Column:
-        """The step's question and choices, large, for the main area of a projected page
-        (presentation mode; the card then keeps the title, the answer and the buttons), with
-        the one-line answer shown on reveal. Empty until the lesson starts."""
-        return self._projected
+        """The step's question and choices, large, for the main area (the card then keeps the
+        title, the answer and the buttons), with, on a projector, the one-line answer shown on
+        reveal. Empty until the lesson starts."""
+        return self._stage
 
     def ask(self, covered: bool) -> None:
-        """Show the projected question while the scene is covered (:meth:`stage`)."""
+        """Show the question while the scene is covered (:meth:`stage`)."""
         self._asking.visible = covered
+        self._place_title()
 
     def layout(self) -> pn.viewable.Viewable:
         return pn.Card(

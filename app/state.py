@@ -8,10 +8,12 @@ value gives a message and a valid fallback.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 import param
 
+from twoball import presets
 from twoball.model import DEFAULT_HEIGHT, Parameters, check_value
 from twoball.units import number_text
 
@@ -47,6 +49,11 @@ class ExplorerState(Parameters):
     tau_ratio = param.Number(0.01, bounds=(1e-4, 10.0))
     height = param.Number(DEFAULT_HEIGHT, bounds=(10.0, 1e8), inclusive_bounds=(True, True))
 
+    preset = param.String(
+        default="",
+        doc="The preset chosen (a key of twoball.presets.PRESETS), empty for none; kept only "
+        "while the drop is the preset's (a moved slider drops it).",
+    )
     scene = param.Selector(default="drop", objects=list(SCENES), doc="The scene on screen.")
     units = param.Selector(
         default="dimensionless",
@@ -146,6 +153,11 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
         values[name] = value
         if message:
             messages.append(f"URL {key}: {message}")
+    if "preset" in query:
+        found, message = _read_preset(query["preset"], values, defaults)
+        values = found | values
+        if message:
+            messages.append(f"URL preset: {message}")
     for name, key in STACK_URL_KEYS.items():
         if key in query:
             value, message = _stack_value(name, query[key], getattr(defaults, name, None))
@@ -184,7 +196,7 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
         if text.isdigit() and 1 <= int(text) <= len(STEPS):
             shown = STEPS[int(text) - 1]
             # a lesson speaks metres unless the URL asks otherwise
-            values |= {**shown.drop, "scene": shown.scene, "step": int(text)}
+            values |= {**shown.drop, "scene": shown.scene, "step": int(text), "preset": ""}
             values.setdefault("units", "SI")
         else:
             messages.append(
@@ -199,6 +211,36 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
                 f"Using {defaults.scene}."
             )
     return values, messages
+
+
+def preset_drop(key: str) -> dict[str, float]:
+    """The drop a preset sets: its parameters and the height of a 1 m drop."""
+    preset = presets.PRESETS[key]
+    height = presets.height_from_metres(presets.DEFAULT_DROP_METRES)
+    drop = {name: getattr(preset, name) for name in ("eps", "eps12", "mu", "tau_ratio")}
+    return drop | {"height": height}
+
+
+def is_preset_drop(key: str, values: Mapping[str, float | None]) -> bool:
+    """Whether ``values`` (the state's or a URL's) are the preset's drop, to the 12 digits a
+    URL carries."""
+    return all(
+        values.get(name) is not None and math.isclose(values[name], value, rel_tol=1e-10)
+        for name, value in preset_drop(key).items()
+    )
+
+
+def _read_preset(name: str, values: dict, defaults: Parameters) -> tuple[dict, str | None]:
+    """The URL's ``preset``: its drop (and metres) for a link with no drop of its own; for a
+    link with one, the preset is shown only if the drop is still the preset's."""
+    if name not in presets.PRESETS:
+        return {}, f"must be one of {', '.join(presets.PRESETS)}; got {name[:40]!r}."
+    if not values.keys() & URL_KEYS.keys():
+        return {**preset_drop(name), "preset": name, "units": "SI"}, None
+    drop = {key: getattr(defaults, key) for key in URL_KEYS} | values
+    if is_preset_drop(name, drop):
+        return {"preset": name}, None
+    return {}, f"the drop in the link is not the {name} preset's; showing the link's drop."
 
 
 def _stack_value(name: str, text: str, fallback: float) -> tuple[float, str | None]:
@@ -254,6 +296,8 @@ def url_query(state: ExplorerState) -> dict[str, str]:
         for name, key in URL_KEYS.items()
         if getattr(state, name) is not None
     }
+    if state.preset and is_preset_drop(state.preset, state.param.values()):
+        query["preset"] = state.preset
     query["scene"] = state.scene
     if state.scene == "stack":
         query |= {key: f"{getattr(state, name):.12g}" for name, key in STACK_URL_KEYS.items()}

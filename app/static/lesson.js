@@ -15,9 +15,18 @@
     }
     return null;
   };
+  // A phone's page scrolls under the template's header, which stays on top (sticky): a title
+  // scrolled to the top of the window was hidden behind it, so it stops below the header.
+  const header = () => {
+    const el = document.querySelector("#header");
+    const stays = el && ["sticky", "fixed"].includes(getComputedStyle(el).position);
+    return stays ? el.getBoundingClientRect().height : 0;
+  };
   const show = (selector, block) => setTimeout(() => {
     const el = find(document, selector);
-    if (el) el.scrollIntoView({block, inline: "nearest", behavior: "instant"});
+    if (!el) return;
+    el.style.scrollMarginTop = `${header() + 8}px`;
+    el.scrollIntoView({block, inline: "nearest", behavior: "instant"});
   }, 300);
   window.twoballShowStep = () => show(".twoball-step-title", "start");
   window.twoballShowAnswer = () => show(".twoball-step-buttons", "end");

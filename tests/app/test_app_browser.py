@@ -277,7 +277,17 @@ def test_metres_and_seconds_and_a_preset(browser, app_server, artifacts):
         page.wait_for_timeout(800)
         query = page_query(page)
         assert abs(float(query["mu"]) - 0.0577 / 0.6085) < 1e-9
+        assert query["preset"] == "tennis"  # a shared link keeps the preset and its sources
         page.screenshot(path=artifacts / "si_units_tennis_preset.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
+    context, page, errors = open_page(browser, page.url)
+    try:
+        page.get_by_text("ITF Rules of Tennis").wait_for()
+        chosen = page.locator("select").first.evaluate("(s) => s.selectedOptions[0].text")
+        assert chosen == "Tennis ball on a basketball"
+        page.screenshot(path=artifacts / "si_units_tennis_preset_shared.png", full_page=True)
         assert errors == []
     finally:
         context.close()

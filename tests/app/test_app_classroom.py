@@ -18,6 +18,7 @@ from appdriver import (
     sources_with,
     wait_for_change,
 )
+from playwright.sync_api import expect
 
 from app.scenes import SCENE_REGISTRY
 
@@ -420,6 +421,175 @@ def test_a_long_query_string_gets_the_page_and_a_short_message(browser, app_serv
         assert len(message.inner_text()) < 300
         page.get_by_text("delayed rebound (h2 > h1)").first.wait_for()  # the default drop
         page.wait_for_function("() => location.search.includes('eps=0.9&')")  # URL in step
+        assert errors == []
+    finally:
+        context.close()
+
+
+# Where a plot's legend lies and how many of its curves' points it covers, in canvas pixels:
+# {legend: [left, top, right, bottom], frame: [...], covered: n, points: n}.
+LEGEND_COVERS_JS = """([title, columns]) => {
+  const models = [...Bokeh.documents[0].all_models];
+  const plot = models.find((m) => m.title && m.title.text === title && Array.isArray(m.renderers));
+  const view = Bokeh.index.find_one(plot);
+  const legend = [...plot.above, ...plot.center, ...plot.below, ...plot.left, ...plot.right]
+    .find((m) => m.constructor.__name__ === "Legend");
+  const box = Bokeh.index.find_one(legend).bbox;
+  const [xs, ys] = [view.frame.x_scale, view.frame.y_scale];
+  let covered = 0, points = 0;
+  for (const r of plot.renderers) {
+    const data = r.data_source && r.data_source.data;
+    const get = (c) => data instanceof Map ? data.get(c) : data && data[c];
+    if (!get(columns[0])) continue;
+    for (const column of columns.slice(1)) {
+      const [x, y] = [Array.from(get(columns[0])), Array.from(get(column) || [])];
+      for (let i = 0; i < y.length; i++) {
+        const [sx, sy] = [xs.compute(x[i]), ys.compute(y[i])];
+        points += 1;
+        if (box.left <= sx && sx <= box.right && box.top <= sy && sy <= box.bottom) covered += 1;
+      }
+    }
+  }
+  const f = view.frame.bbox;
+  return {legend: [box.left, box.top, box.right, box.bottom], covered, points,
+          frame: [f.left, f.top, f.right, f.bottom]};
+}"""
+
+
+@pytest.mark.parametrize(
+    "query",
+    ["eps=0.3&mu=0.01&tau_ratio=0.01", "eps=0.9&mu=0.01&tau_ratio=0.01", "preset=tennis"],
+    ids=["release-highest", "paper", "tennis"],
+)
+@pytest.mark.parametrize("size", [(1366, 768), (390, 844)], ids=["laptop", "phone"])
+def test_the_drop_legend_covers_no_curve(browser, app_server, artifacts, query, size):
+    """The Drop scene's legend stood inside the plot, top left, over the curves' start when
+    the release was the highest point (a low eps): it lies outside the plot area now, and
+    covers no point of the curves at any drop."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?{query}", viewport=size)
+    try:
+        page.wait_for_timeout(500)
+        found = page.evaluate(LEGEND_COVERS_JS, ["Heights to the second apex", ["t", "x1", "x2"]])
+        assert found["points"] > 100 and found["covered"] == 0, found
+        assert found["legend"][3] <= found["frame"][1], found  # above the plot area
+        shots = artifacts / "legend"
+        shots.mkdir(exist_ok=True)
+        page.screenshot(path=shots / f"drop-{query.split('&')[0]}-{size[0]}.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
+# The trails' renderers (lines drawn from a source with the balls' tops): [visible, ...]
+TRAILS_SHOWN_JS = """() => [...Bokeh.documents[0].all_models]
+  .filter((m) => m.constructor.__name__ === "GlyphRenderer" && m.data_source.data
+    && (m.data_source.data instanceof Map ? m.data_source.data.has("top0")
+        : "top0" in m.data_source.data))
+  .map((m) => m.visible)"""
+
+
+def test_the_trails_label_toggles_them(browser, app_server, artifacts):
+    """Clicking the words 'trails (...)', not only the box, turns the trails on and off (the
+    label did nothing); they are drawn behind the balls (screenshot), not beside them."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app", viewport=(1366, 768))
+    try:
+        box = page.get_by_role("checkbox", name="trails (the path of each ball's top)")
+        page.get_by_text("trails (the path of each ball's top)", exact=True).click()
+        expect(box).to_be_checked()
+        page.wait_for_function(f"() => ({TRAILS_SHOWN_JS})().some((v) => v)")
+        page.locator("button.play").click()
+        page.wait_for_timeout(2500)
+        page.screenshot(path=artifacts / "trails_behind_the_balls.png")
+        page.get_by_text("trails (the path of each ball's top)", exact=True).click()
+        expect(box).not_to_be_checked()
+        page.wait_for_function(f"() => !({TRAILS_SHOWN_JS})().some((v) => v)")
+        assert errors == []
+    finally:
+        context.close()
+
+
+# For each axis of the plots titled as given: the smallest gap in px between two neighbouring
+# tick labels along the axis (negative: they overlap), as Bokeh draws them.
+TICK_GAPS_JS = """(titles) => {
+  const models = [...Bokeh.documents[0].all_models];
+  const out = [];
+  for (const plot of models.filter((m) => m.title && titles.includes(m.title.text))) {
+    for (const axis of [...plot.below, ...plot.left]) {
+      const view = Bokeh.index.find_one(axis);
+      const coords = view.tick_coords.major;
+      const d = view.dimension;
+      const labels = view.compute_labels(coords[d]);
+      labels.visuals = view.visuals.major_label_text.values();
+      labels.base_font_size = view.plot_view.base_font_size;
+      const sizes = labels.items.map((label) => label.size());
+      const at = view.scoords(coords)[d];
+      let gap = Infinity;
+      for (let i = 1; i < at.length; i++) {
+        const half = d == 0 ? (sizes[i].width + sizes[i - 1].width) / 2
+                            : (sizes[i].height + sizes[i - 1].height) / 2;
+        gap = Math.min(gap, Math.abs(at[i] - at[i - 1]) - half);
+      }
+      out.push([plot.title.text, d == 0 ? "x" : "y", at.length, gap]);
+    }
+  }
+  return out;
+}"""
+CLOSEUP_TITLES = ["Positions (negative: compressed)", "Floor force f01", "Ball-ball force f12"]
+
+
+@pytest.mark.parametrize("size", [(390, 844), (1366, 768)], ids=["phone", "laptop"])
+def test_the_first_collision_s_ticks_do_not_crowd(browser, app_server, artifacts, size):
+    """On a phone the first collision's time axis had 8 labels touching each other: every
+    axis keeps 12 px between its tick labels, at both sizes, with at least three ticks."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?scene=closeup", viewport=size)
+    try:
+        page.wait_for_timeout(800)
+        axes = page.evaluate(TICK_GAPS_JS, CLOSEUP_TITLES)
+        assert len(axes) == 6, axes
+        assert all(ticks >= 3 and gap >= 12 for _, _, ticks, gap in axes), axes
+        page.screenshot(path=artifacts / f"closeup-ticks-{size[0]}.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
+
+
+# A plot's frame (where the data are drawn), its legend and the whole figure, in canvas px.
+PLOT_BOXES_JS = """(title) => {
+  const models = [...Bokeh.documents[0].all_models];
+  const plot = models.find((m) => m.title && m.title.text === title && Array.isArray(m.renderers)
+    && Bokeh.index.find_one(m) != null);  // (HoloViews may keep a figure it replaced)
+  const view = Bokeh.index.find_one(plot);
+  const legend = [...plot.above, ...plot.center, ...plot.below, ...plot.left, ...plot.right]
+    .find((m) => m.constructor.__name__ === "Legend");
+  const box = (b) => ({left: b.left, top: b.top, right: b.right, bottom: b.bottom,
+                       width: b.width, height: b.height});
+  const whole = view.el.getBoundingClientRect();
+  return {frame: box(view.frame.bbox), legend: box(Bokeh.index.find_one(legend).bbox),
+          figure: {left: 0, top: 0, right: whole.width, bottom: whole.height,
+                   width: whole.width, height: whole.height}};
+}"""
+
+
+@pytest.mark.parametrize("size", [(390, 844), (1366, 768)], ids=["phone", "laptop"])
+def test_the_accuracy_legend_leaves_the_plot_its_width(browser, app_server, artifacts, size):
+    """On a phone the Accuracy scene's legend, beside the plot, took half its width: it lies
+    below the plot area, which keeps most of the figure's width and all of the methods."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?scene=accuracy", viewport=size)
+    try:
+        page.get_by_text("DOP853").first.wait_for(timeout=120_000)
+        page.get_by_text("Computing: every method").wait_for(state="hidden", timeout=60_000)
+        page.wait_for_timeout(800)
+        boxes = page.evaluate(PLOT_BOXES_JS, "Error against run time")
+        frame, legend, whole = boxes["frame"], boxes["legend"], boxes["figure"]
+        assert frame["width"] >= 0.65 * whole["width"], boxes  # (the axis and tools beside)
+        assert legend["top"] >= frame["bottom"], boxes  # below the data, not over them
+        assert legend["right"] <= whole["right"] and legend["left"] >= 0, boxes  # not cut
+        assert frame["height"] >= 200, boxes
+        page.screenshot(path=artifacts / f"accuracy-legend-{size[0]}.png", full_page=True)
         assert errors == []
     finally:
         context.close()

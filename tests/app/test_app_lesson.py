@@ -15,6 +15,17 @@ from twoball import presets
 from twoball.observables import BALLS
 
 SIZES = {"projector": (1366, 768), "desktop": (1920, 1080), "phone": (390, 844)}
+# each radio choice: [its words, the vertical centre of its circle, of its words] in px
+RADIO_CENTRES_JS = """() => { const out = []; const walk = (root) => {
+  for (const el of root.querySelectorAll("*")) {
+    if (el.matches("label") && el.querySelector("input[type=radio]")) {
+      const [circle, words] = [el.querySelector("input"), el.querySelector("span")]
+        .map((e) => e.getBoundingClientRect());
+      out.push([el.innerText, (circle.top + circle.bottom) / 2, (words.top + words.bottom) / 2]);
+    }
+    if (el.shadowRoot) walk(el.shadowRoot);
+  } };
+  walk(document); return out; }"""
 
 
 def _result(step):
@@ -84,16 +95,26 @@ def test_the_lesson_asks_before_it_answers_and_walks_the_scenes(browser, app_ser
             assert float(query["mu"]) == pytest.approx(step.drop["mu"], rel=1e-11)
             reveal = page.get_by_role("button", name="Reveal the answer")
             expect(reveal).to_be_disabled()  # a prediction first
-            # every choice whole in the sidebar (a long one once ran off its edge, cut)
+            # the question and every choice whole in the main area, larger than the sidebar's
+            # text, in place of the covered scene (they sat in the 300 px sidebar beside an
+            # empty main area); a long choice wraps, not cut
+            question = page.get_by_text(step.question, exact=True)
+            expect(question).to_be_in_viewport(ratio=1)
+            assert question.bounding_box()["x"] > 330 and _font_px(page, step.question) >= 19
             labels = [c for c in deep_query(page, "label") if c["text"] in step.choices]
-            assert len(labels) == len(step.choices) and all(c["right"] <= 330 for c in labels)
-            expect(page.get_by_text("Predict first.")).to_be_visible()  # the scene is covered
-            assert _scene_canvases(page) == []
+            assert len(labels) == len(step.choices)
+            assert all(c["left"] > 330 and c["right"] <= 1366 for c in labels), labels
+            assert all(c["bottom"] <= 768 and c["font"] >= 17 for c in labels), labels
+            expect(reveal).to_be_in_viewport(ratio=1)
+            assert reveal.bounding_box()["x"] > 330
+            assert _scene_canvases(page) == []  # the scene is covered
+            if number == 1:
+                page.screenshot(path=shots / "step1-laptop-asked.png")
             page.get_by_text(step.choices[step.answer], exact=True).click()
             expect(reveal).to_be_enabled()
             reveal.click()
             page.get_by_text("Right.").wait_for()
-            expect(page.get_by_text("Predict first.")).to_be_hidden()
+            expect(question).to_be_hidden()
             page.wait_for_timeout(1500)  # the scene's plots follow the step's drop
             if step.scene != "accuracy":  # (computed in the background, drawn when done)
                 assert max(c["width"] for c in _scene_canvases(page)) > 300
@@ -123,7 +144,7 @@ def test_every_step_opens_from_its_url(browser, app_server, artifacts, size):
             # the app writes the whole state into the URL once the page has loaded
             page.wait_for_function("() => location.search.includes('scene=')")
             assert page_query(page)["scene"] == step.scene
-            expect(page.get_by_text("Predict first.")).to_be_visible()
+            expect(page.get_by_text(step.question, exact=True)).to_be_visible()
             page.get_by_text(step.choices[step.answer], exact=True).click()
             page.get_by_role("button", name="Reveal the answer").click()
             page.get_by_text("Right.").wait_for()
@@ -211,6 +232,10 @@ def test_a_projected_step_asks_large_and_answers_in_one_large_line(
             choice_box = page.get_by_text(choice, exact=True).bounding_box()
             assert choice_box["x"] > 330 and choice_box["y"] + choice_box["height"] <= 720
             assert _font_px(page, choice) >= 28
+        # each circle level with its words (they sat 10 px below the words' middle)
+        centres = [c for c in page.evaluate(RADIO_CENTRES_JS) if c[0] in step.choices]
+        assert len(centres) == len(step.choices)
+        assert all(abs(circle - words) <= 2 for _, circle, words in centres), centres
         assert _scene_canvases(page) == []  # covered
         page.screenshot(path=shots / f"step{number}-projected-asked.png")
         page.keyboard.press("PageDown")
@@ -248,6 +273,10 @@ def test_each_new_step_shows_from_its_title(browser, app_server, artifacts, size
             title = page.get_by_text(f"Step {number} of {len(STEPS)}: {step.title}")
             title.wait_for()
             expect(title).to_be_in_viewport(ratio=1, timeout=10_000)
+            page.wait_for_timeout(600)  # (the page scrolls 300 ms after the click)
+            # below the header, which stays on top of a phone's page (the title was behind it)
+            header = page.locator("#header").bounding_box()
+            assert title.bounding_box()["y"] >= header["y"] + header["height"], number
             page.get_by_text(step.choices[step.answer], exact=True).click()
             page.get_by_role("button", name="Reveal the answer").click()
             page.get_by_text("Right.").wait_for()

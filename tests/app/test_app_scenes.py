@@ -17,8 +17,10 @@ from bokeh.models import ColorBar
 
 import twoball
 from app.delayed_map import map_cube
+from app.drop import TRAILS
 from app.explorer import Explorer
 from app.scenes import SCENE_REGISTRY, SCENES
+from app.state import url_query
 from twoball import presets
 from twoball.observables import BALLS, FLOOR
 
@@ -176,6 +178,22 @@ def test_si_units_scale_heights_and_times():
     # the drop height input now speaks metres: 1 m typed is H = 1 m k / (m1 g)
     explorer.controls.height.value = "1"
     assert explorer.state.height == pytest.approx(presets.height_from_metres(1.0))
+
+
+def test_the_drop_height_reads_round_metres_and_its_meaning_speaks_metres():
+    """In metres the default H read 0.994898 m and its meaning spoke of a dimensionless
+    height: three digits, a meaning in metres, and a typed height kept as typed."""
+    explorer = rendered({"units": "SI"})
+    controls = explorer.controls
+    assert controls.height.value == "0.995" and explorer.state.height == 1e4
+    assert "**drop height [m]**: in metres" in controls.meanings.object
+    assert "**H**" not in controls.meanings.object
+    controls.height.value = "1.2345"  # (more digits than shown: kept, and used)
+    assert controls.height.value == "1.2345"
+    assert explorer.state.height == pytest.approx(presets.height_from_metres(1.2345))
+    controls.units.value = "dimensionless"
+    assert controls.height.value == f"{presets.height_from_metres(1.2345):.6g}"
+    assert "**H**: the drop height in units of" in controls.meanings.object
 
 
 def test_closeup_shows_the_four_contacts_and_forces_only_inside_them():
@@ -385,6 +403,22 @@ def test_a_preset_sets_the_parameters_and_the_sliders():
     assert explorer.scenes["drop"].result.drop.mu == preset.mu
 
 
+def test_a_shared_link_shows_its_preset_until_a_slider_moves():
+    """The preset chosen is in the link, and a page opened from it shows the preset and its
+    sources; a slider moved there forgets it (in the page and in its link)."""
+    chosen = rendered()
+    chosen.controls.preset.value = "tennis"
+    shared = rendered(url_query(chosen.state))
+    assert shared.controls.preset.value == "tennis" and shared.state.units == "SI"
+    assert "ITF" in shared.controls.preset_source.object
+    assert shared.controls.message.visible is False
+    with param.edit_constant(shared.controls.sliders["mu"]):
+        shared.controls.sliders["mu"].value_throttled = -1.5  # (as a release sets it)
+    assert shared.state.mu == pytest.approx(10**-1.5)
+    assert shared.controls.preset.value == "" and shared.controls.preset_source.object == ""
+    assert "preset" not in url_query(shared.state)
+
+
 def test_choosing_contacts_reads_their_slice_and_matches_the_solver():
     explorer = rendered({"eps": "0.816", "scene": "map"})
     scene = explorer.scenes["map"]
@@ -399,18 +433,22 @@ def test_choosing_contacts_reads_their_slice_and_matches_the_solver():
 def test_a_lesson_step_covers_its_scene_until_the_answer_is_revealed():
     """A class predicts before it sees: the scene (computed underneath) is shown on reveal, and
     covered again on the next step; without the lesson nothing is covered."""
+
+    def asked(explorer: Explorer) -> bool:  # the step's question, in place of the scene
+        return bool(explorer.stage.objects) and explorer.stage.objects[0].visible
+
     explorer = rendered({"step": "3"})
-    assert explorer.cover.visible and not explorer.tabs.visible
+    assert asked(explorer) and not explorer.tabs.visible
     assert explorer.scenes["drop"].computations == 1  # ready underneath
     lesson = explorer.lesson
     lesson.choices.value = lesson.choices.options[1]
     lesson._reveal()
-    assert not explorer.cover.visible and explorer.tabs.visible
+    assert not asked(explorer) and explorer.tabs.visible
     lesson._go(4)
-    assert explorer.cover.visible and not explorer.tabs.visible
+    assert asked(explorer) and not explorer.tabs.visible
     lesson._go(0)
-    assert not explorer.cover.visible and explorer.tabs.visible
-    assert not rendered().cover.visible
+    assert not asked(explorer) and explorer.tabs.visible
+    assert not asked(rendered())
 
 
 def test_the_end_of_the_lesson_gives_back_the_teachers_drop():
@@ -575,15 +613,17 @@ def test_trails_are_drawn_under_the_balls_when_first_asked_for():
     explorer = rendered()
     scene = explorer.scenes["drop"]
     before = len(scene.animation.renderers)
-    scene.trails.value = True
+    scene.trails.value = [TRAILS]
     renderers = scene.animation.renderers
     assert len(renderers) == before + 2
     assert [r.data_source for r in renderers[:2]] == [scene.trail, scene.trail]  # underneath
     assert scene.animated.on_frame.args["trail_lines"] == renderers[:2]
     assert all(line.visible for line in renderers[:2])
-    scene.trails.value = False
+    # behind the balls (drawn first, where the balls are), not beside them
+    assert {line.glyph.x for line in renderers[:2]} == set(scene.balls.data["x"]) == {0.0}
+    scene.trails.value = []
     assert not any(line.visible for line in renderers[:2])
-    scene.trails.value = True  # once added, never twice
+    scene.trails.value = [TRAILS]  # once added, never twice
     assert len(scene.animation.renderers) == before + 2
 
 
@@ -594,14 +634,14 @@ def test_trails_asked_for_while_paused_have_their_frames_at_once():
     explorer = rendered()
     scene = explorer.scenes["drop"]
     assert len(scene.animated.frames.data["t"]) == 0  # (not sent: nobody played)
-    scene.trails.value = True
+    scene.trails.value = [TRAILS]
     first = np.asarray(scene.animated.frames.data["y1"]).copy()
     assert first.size == scene.times.size
     explorer.state.eps = 0.8
     scene.current()
     second = np.asarray(scene.animated.frames.data["y1"])
     assert second.size == scene.times.size and not np.array_equal(second[: first.size], first)
-    scene.trails.value = False
+    scene.trails.value = []
     explorer.state.eps = 0.7
     scene.current()
     assert len(scene.animated.frames.data["t"]) == 0  # hidden: back to sending when played

@@ -6,7 +6,14 @@ import math
 
 import pytest
 
-from app.state import ExplorerState, app_range, read_query, url_query, validate
+from app.state import (
+    ExplorerState,
+    app_range,
+    preset_drop,
+    read_query,
+    url_query,
+    validate,
+)
 from twoball import presets
 from twoball.model import Parameters
 
@@ -147,3 +154,25 @@ def test_contact_eps_asks_for_one_value_per_contact():
     assert contact_eps(" 0.9, 0.8 ,0.7", 3) == ([0.9, 0.8, 0.7], None)
     values, message = contact_eps("0.9,0.8", 3)
     assert values is None and "give 3 values for 3 balls (floor, 1-2, 2-3); got 2" in message
+
+
+def test_a_link_names_its_preset_while_the_drop_is_the_preset_s():
+    """A shared link kept the preset's drop but lost its name and sources: the link names the
+    preset while the drop is still the preset's, and a link naming it shows it again."""
+    state = ExplorerState()
+    state.param.update(**preset_drop("tennis"), preset="tennis", units="SI")
+    query = url_query(state)
+    assert query["preset"] == "tennis"
+    values, messages = read_query(query, ExplorerState())
+    assert values["preset"] == "tennis" and messages == []
+    state.mu = 0.05  # a moved slider: no longer the preset (the controls forget it too)
+    assert "preset" not in url_query(state)
+    values, messages = read_query(query | {"mu": "0.05"}, ExplorerState())
+    assert "preset" not in values and values["mu"] == 0.05
+    assert messages == ["URL preset: the drop in the link is not the tennis preset's; showing "
+                        "the link's drop."]  # fmt: skip
+    values, messages = read_query({"preset": "ping-pong"}, ExplorerState())  # a bare preset
+    assert values == preset_drop("ping-pong") | {"preset": "ping-pong", "units": "SI"}
+    values, messages = read_query({"preset": "golf"}, ExplorerState())
+    assert "preset" not in values
+    assert messages == ["URL preset: must be one of tennis, ping-pong; got 'golf'."]
