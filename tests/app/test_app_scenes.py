@@ -8,12 +8,10 @@ from __future__ import annotations
 
 import math
 
-import holoviews as hv
 import numpy as np
 import param
 import pytest
 from bokeh.document import Document
-from bokeh.models import ColorBar
 
 import twoball
 from app.delayed_map import map_cube
@@ -222,51 +220,6 @@ def test_closeup_shows_the_four_contacts_and_forces_only_inside_them():
     assert all(floor[0].start < c.start and c.end < floor[0].end for c in ball)
 
 
-def test_map_shows_the_cube_slice_nearest_eps_as_the_solver_computes_it():
-    explorer = rendered({"eps": "0.83", "scene": "map"})
-    scene = explorer.scenes["map"]
-    cube_eps = map_cube()["eps"].values
-    nearest = cube_eps[np.abs(cube_eps - 0.83).argmin()]
-    assert scene.slice_eps == nearest
-    assert "eps" not in scene.slice.dims  # one slice was read, not the cube
-    values = scene.slice["h2_over_h1"]
-    for i, j in ((10, 20), (40, 60)):
-        mu, tau = float(values["mu"][i]), float(values["tau_ratio"][j])
-        direct = twoball.simulate(nearest, mu, tau, height=map_cube().attrs["height"])
-        assert float(values[i, j]) == pytest.approx(direct.h2_over_h1, rel=1e-5)
-    # moving mu only moves the marker: the slice is not read again
-    before = scene.computations
-    explorer.state.mu = 0.03
-    assert scene.computations == before
-
-
-def test_the_map_of_another_drop_height_and_eps12_is_computed_and_said_so():
-    explorer = rendered({"eps": "0.9", "H": "2000", "eps12": "0.7", "scene": "map"})
-    scene = explorer.scenes["map"]
-    note = scene._note()
-    assert scene.computed and "Computed for this drop" in note and "H = 2000" in note
-    values = scene.slice["h2_over_h1"]
-    assert values.shape == (map_cube().sizes["mu"], map_cube().sizes["tau_ratio"])
-    for i, j in ((5, 70), (30, 10), (60, 45)):
-        mu, tau = float(values["mu"][i]), float(values["tau_ratio"][j])
-        direct = twoball.simulate(scene.slice_eps, mu, tau, height=2000.0, eps12=0.7)
-        assert float(values[i, j]) == pytest.approx(direct.h2_over_h1, rel=1e-12, nan_ok=True)
-    # back to the cube's drop: the shipped slice again
-    explorer.state.param.update(height=map_cube().attrs["height"], eps12=None)
-    scene.current()
-    assert not scene.computed and "Slice of the shipped cube" in scene._note()
-
-
-def test_a_click_on_the_map_sets_mu_and_tau_ratio_and_moves_the_sliders():
-    explorer = rendered({"scene": "map"})
-    scene = explorer.scenes["map"]
-    scene.tap.event(x=math.log10(0.02), y=math.log10(0.15))  # the map is drawn in log10
-    assert explorer.state.mu == pytest.approx(0.02)
-    assert explorer.state.tau_ratio == pytest.approx(0.15)
-    assert explorer.controls.sliders["mu"].value == pytest.approx(math.log10(0.02))
-    assert explorer.controls.sliders["tau_ratio"].value == pytest.approx(math.log10(0.15))
-
-
 def test_accuracy_computes_only_when_opened():
     explorer = rendered({"eps": "0.816", "mu": "0.05", "tau_ratio": "0.3"})
     explorer.state.mu = 0.06
@@ -348,16 +301,6 @@ def test_the_accuracy_of_the_last_drop_is_dimmed_while_the_next_is_measured(monk
     ((styles, status),) = shown_while_measuring
     assert styles == app.accuracy.STALE and "Computing" in status
     assert scene.results.styles == {"opacity": "1"} and scene.status.object == ""
-
-
-def test_the_map_of_contact_counts_ticks_whole_numbers():
-    """A count's colour bar has no ticks between whole numbers (it showed 2.5, 3.5)."""
-    explorer = rendered({"scene": "map"})
-    scene = explorer.scenes["map"]
-    scene.variable = "contacts_first"
-    image = scene._image(scene.revision, "contacts_first")
-    colorbar = hv.render(image).select_one({"type": ColorBar})
-    assert colorbar.ticker.min_interval == 1
 
 
 def test_bad_typed_values_show_a_message_and_keep_a_valid_state():
@@ -522,51 +465,6 @@ def test_a_pinned_drop_stays_under_the_next_one_in_the_units_on_screen():
     scene.pin.clicks += 1
     assert len(scene.pinned_curves.data["t"]) == 0 and "Pinned" not in scene.summary.object
     assert not scene.heights.legend[0].items[-1].visible
-
-
-def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
-    """The map's Hertz force: a slice of hertz-h1e4 (or h1e2, whichever H is nearer the drop's)
-    at the eps nearest the drop's, each cell the library's Hertz two-ball drop; the note says
-    H is in the Hertz unit and tau_ratio counts the Hertz floor contact; the URL carries it."""
-    from app.delayed_map import shown_cube
-    from app.state import read_query, url_query
-
-    explorer = rendered({"eps": "0.83", "scene": "map", "map_force": "hertz"})
-    scene = explorer.scenes["map"]
-    assert scene.cube_name() == "hertz-h1e4"  # the drop's H = 1e4
-    cube = shown_cube("hertz-h1e4")
-    cube_eps = cube["eps"].values
-    assert scene.slice_eps == cube_eps[np.abs(cube_eps - 0.83).argmin()]
-    values = scene.slice["h2_over_h1"]
-    assert values.dims == ("mu", "tau_ratio") and values.shape == (50, 50)
-    for i, j in ((3, 40), (20, 10), (45, 45)):
-        mu, tau = float(values["mu"][i]), float(values["tau_ratio"][j])
-        direct = twoball.simulate_stack(
-            [mu], scene.slice_eps, tau, height=cube.attrs["height"], force="hertz"
-        )
-        assert float(values[i, j]) == pytest.approx(direct.h2 / direct.h1, rel=1e-6)
-    note = scene._note()
-    assert "Hertz force" in note and "Hertz length unit" in note and "hertz-h1e4" in note
-    assert "Hertz floor contact" in note
-    assert "use the **linear** force" in note  # where a click on it leads (the drop scenes)
-    assert "linear" not in scene._note() or scene.state.map_force == "hertz"
-    assert url_query(explorer.state)["map_force"] == "hertz"
-    assert read_query(url_query(explorer.state), explorer.state)[0]["map_force"] == "hertz"
-    # every pixel of the image is one of the slice's cells (none interpolated)
-    shown = scene._image(True, "h2_over_h1").dimension_values(2)
-    assert np.isin(shown[np.isfinite(shown)], values.values).all()
-    # a drop nearer H = 100: the other cube; a click still sets mu and tau_ratio
-    explorer.state.height = 300.0
-    scene.current()
-    assert scene.cube_name() == "hertz-h1e2" and "hertz-h1e2" in scene._note()
-    scene.tap.event(x=math.log10(0.05), y=math.log10(0.3))
-    assert explorer.state.mu == pytest.approx(0.05)
-    assert explorer.state.tau_ratio == pytest.approx(0.3)
-    # back to linear: the map cube again
-    explorer.state.map_force = "linear"
-    scene.current()
-    assert scene.cube_name() == "map" and "Hertz" not in scene._note()
-    assert "map_force" not in url_query(explorer.state)
 
 
 def test_the_stack_scene_takes_eight_balls_and_eps_per_contact_under_advanced():

@@ -1,0 +1,198 @@
+"""The map scene (app/delayed_map.py) without a browser: the slice shown is the cube's (or
+computed, or a Hertz cube's) and agrees with the solver; a click sets mu and tau_ratio; an eps
+move sends the new slice into the figure HoloViews drew, and what it sends is what HoloViews
+itself draws for that slice."""
+
+from __future__ import annotations
+
+import math
+
+import holoviews as hv
+import numpy as np
+import pytest
+from bokeh.document import Document
+from bokeh.models import ColorBar, ColorMapper, GlyphRenderer, Image, MultiLine
+
+import twoball
+from app.delayed_map import MapScene, map_cube, nearest_eps
+from app.explorer import Explorer
+
+
+def rendered(query: dict) -> Explorer:
+    return map_on_screen(query)[0]
+
+
+def map_on_screen(query: dict) -> tuple[Explorer, MapScene]:
+    explorer = Explorer({"scene": "map", **query})
+    explorer.__panel__().get_root(Document())
+    return explorer, explorer.scenes["map"]
+
+
+def drawn_by_holoviews(scene: MapScene) -> dict:
+    """The scene's current slice rendered by HoloViews from scratch: the image's values, the
+    colour mapper's range and the outline's paths."""
+    figure = hv.render(scene._image(True, scene.variable) * scene._outline(True))
+    renderers = figure.select({"type": GlyphRenderer})
+    (image,) = [r.data_source for r in renderers if isinstance(r.glyph, Image)]
+    (outline,) = [r.data_source for r in renderers if isinstance(r.glyph, MultiLine)]
+    mapper = figure.select_one({"type": ColorMapper})
+    return {
+        "image": image.data["image"][0],
+        "range": (mapper.low, mapper.high),
+        "xs": list(outline.data["xs"]),
+        "ys": list(outline.data["ys"]),
+    }
+
+
+def sent(scene: MapScene) -> dict:
+    """What the figure on screen holds now."""
+    return {
+        "image": scene._image_source.data["image"][0],
+        "range": (scene._colour_mapper.low, scene._colour_mapper.high),
+        "xs": list(scene._outline_source.data["xs"]),
+        "ys": list(scene._outline_source.data["ys"]),
+    }
+
+
+def assert_same(held: dict, drawn: dict) -> None:
+    assert held["image"].dtype == drawn["image"].dtype
+    np.testing.assert_array_equal(held["image"], drawn["image"])
+    assert held["range"] == pytest.approx(drawn["range"], rel=1e-6)
+    assert len(held["xs"]) == len(drawn["xs"])
+    for mine, theirs in zip(held["xs"] + held["ys"], drawn["xs"] + drawn["ys"], strict=True):
+        np.testing.assert_array_equal(mine, theirs)
+
+
+@pytest.mark.parametrize("variable", ["h2_over_h1", "h1_over_drop", "contacts_first"])
+def test_an_eps_move_sends_the_slice_holoviews_would_draw_without_redrawing(variable):
+    explorer, scene = map_on_screen({"eps": "0.6"})
+    scene.variable = variable  # (a new figure, drawn by HoloViews)
+    scene.current()
+    before = sent(scene)["image"].copy()
+    reframes = []
+    scene.param.watch(lambda event: reframes.append(event), "reframe")
+
+    explorer.state.eps = 0.9
+    assert not reframes  # the figure's frame stayed; its models took the new slice
+    assert scene.slice_eps == nearest_eps(0.9) != nearest_eps(0.6)
+    held = sent(scene)
+    assert not np.array_equal(held["image"], before, equal_nan=True)
+    assert_same(held, drawn_by_holoviews(scene))
+
+
+def test_the_hertz_map_takes_its_slices_the_same_way():
+    explorer, scene = map_on_screen({"eps": "0.7", "map_force": "hertz"})
+    explorer.state.eps = 0.95
+    assert "hertz" in scene.slice_cube
+    assert_same(sent(scene), drawn_by_holoviews(scene))
+
+
+def test_a_slice_on_another_grid_is_drawn_again_by_holoviews():
+    """The pushed image must fit the drawn one; a slice that does not (here: a figure drawn
+    from a blank of another shape) makes HoloViews draw the frame again."""
+    explorer, scene = map_on_screen({"eps": "0.6"})
+    scene._image_source.data = {**scene._image_source.data, "image": [np.ones((3, 3))]}
+    reframes = []
+    scene.param.watch(lambda event: reframes.append(event), "reframe")
+    explorer.state.eps = 0.9
+    assert len(reframes) == 1
+
+
+def test_map_shows_the_cube_slice_nearest_eps_as_the_solver_computes_it():
+    explorer = rendered({"eps": "0.83", "scene": "map"})
+    scene = explorer.scenes["map"]
+    cube_eps = map_cube()["eps"].values
+    nearest = cube_eps[np.abs(cube_eps - 0.83).argmin()]
+    assert scene.slice_eps == nearest
+    assert "eps" not in scene.slice.dims  # one slice was read, not the cube
+    values = scene.slice["h2_over_h1"]
+    for i, j in ((10, 20), (40, 60)):
+        mu, tau = float(values["mu"][i]), float(values["tau_ratio"][j])
+        direct = twoball.simulate(nearest, mu, tau, height=map_cube().attrs["height"])
+        assert float(values[i, j]) == pytest.approx(direct.h2_over_h1, rel=1e-5)
+    # moving mu only moves the marker: the slice is not read again
+    before = scene.computations
+    explorer.state.mu = 0.03
+    assert scene.computations == before
+
+
+def test_the_map_of_another_drop_height_and_eps12_is_computed_and_said_so():
+    explorer = rendered({"eps": "0.9", "H": "2000", "eps12": "0.7", "scene": "map"})
+    scene = explorer.scenes["map"]
+    note = scene._note()
+    assert scene.computed and "Computed for this drop" in note and "H = 2000" in note
+    values = scene.slice["h2_over_h1"]
+    assert values.shape == (map_cube().sizes["mu"], map_cube().sizes["tau_ratio"])
+    for i, j in ((5, 70), (30, 10), (60, 45)):
+        mu, tau = float(values["mu"][i]), float(values["tau_ratio"][j])
+        direct = twoball.simulate(scene.slice_eps, mu, tau, height=2000.0, eps12=0.7)
+        assert float(values[i, j]) == pytest.approx(direct.h2_over_h1, rel=1e-12, nan_ok=True)
+    # back to the cube's drop: the shipped slice again
+    explorer.state.param.update(height=map_cube().attrs["height"], eps12=None)
+    scene.current()
+    assert not scene.computed and "Slice of the shipped cube" in scene._note()
+
+
+def test_a_click_on_the_map_sets_mu_and_tau_ratio_and_moves_the_sliders():
+    explorer = rendered({"scene": "map"})
+    scene = explorer.scenes["map"]
+    scene.tap.event(x=math.log10(0.02), y=math.log10(0.15))  # the map is drawn in log10
+    assert explorer.state.mu == pytest.approx(0.02)
+    assert explorer.state.tau_ratio == pytest.approx(0.15)
+    assert explorer.controls.sliders["mu"].value == pytest.approx(math.log10(0.02))
+    assert explorer.controls.sliders["tau_ratio"].value == pytest.approx(math.log10(0.15))
+
+
+def test_the_map_of_contact_counts_ticks_whole_numbers():
+    """A count's colour bar has no ticks between whole numbers (it showed 2.5, 3.5)."""
+    explorer = rendered({"scene": "map"})
+    scene = explorer.scenes["map"]
+    scene.variable = "contacts_first"
+    image = scene._image(scene.revision, "contacts_first")
+    colorbar = hv.render(image).select_one({"type": ColorBar})
+    assert colorbar.ticker.min_interval == 1
+
+
+def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
+    """The map's Hertz force: a slice of hertz-h1e4 (or h1e2, whichever H is nearer the drop's)
+    at the eps nearest the drop's, each cell the library's Hertz two-ball drop; the note says
+    H is in the Hertz unit and tau_ratio counts the Hertz floor contact; the URL carries it."""
+    from app.delayed_map import shown_cube
+    from app.state import read_query, url_query
+
+    explorer = rendered({"eps": "0.83", "scene": "map", "map_force": "hertz"})
+    scene = explorer.scenes["map"]
+    assert scene.cube_name() == "hertz-h1e4"  # the drop's H = 1e4
+    cube = shown_cube("hertz-h1e4")
+    cube_eps = cube["eps"].values
+    assert scene.slice_eps == cube_eps[np.abs(cube_eps - 0.83).argmin()]
+    values = scene.slice["h2_over_h1"]
+    assert values.dims == ("mu", "tau_ratio") and values.shape == (50, 50)
+    for i, j in ((3, 40), (20, 10), (45, 45)):
+        mu, tau = float(values["mu"][i]), float(values["tau_ratio"][j])
+        direct = twoball.simulate_stack(
+            [mu], scene.slice_eps, tau, height=cube.attrs["height"], force="hertz"
+        )
+        assert float(values[i, j]) == pytest.approx(direct.h2 / direct.h1, rel=1e-6)
+    note = scene._note()
+    assert "Hertz force" in note and "Hertz length unit" in note and "hertz-h1e4" in note
+    assert "Hertz floor contact" in note
+    assert "use the **linear** force" in note  # where a click on it leads (the drop scenes)
+    assert "linear" not in scene._note() or scene.state.map_force == "hertz"
+    assert url_query(explorer.state)["map_force"] == "hertz"
+    assert read_query(url_query(explorer.state), explorer.state)[0]["map_force"] == "hertz"
+    # every pixel of the image is one of the slice's cells (none interpolated)
+    shown = scene._image(True, "h2_over_h1").dimension_values(2)
+    assert np.isin(shown[np.isfinite(shown)], values.values).all()
+    # a drop nearer H = 100: the other cube; a click still sets mu and tau_ratio
+    explorer.state.height = 300.0
+    scene.current()
+    assert scene.cube_name() == "hertz-h1e2" and "hertz-h1e2" in scene._note()
+    scene.tap.event(x=math.log10(0.05), y=math.log10(0.3))
+    assert explorer.state.mu == pytest.approx(0.05)
+    assert explorer.state.tau_ratio == pytest.approx(0.3)
+    # back to linear: the map cube again
+    explorer.state.map_force = "linear"
+    scene.current()
+    assert scene.cube_name() == "map" and "Hertz" not in scene._note()
+    assert "map_force" not in url_query(explorer.state)
