@@ -196,3 +196,15 @@ def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
     scene.current()
     assert scene.cube_name() == "map" and "Hertz" not in scene._note()
     assert "map_force" not in url_query(explorer.state)
+
+
+def test_a_map_first_opened_from_another_scene_shows_its_slice():
+    """Built when its tab is first chosen, the map's figure is drawn before the scene is on
+    screen (a blank frame), then given the slice: what HoloViews would draw for it."""
+    explorer = Explorer({"scene": "drop", "eps": "0.7"})
+    explorer.__panel__().get_root(Document())
+    explorer.state.scene = "map"
+    scene = explorer.scenes["map"]
+    scene._redraw()  # (what the page does on the next tick)
+    assert scene.active and scene.slice_eps == nearest_eps(0.7)
+    assert_same(sent(scene), drawn_by_holoviews(scene))
