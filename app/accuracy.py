@@ -11,20 +11,33 @@ import asyncio
 import functools
 import math
 
-import holoviews as hv
 import panel as pn
 import param
+from bokeh.models import ColumnDataSource, Legend, LegendItem, Line, Range1d, Scatter
+from bokeh.plotting import figure
 
 from twoball import jit
 from twoball.studies.precision import ERROR_FLOOR, FAILED_ERROR, PrecisionRow, work_precision
 
-from .scene import PROJECTOR_LINE_WIDTH, AnsweringMarkdown, Scene, Text, font_sizes
+from .scene import PROJECTOR_LINE_WIDTH, AnsweringMarkdown, Scene, Text, draw, readable
 
 # Okabe and Ito's eight colours, told apart with every common colour-vision deficiency (black
 # first: the exact solver, pale yellow last); Category10's red and green were not
 OKABE_ITO = ("#000000", "#E69F00", "#56B4E9", "#009E73", "#0072B2", "#D55E00", "#CC79A7", "#F0E442")
 STALE = {"opacity": "0.35"}  # the results of the drop before, while this one is measured
 PROJECTOR_PLOT_HEIGHT = 400  # presentation mode (scene.py): first under the tabs, in 720 px
+
+
+def log_range(values: list[float], empty: tuple[float, float]) -> Range1d:
+    """An axis range on a log scale around ``values`` with a tenth of their span (in decades,
+    at least one) to spare on each side, so that points at the ends are not cut in half;
+    ``empty`` where there are none."""
+    logs = [math.log10(v) for v in values if v > 0]
+    if not logs:
+        return Range1d(*empty)
+    low, high = min(logs), max(logs)
+    spare = 0.1 * max(high - low, 1.0)
+    return Range1d(10 ** (low - spare), 10 ** (high + spare))
 
 
 @functools.lru_cache(maxsize=64)
@@ -49,10 +62,10 @@ class AccuracyScene(Scene):
         super().__init__(**params)
         self.rows: list[PrecisionRow] | None = None
         self._request = 0
-        # a new figure per result (rare): the number of methods drawn varies
-        self.plot = pn.pane.HoloViews(
-            pn.bind(self._plot, self.param.revision), sizing_mode="stretch_width"
-        )
+        # a new Bokeh figure per result (the number of methods drawn varies; a figure built
+        # whole arrives whole in the browser); drawn by HoloViews, a result cost about ten
+        # times as much, and the scene's opening twice the others'
+        self.plot = pn.pane.Bokeh(self._figure([]), sizing_mode="stretch_width")
         self.table = Text(pn.bind(self._table, self.param.revision), sizing_mode="stretch_width")
         # what is being computed, said in words (Panel's loading overlay, set back from the
         # computation's callback, sometimes stayed on in the browser though the plots arrived)
@@ -123,46 +136,50 @@ class AccuracyScene(Scene):
         self.status.object = ""
         self.results.styles = {"opacity": "1"}
 
-    def _plot(self, revision: bool) -> hv.Overlay:
-        time_dim = hv.Dimension("seconds", label="run time per drop [s]")
-        label = (
-            "error of h1, h2" if self.state.presentation else "relative error of h1, h2 (larger)"
-        )
-        error_dim = hv.Dimension("error", label=label)
-        layers = []
-        methods = dict.fromkeys(r.method for r in self.rows or [])
-        for method, color in zip(methods, OKABE_ITO, strict=False):
-            mine = [r for r in self.rows if r.method == method and math.isfinite(r.seconds)]
-            points = [(r.seconds, r.shown_error) for r in mine]
-            line, size = (PROJECTOR_LINE_WIDTH, 14) if self.state.presentation else (2, 8)
-            layers.append(
-                hv.Curve(points, time_dim, error_dim, label=method).opts(
-                    color=color, line_width=line
-                )
-            )
-            layers.append(
-                hv.Scatter(points, time_dim, error_dim, label=method).opts(color=color, size=size)
-            )
-        if not layers:
-            layers = [hv.Curve([], time_dim, error_dim)]
+    @param.depends("revision", watch=True)
+    def _draw(self) -> None:
+        self.plot.object = self._figure(self.rows or [])
+
+    def _figure(self, rows: list[PrecisionRow]):
+        """Error against run time, both logarithmic, a line and its points per method, the
+        legend below the plot in rows (beside it, on a phone, it took half the width; a
+        projector has the width, not the height)."""
         projected = self.state.presentation
-        return hv.Overlay(layers).opts(
-            hv.opts.Overlay(
-                logx=True,
-                logy=True,
-                responsive=True,
-                height=PROJECTOR_PLOT_HEIGHT if projected else 480,
-                framewise=True,
-                padding=0.1,  # points at the ends of the axes are not cut in half
-                fontsize=font_sizes(self.state.presentation),
-                # below the plot, in rows: beside it, on a phone, it took half its width (a
-                # projector has the width, not the height)
-                legend_position="right" if projected else "bottom",
-                legend_cols=1 if projected else 3,
-                legend_opts={"spacing": 6},
-                title="Error against run time",
-            )
+        points = {
+            method: [(r.seconds, r.shown_error) for r in rows if r.method == method]
+            for method in dict.fromkeys(r.method for r in rows)
+        }
+        points = {m: [p for p in shown if math.isfinite(p[0])] for m, shown in points.items()}
+        everything = [p for shown in points.values() for p in shown]
+        fig = figure(
+            title="Error against run time",
+            x_axis_type="log",
+            y_axis_type="log",
+            x_range=log_range([p[0] for p in everything], (1e-5, 1.0)),
+            y_range=log_range([p[1] for p in everything], (ERROR_FLOOR, 1.0)),
+            x_axis_label="run time per drop [s]",
+            y_axis_label="error of h1, h2" if projected else "relative error of h1, h2 (larger)",
+            height=PROJECTOR_PLOT_HEIGHT if projected else 480,
+            sizing_mode="stretch_width",
+            tools="pan,box_zoom,wheel_zoom,reset,save",
         )
+        fig.toolbar.autohide = True
+        line, size = (PROJECTOR_LINE_WIDTH, 14) if projected else (2, 8)
+        items = []
+        for (method, shown), colour in zip(points.items(), OKABE_ITO, strict=False):
+            source = ColumnDataSource(
+                {"seconds": [p[0] for p in shown], "error": [p[1] for p in shown]}
+            )
+            glyphs = (
+                Line(x="seconds", y="error", line_color=colour, line_width=line),
+                Scatter(x="seconds", y="error", size=size, fill_color=colour, line_color=colour),
+            )
+            renderers = [draw(fig, glyph, source) for glyph in glyphs]
+            items.append(LegendItem(label=method, renderers=renderers))
+        legend = Legend(items=items, spacing=6, ncols=1 if projected else 3)
+        fig.add_layout(legend, "right" if projected else "below")
+        readable(fig, projected)
+        return fig
 
     def _table(self, revision: bool) -> str:
         if not self.rows:

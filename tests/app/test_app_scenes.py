@@ -737,3 +737,42 @@ def test_a_text_pane_sends_what_panels_markdown_pane_sends():
     assert "&lt;table&gt;" in models[0].text  # (Panel sends the HTML escaped)
     text.styles = {"opacity": "0.5"}
     assert models[0].styles == {"opacity": "0.5"}
+
+
+def test_the_accuracy_plot_draws_each_measured_method_from_its_rows():
+    """One line and its points per method, from the rows measured (the exact solver's error
+    at the floor), the legend naming the methods, every point inside the axes' ranges; each
+    result a new figure, built whole."""
+    from bokeh.models import GlyphRenderer, Legend, Line, Scatter
+
+    explorer = rendered({"scene": "accuracy", "eps": "0.8", "mu": "0.05", "tau_ratio": "0.3"})
+    scene = explorer.scenes["accuracy"]
+    figures = []
+    for drop in range(2):
+        figure = scene.plot.object
+        figures.append(figure)
+        methods = list(dict.fromkeys(r.method for r in scene.rows))
+        assert "exact" in methods and "LSODA" in methods
+        expected = {
+            method: [
+                (r.seconds, r.shown_error)
+                for r in scene.rows
+                if r.method == method and math.isfinite(r.seconds)
+            ]
+            for method in methods
+        }
+        (legend,) = figure.select({"type": Legend})
+        assert [item.label.value for item in legend.items] == methods
+        for item, method in zip(legend.items, methods, strict=True):
+            line, points = item.renderers
+            assert isinstance(line.glyph, Line) and isinstance(points.glyph, Scatter)
+            assert line.data_source is points.data_source
+            data = line.data_source.data
+            assert list(zip(data["seconds"], data["error"], strict=True)) == expected[method]
+        assert len(figure.select({"type": GlyphRenderer})) == 2 * len(methods)
+        shown = [p for points in expected.values() for p in points]
+        assert all(figure.x_range.start < x < figure.x_range.end for x, _ in shown)
+        assert all(figure.y_range.start < y < figure.y_range.end for _, y in shown)
+        if drop == 0:
+            explorer.state.mu = 0.1  # measured again: a new figure
+    assert figures[0] is not figures[1]
