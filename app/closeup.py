@@ -13,7 +13,7 @@ import dataclasses
 import numpy as np
 import panel as pn
 import param
-from bokeh.models import ColumnDataSource, Legend, LegendItem, Line, Span
+from bokeh.models import ColumnDataSource, LegendItem, Line, Span
 from bokeh.plotting import figure
 
 import twoball
@@ -21,7 +21,7 @@ from twoball.observables import BALLS, FLOOR
 from twoball.units import units_named
 
 from .collisions import first_collision
-from .drop import LOWER, UPPER
+from .drop import LOWER, UPPER, legend_above
 from .scene import Scene, Text, answers_pending, draw, on_screen, readable
 
 SAMPLES = 600  # over the collision, with every contact's start and end: ~2 px apart at 1366 px
@@ -64,7 +64,7 @@ class CloseUpScene(Scene):
         self.positions.add_layout(Span(dimension="width", location=0.0, line_color="gray"))
         items = [LegendItem(label="X1 lower ball", renderers=[lower]),
                  LegendItem(label="X2 upper ball", renderers=[upper])]  # fmt: skip
-        self.positions.add_layout(Legend(items=items, location="top_left"))
+        legend_above(self.positions, items)  # (inside, it covered the curves' start)
         # f12 is of order mu times f01: each force gets its own axis
         self.floor_force = self._figure("Floor force f01", 200, x_range=self.positions.x_range)
         draw(self.floor_force, Line(x="t", y="f01", line_color="black", line_width=2), self.samples)

@@ -123,6 +123,16 @@ def ball_radii(mu: float) -> tuple[float, float]:
     return BALL_RADIUS, BALL_RADIUS * mu ** (1 / 3)
 
 
+def legend_above(fig, items: list[LegendItem]) -> None:
+    """A legend above the plot area, in a row under the title: inside, top left, it covered
+    the curves' start whenever the release was the highest point (and a phone has no width to
+    spare for a legend beside the plot)."""
+    legend = Legend(
+        items=items, orientation="horizontal", padding=0, margin=4, spacing=16, border_line_alpha=0
+    )
+    fig.add_layout(legend, "above")
+
+
 def height_axis(fig) -> None:
     """Heights on the y axis in grouped digits, no exponent (200,000, not 2.000e+5)."""
     fig.yaxis.formatter = NumeralTickFormatter(format="0,0.[0000]")
@@ -273,24 +283,8 @@ class DropScene(Scene):
         )
         for span in (self.drop_line, self.icm_line, self.cursor):
             fig.add_layout(span)
-        # above the plot, in a row under its title: inside, top left, it covered the curves'
-        # start whenever the release was the highest point (a phone has no width to spare
-        # for a legend beside the plot)
-        fig.add_layout(
-            Legend(
-                items=[
-                    LegendItem(label="lower ball", renderers=[lower]),
-                    LegendItem(label="upper ball", renderers=[upper]),
-                ],
-                orientation="horizontal",
-                location="top_left",
-                padding=0,
-                margin=4,
-                spacing=16,
-                border_line_alpha=0,
-            ),
-            "above",
-        )
+        legend_above(fig, [LegendItem(label="lower ball", renderers=[lower]),
+                           LegendItem(label="upper ball", renderers=[upper])])  # fmt: skip
         return fig
 
     def _animation_figure(self):

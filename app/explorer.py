@@ -12,7 +12,7 @@ from twoball import jit
 
 from .controls import Controls
 from .lesson import Lesson
-from .scene import MODEL_PARAMETERS, Built, Scene, alert
+from .scene import MODEL_PARAMETERS, Built, Scene, alert, join
 from .scenes import SCENE_REGISTRY, SCENES
 from .state import ExplorerState, read_query, url_query
 
@@ -113,6 +113,8 @@ class Explorer(Built):
         answer away); it keeps computing underneath, so it shows at once."""
         covered = self.state.step > 0 and not self.state.revealed
         self.lesson.ask(covered)
+        if covered:
+            join(self._layout, self.stage)
         self.tabs.visible = not covered
 
     @param.depends("state.scene", watch=True)
@@ -180,7 +182,10 @@ class Explorer(Built):
     def layout(self) -> pn.viewable.Viewable:
         """The scenes, below a lesson step's question that covers them until its answer
         (the controls go into the page's sidebar, :meth:`page`)."""
-        return pn.Column(self.stage, self.tabs, sizing_mode="stretch_width")
+        # the question joins the page when a step first covers the scene (_cover): empty, in
+        # every page's first document, it cost a page opened without the lesson
+        parts = [self.stage] if self.state.step else []
+        return pn.Column(*parts, self.tabs, sizing_mode="stretch_width")
 
     def page(self) -> pn.template.BootstrapTemplate:
         """The served page: a template gives the viewport meta tag, a sidebar that folds away

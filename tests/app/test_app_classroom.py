@@ -458,24 +458,31 @@ LEGEND_COVERS_JS = """([title, columns]) => {
 
 @pytest.mark.parametrize(
     "query",
-    ["eps=0.3&mu=0.01&tau_ratio=0.01", "eps=0.9&mu=0.01&tau_ratio=0.01", "preset=tennis"],
-    ids=["release-highest", "paper", "tennis"],
+    [
+        "eps=0.3&mu=0.01&tau_ratio=0.01",
+        "eps=0.9&mu=0.01&tau_ratio=0.01",
+        "preset=tennis",
+        "eps=0.9&mu=0.01&tau_ratio=0.01&scene=closeup",
+    ],
+    ids=["release-highest", "paper", "tennis", "closeup"],
 )
 @pytest.mark.parametrize("size", [(1366, 768), (390, 844)], ids=["laptop", "phone"])
 def test_the_drop_legend_covers_no_curve(browser, app_server, artifacts, query, size):
     """The Drop scene's legend stood inside the plot, top left, over the curves' start when
-    the release was the highest point (a low eps): it lies outside the plot area now, and
-    covers no point of the curves at any drop."""
+    the release was the highest point (a low eps), and the first collision's over its
+    positions' start: they lie outside the plot area now, and cover no point of the curves."""
     base, _ = app_server
     context, page, errors = open_page(browser, f"{base}/app?{query}", viewport=size)
     try:
         page.wait_for_timeout(500)
-        found = page.evaluate(LEGEND_COVERS_JS, ["Heights to the second apex", ["t", "x1", "x2"]])
+        closeup = "closeup" in query
+        title = "Positions (negative: compressed)" if closeup else "Heights to the second apex"
+        found = page.evaluate(LEGEND_COVERS_JS, [title, ["t", "x1", "x2"]])
         assert found["points"] > 100 and found["covered"] == 0, found
         assert found["legend"][3] <= found["frame"][1], found  # above the plot area
         shots = artifacts / "legend"
         shots.mkdir(exist_ok=True)
-        page.screenshot(path=shots / f"drop-{query.split('&')[0]}-{size[0]}.png")
+        page.screenshot(path=shots / f"{query.split('&')[-1]}-{size[0]}.png")
         assert errors == []
     finally:
         context.close()
