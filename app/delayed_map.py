@@ -534,37 +534,31 @@ class MapScene(Scene):
         return "  \n".join(lines)
 
     def _image(self, revision: bool, variable: str) -> hv.Image:
+        """The slice's image; off screen (nothing is read until the map is opened) or without
+        a slice, a blank on the cube's grid. Both in the variable's colours, scale, colour bar
+        and tools: a blank drawn first is later given the slice's values alone
+        (:meth:`_push_slice`; a blank in HoloViews' default colours and without the colour
+        bar stayed so, a map opened from its tab blue where it should be red)."""
         mu_dim = hv.Dimension("log_mu", label="log10 mu")
         tau_dim = hv.Dimension("log_tau_ratio", label="log10 tau_d/tau_f")
-        if not self.active:  # rendered off screen: nothing is read until the map is opened
-            # (the plot keeps its first ticker)
-            blank = blank_image(mu_dim, tau_dim, variable, shown_cube(self.cube_name()))
-            if variable in RATIO_CENTRES:  # (a log scale needs limits: the blank has no data)
-                return blank.opts(
-                    colorbar=True,
-                    logz=True,
-                    clim=(0.5, 2.0),
-                    colorbar_opts=ratio_colorbar(),
-                    colorbar_position=self._colorbar_position(),
-                )
-            return blank
-        self.current()
         label = variable_label(variable)
-        if self.slice is None:
-            return blank_image(mu_dim, tau_dim, variable, shown_cube(self.cube_name()))
-        (log_mu, log_tau, shown), clim = slice_image(self.slice, variable)
-        mesh = hv.Image(
-            (log_mu, log_tau, on_screen(shown)),
-            [mu_dim, tau_dim],
-            hv.Dimension(variable, label=label),
-        )
-        if variable in RATIO_CENTRES:
+        ratio = variable in RATIO_CENTRES
+        if self.active:
+            self.current()
+        if self.active and self.slice is not None:
+            (log_mu, log_tau, shown), clim = slice_image(self.slice, variable)
+            dims = [mu_dim, tau_dim], hv.Dimension(variable, label=label)
+            image = hv.Image((log_mu, log_tau, on_screen(shown)), *dims)
+        else:  # (the plot keeps its first ticker; a log scale needs limits)
+            image = blank_image(mu_dim, tau_dim, variable, shown_cube(self.cube_name()))
+            clim = (0.5, 2.0) if ratio else None
+        if ratio:
             opts = dict(cmap="RdBu_r", logz=True, clim=clim, colorbar_opts=ratio_colorbar())
         else:
             opts = dict(cmap="viridis", logz=False, clim=(np.nan, np.nan))
             if variable == "contacts_first":  # a count: whole numbers on its colour bar
                 opts["colorbar_opts"] = {"ticker": BasicTicker(min_interval=1)}
-        return mesh.opts(
+        return image.opts(
             colorbar=True,
             colorbar_position=self._colorbar_position(),
             tools=[values_hover(label), "tap"],
@@ -583,15 +577,14 @@ class MapScene(Scene):
         One path per region instead of one cross per grid point: ~3000 markers made every
         repaint of the plot ~100 ms slower in the browser.
         """
-        dims = ["log_mu", "log_tau_ratio"]
-        if not self.active:
-            return hv.Contours([], dims)
-        self.current()
-        if self.slice is None:
-            return hv.Contours([], dims)
         width = PROJECTOR_LINE_WIDTH if self.state.presentation else 1.5
-        # (a copy: the cached outline is every session's, its options this page's)
-        return self._outline_of_slice().clone().opts(color="black", line_width=width)
+        if self.active:
+            self.current()
+        if not self.active or self.slice is None:  # (drawn as the outlines are, for later)
+            outline = hv.Contours([], ["log_mu", "log_tau_ratio"])
+        else:  # (a copy: the cached outline is every session's, its options this page's)
+            outline = self._outline_of_slice().clone()
+        return outline.opts(color="black", line_width=width)
 
     def _outline_of_slice(self) -> hv.Contours:
         s = self.state

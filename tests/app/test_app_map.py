@@ -28,9 +28,29 @@ def map_on_screen(query: dict) -> tuple[Explorer, MapScene]:
     return explorer, explorer.scenes["map"]
 
 
+def looks(figure) -> dict:
+    """How a map figure draws: its colour mapper's kind and palette, whether it has a colour
+    bar, the outline's colour and width, and its tools."""
+    renderers = figure.select({"type": GlyphRenderer})
+    (outline,) = [r.glyph for r in renderers if isinstance(r.glyph, MultiLine)]
+    mapper = figure.select_one({"type": ColorMapper})
+    return {
+        "mapper": (type(mapper).__name__, tuple(mapper.palette)),
+        "colour bar": len(figure.select({"type": ColorBar})),
+        "outline": (outline.line_color, outline.line_width),
+        "tools": sorted(type(tool).__name__ for tool in figure.toolbar.tools),
+    }
+
+
+def on_screen(scene: MapScene):
+    """The map's Bokeh figure in the page."""
+    ((plot, _),) = scene.figure._plots.values()
+    return plot.state
+
+
 def drawn_by_holoviews(scene: MapScene) -> dict:
     """The scene's current slice rendered by HoloViews from scratch: the image's values, the
-    colour mapper's range and the outline's paths."""
+    colour mapper's range and the outline's paths, and how it draws them."""
     figure = hv.render(scene._image(True, scene.variable) * scene._outline(True))
     renderers = figure.select({"type": GlyphRenderer})
     (image,) = [r.data_source for r in renderers if isinstance(r.glyph, Image)]
@@ -41,12 +61,14 @@ def drawn_by_holoviews(scene: MapScene) -> dict:
         "range": (mapper.low, mapper.high),
         "xs": list(outline.data["xs"]),
         "ys": list(outline.data["ys"]),
+        "looks": looks(figure),
     }
 
 
 def sent(scene: MapScene) -> dict:
     """What the figure on screen holds now."""
     return {
+        "looks": looks(on_screen(scene)),
         "image": scene._image_source.data["image"][0],
         "range": (scene._colour_mapper.low, scene._colour_mapper.high),
         "xs": list(scene._outline_source.data["xs"]),
@@ -55,6 +77,7 @@ def sent(scene: MapScene) -> dict:
 
 
 def assert_same(held: dict, drawn: dict) -> None:
+    assert held["looks"] == drawn["looks"]
     assert held["image"].dtype == drawn["image"].dtype
     np.testing.assert_array_equal(held["image"], drawn["image"])
     assert held["range"] == pytest.approx(drawn["range"], rel=1e-6)

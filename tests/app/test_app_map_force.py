@@ -29,7 +29,8 @@ IMAGE_JS = """() => {
     && (m.data instanceof Map ? m.data.has("image") : "image" in m.data));
   const data = image.data instanceof Map ? image.data.get("image") : image.data.image;
   const mapper = models.find((m) => m.constructor.__name__.endsWith("ColorMapper"));
-  return [Array.from(data[0], (v) => (Number.isNaN(v) ? null : v)), [mapper.low, mapper.high]];
+  return [Array.from(data[0], (v) => (Number.isNaN(v) ? null : v)), [mapper.low, mapper.high],
+          mapper.palette, models.filter((m) => m.constructor.__name__ === "ColorBar").length];
 }"""
 
 
@@ -47,7 +48,7 @@ def test_an_eps_move_shows_the_new_slice_in_the_browser(browser, app_server, art
         expect(page.get_by_text(f"at eps = {eps:g} (nearest").first).to_be_visible()
         page.wait_for_timeout(500)
         (_, _, expected), (low, high) = slice_image(eps_slice(eps, "h2_over_h1"), "h2_over_h1")
-        drawn, mapped = page.evaluate(IMAGE_JS)
+        drawn, mapped, _, _ = page.evaluate(IMAGE_JS)
         np.testing.assert_array_equal(np.array(drawn, dtype=float), on_screen(expected).ravel())
         assert mapped == pytest.approx([low, high])
         (outline,) = sources_with(page, "xs", "ys")
@@ -56,6 +57,31 @@ def test_an_eps_move_shows_the_new_slice_in_the_browser(browser, app_server, art
         assert errors == []
     finally:
         context.close()
+
+
+def test_a_map_opened_from_its_tab_is_the_map_a_link_opens(browser, app_server, artifacts):
+    """Built off screen and drawn blank, then given its slice: the same values, colours and
+    colour bar as the map a link opens (a new user saw it blue, without its red, from the
+    tab)."""
+    base, _ = app_server
+    folder = artifacts / "map_force"
+    folder.mkdir(exist_ok=True)
+    shown = {}
+    for way in ("link", "tab"):
+        url = f"{base}/app?eps=0.9" + ("&scene=map" if way == "link" else "")
+        context, page, errors = open_page(browser, url)
+        try:
+            if way == "tab":
+                page.locator(".bk-tab", has_text="Delayed-rebound map").click()
+            expect(page.get_by_text("at eps = 0.9 (nearest").first).to_be_visible(timeout=60_000)
+            page.wait_for_timeout(1500)
+            shown[way] = page.evaluate(IMAGE_JS)
+            page.screenshot(path=folder / f"map_from_{way}.png")
+            assert errors == []
+        finally:
+            context.close()
+    assert shown["tab"] == shown["link"]
+    assert shown["tab"][3] == 1  # its colour bar
 
 
 def test_the_map_switches_to_the_hertz_cube(browser, app_server, artifacts):
