@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import os
 import signal
+import socket
 import sys
 from pathlib import Path
 
@@ -92,6 +93,27 @@ def stop_together_on_sigterm() -> None:
     signal.signal(signal.SIGTERM, forward)
 
 
+def where_not_to_listen(address: str | None, port: int) -> str | None:
+    """Why the server could not listen at ``address`` and ``port`` (Tornado's own failure is a
+    traceback, or a log line and status 1), or None. The port is tried as Tornado binds it."""
+    if not 0 <= port <= 65535:
+        return f"--port must be between 0 and 65535; got {port}"
+    try:
+        found = socket.getaddrinfo(
+            address or None, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE
+        )
+    except (socket.gaierror, UnicodeError) as error:
+        return f"--address {address!r} is not an address ({error})"
+    family, kind, protocol, _, where = found[0]
+    with socket.socket(family, kind, protocol) as trial:
+        trial.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            trial.bind(where)
+        except OSError as error:
+            return f"cannot listen at {address or 'every address'}, port {port}: {error.strerror}"
+    return None
+
+
 def main(argv: list[str]) -> int:
     """Run the server until it is stopped; returns the exit status."""
     parser = build_parser()
@@ -100,6 +122,9 @@ def main(argv: list[str]) -> int:
         parser.error(f"--num-procs must be at least 1; got {args.num_procs}")
     if args.files != [str(APP_DIR)]:
         parser.error(f"takes no app to serve (it serves the explorer); got {args.files[1:]}")
+    problem = where_not_to_listen(args.address, args.port)
+    if problem:
+        parser.error(problem)
     if args.num_procs > 1:
         stop_together_on_sigterm()
     AppServe(parser=argparse.ArgumentParser()).invoke(args)

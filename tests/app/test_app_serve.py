@@ -12,6 +12,7 @@ from __future__ import annotations
 import asyncio
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -216,7 +217,20 @@ def test_a_release_is_answered_in_one_message_of_float32_data(two_processes):
 
 
 def test_a_bad_serve_option_is_one_line_and_status_2(tmp_path):
-    for options in (["--num-procs", "0"], ["--port", "many"], ["some_app.py"]):
+    with socket.socket() as taken:  # a port in use
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        in_use = str(taken.getsockname()[1])
+        bad = (
+            ["--num-procs", "0"], ["--port", "many"], ["some_app.py"], ["--port", "99999"],
+            ["--port", "-5"], ["--address", "999.1.1.1"],
+            ["--address", "127.0.0.1", "--port", in_use],
+        )  # fmt: skip
+        check_each_is_refused(bad, tmp_path)
+
+
+def check_each_is_refused(bad: tuple, tmp_path) -> None:
+    for options in bad:
         done = subprocess.run(
             [str(TWOBALL), "serve", *options], capture_output=True, text=True, cwd=tmp_path
         )
