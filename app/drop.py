@@ -258,7 +258,9 @@ class DropScene(Scene):
         fig = figure(
             height=400,
             sizing_mode="stretch_width",
-            title="Heights to the second apex",
+            # (on a projector the teacher says what it shows, and its 290 px go to the curves:
+            # under a title and the legend's row they had 150)
+            title=None if self.state.presentation else "Heights to the second apex",
             y_range=Range1d(0.0, 1.0),  # set with every drop (auto-ranging ignores the lines)
             tools="pan,box_zoom,wheel_zoom,reset,save",
         )

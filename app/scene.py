@@ -236,7 +236,8 @@ def readable(fig, presentation: bool) -> None:
         # (16 pt labels on a plot half a projector wide ran into each other)
         if presentation and hasattr(axis.ticker, "desired_num_ticks"):
             axis.ticker.desired_num_ticks = 4
-    fig.title.text_font_size = title
+    if fig.title is not None:  # (a projected drop's heights have none)
+        fig.title.text_font_size = title
     for legend in fig.legend:
         legend.label_text_font_size = ticks
     if presentation:
