@@ -3,6 +3,7 @@ DOP853 reference, energy, and the ICM chain (docs/model.md, "Stacks of N balls")
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -443,3 +444,18 @@ def test_a_reused_cluster_store_gives_the_same_drop():
     again = simulate_stack(*drop, height=30.0)
     assert (again.h1, again.h2, again.end_time) == (fresh.h1, fresh.h2, fresh.end_time)
     assert again.contacts == fresh.contacts and again.apexes == fresh.apexes
+
+
+def test_contact_intervals_are_the_dataclass_s_own():
+    """The linear stack writes its contact intervals straight into their instances
+    (twoball.stacks.stack._intervals, bypassing the frozen dataclass's __init__ for speed):
+    each must be what the constructor makes: equal, hashed and shown alike, frozen, its
+    contact an int."""
+    result = simulate_stack([0.2, 0.2], 0.9, 0.2)
+    assert len(result.contacts) > 3
+    for interval in result.contacts:
+        made = twoball.ContactInterval(interval.contact, interval.start, interval.end)
+        assert made == interval and hash(made) == hash(interval) and repr(made) == repr(interval)
+        assert type(interval.contact) is int and interval.start <= interval.end
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            interval.end = 0.0
