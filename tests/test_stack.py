@@ -450,7 +450,7 @@ def test_contact_intervals_are_the_dataclass_s_own():
     """The linear stack writes its contact intervals straight into their instances
     (twoball.stacks.stack._intervals, bypassing the frozen dataclass's __init__ for speed):
     each must be what the constructor makes: equal, hashed and shown alike, frozen, its
-    contact an int."""
+    contact an int; and two balls' must be simulate's, field by field."""
     result = simulate_stack([0.2, 0.2], 0.9, 0.2)
     assert len(result.contacts) > 3
     for interval in result.contacts:
@@ -459,3 +459,10 @@ def test_contact_intervals_are_the_dataclass_s_own():
         assert type(interval.contact) is int and interval.start <= interval.end
         with pytest.raises(dataclasses.FrozenInstanceError):
             interval.end = 0.0
+    pair = sorted(simulate_stack([0.01], 0.9, 0.01).contacts, key=lambda i: i.start)
+    single = twoball.simulate(0.9, 0.01, 0.01).contacts
+    assert len(pair) == len(single) > 3
+    for mine, theirs in zip(pair, single, strict=True):
+        assert mine.contact == theirs.contact
+        assert mine.start == pytest.approx(theirs.start, rel=1e-12)
+        assert mine.end == pytest.approx(theirs.end, rel=1e-12)
