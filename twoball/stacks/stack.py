@@ -147,11 +147,8 @@ def solve_linear(
     )
     with _collector_paused():
         # tolist: Python floats at once, not a numpy scalar per value (a third of the
-        # three-ball drop's time outside the kernel); each ball's rows taken at once
-        balls = out.apexes[:, 0]
-        apexes: list[list[tuple[float, float]]] = [
-            list(map(tuple, out.apexes[balls == ball, 1:].tolist())) for ball in range(stack.balls)
-        ]
+        # three-ball drop's time outside the kernel)
+        apexes = _apexes_by_ball(out.apexes, stack.balls)
         contacts = _intervals(out.contacts.tolist())
     trajectory = None
     if times is not None:
@@ -169,6 +166,20 @@ def solve_linear(
         trajectory=trajectory,
         stats=RunStats(phases=out.phase_count),
     )
+
+
+def _apexes_by_ball(rows: np.ndarray, balls: int) -> list[list[tuple[float, float]]]:
+    """Each ball's (time, height) apexes from the kernel's table (ball, time, height), in its
+    order: row by row for a short table, by one mask a ball for a long one (about 6 000 rows
+    to the eight-ball drop's second apex: 1.7 ms against 4.7 row by row; for three balls' 12
+    rows the masks cost 27 us against 2)."""
+    if rows.shape[0] < 64:
+        apexes: list[list[tuple[float, float]]] = [[] for _ in range(balls)]
+        for ball, when, where in rows.tolist():
+            apexes[int(ball)].append((when, where))
+        return apexes
+    of_ball = rows[:, 0]
+    return [list(map(tuple, rows[of_ball == ball, 1:].tolist())) for ball in range(balls)]
 
 
 def _intervals(rows: list[list[float]]) -> list[ContactInterval]:
