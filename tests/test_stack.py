@@ -3,6 +3,7 @@ DOP853 reference, energy, and the ICM chain (docs/model.md, "Stacks of N balls")
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -14,8 +15,10 @@ from stack_reference import reference_stack
 
 import twoball
 from twoball.errors import ParameterError, SolverError, Status
+from twoball.kernels import stack as kernel
 from twoball.stacks import check_stack, icm_chain, simulate_stack
 from twoball.stacks.model import _apex_bound
+from twoball.stacks.stack import _store_for
 
 
 def _energy(stack, trajectory) -> np.ndarray:
@@ -443,3 +446,40 @@ def test_a_reused_cluster_store_gives_the_same_drop():
     again = simulate_stack(*drop, height=30.0)
     assert (again.h1, again.h2, again.end_time) == (fresh.h1, fresh.h2, fresh.end_time)
     assert again.contacts == fresh.contacts and again.apexes == fresh.apexes
+
+
+def test_contact_intervals_are_the_dataclass_s_own():
+    """The linear stack writes its contact intervals straight into their instances
+    (twoball.stacks.stack._intervals, bypassing the frozen dataclass's __init__ for speed):
+    each must be what the constructor makes: equal, hashed and shown alike, frozen, its
+    contact an int; and two balls' must be simulate's, field by field."""
+    result = simulate_stack([0.2, 0.2], 0.9, 0.2)
+    assert len(result.contacts) > 3
+    for interval in result.contacts:
+        made = twoball.ContactInterval(interval.contact, interval.start, interval.end)
+        assert made == interval and hash(made) == hash(interval) and repr(made) == repr(interval)
+        assert type(interval.contact) is int and interval.start <= interval.end
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            interval.end = 0.0
+    pair = sorted(simulate_stack([0.01], 0.9, 0.01).contacts, key=lambda i: i.start)
+    single = twoball.simulate(0.9, 0.01, 0.01).contacts
+    assert len(pair) == len(single) > 3
+    for mine, theirs in zip(pair, single, strict=True):
+        assert mine.contact == theirs.contact
+        assert mine.start == pytest.approx(theirs.start, rel=1e-12)
+        assert mine.end == pytest.approx(theirs.end, rel=1e-12)
+
+
+def test_each_ball_s_apexes_are_the_kernel_s_rows_in_order():
+    """simulate_stack splits the kernel's apex table (ball, time, height) by ball, row by row
+    for a short table and by masks for a long one (twoball.stacks.stack._apexes_by_ball): both
+    must give each ball its rows in the table's order."""
+    for ratios in ([0.2, 0.2], [0.2] * 7):  # 12 rows; about 6 000
+        result = simulate_stack(ratios, 0.9, 0.2)
+        made = result.stack
+        out = kernel.run(made.masses, made.zeta, made.x_start, 2, math.inf, False, _store_for(made))
+        expected = [[] for _ in range(made.balls)]
+        for ball, when, where in out.apexes.tolist():
+            expected[int(ball)].append((when, where))
+        assert result.apexes == expected
+        assert sum(map(len, expected)) == out.apexes.shape[0]

@@ -395,8 +395,8 @@ def _evaluate_arrays(
 ):
     """Heights, velocities, accelerations of the balls of the phase's count clusters at tau into
     the phase (into x, v, a; with every_ball False only the accelerations of the balls at
-    either end of a cluster, all that the step loop reads), each cluster's z and w = z' (into
-    shape_z, shape_w) and their block (mode)
+    either end of a cluster, all that the step loop reads), each cluster's z and the rates of
+    w = z', eta'' (into shape_z and the second half of shape_w) and the block (mode)
     coordinates X^-1 z and X^-1 w (into mode_z, mode_w), from the phase's (:func:`_phase`) and
     the store's arrays, passed one by one: the step loop reads them once per phase. Written
     without array slices or tuples of arrays: each would count references, which took most of
@@ -412,6 +412,10 @@ def _evaluate_arrays(
     between two free clusters. change_z, size_change and size_value are work arrays."""
     contacts, blocks, big_x = store.contacts, store.blocks, store.x
     shape, offset, eta_rest = store.shape, store.offset, store.eta_rest
+    # At a phase's start in the step loop the state is the start's (e = e0, de = de0, as the
+    # zero change below gives to the bit) and only the rates w are formed: a third of the
+    # sums of a step (docs/stacks.md, "What a step costs")
+    start = tau == 0.0 and not every_ball
     gravity_below = 0.0  # -tau^2/2 (or 0) in the height of the ball below, and its rate
     gravity_rate_below = 0.0
     for p in range(count):
@@ -439,10 +443,14 @@ def _evaluate_arrays(
                 )
             mode_z[p, 2 * blk], mode_z[p, 2 * blk + 1] = n0, n1
             mode_w[p, 2 * blk], mode_w[p, 2 * blk + 1] = r0, r1
-            for row in range(d):  # z = X flow, w = X rate, without allocating
+            for row in range(k, d):  # w = X rate: its rates only (eta'', read as a[] and g'')
+                left, right = big_x[cid, row, 2 * blk], big_x[cid, row, 2 * blk + 1]
+                shape_w[p, row] += left * r0 + right * r1
+            if start:
+                continue  # z is the start's, its change zero, as zeroed above
+            for row in range(d):  # z = X flow, and its change, without allocating
                 left, right = big_x[cid, row, 2 * blk], big_x[cid, row, 2 * blk + 1]
                 shape_z[p, row] += left * n0 + right * n1
-                shape_w[p, row] += left * r0 + right * r1
                 change_z[p, row] += left * d0 + right * d1
                 size_change[p, row] += abs(left * d0) + abs(right * d1)
                 size_value[p, row] += abs(left * n0) + abs(right * n1)

@@ -527,16 +527,20 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
         for c in range(n):  # the phase's end is the next one's start (copied: swapping the
             e[c], de[c] = e_next[c], de_next[c]  # arrays counted 8 references a phase)
         phase_apexes = n_apex
+        # room for every lower ball's apex first: an array that may be replaced inside the loop
+        # had its references counted up and down at every ball of every phase (a tenth of the
+        # eight-ball drop's time)
+        while n_apex + n > apexes.shape[0]:
+            apexes = _room_for_one(apexes, apexes.shape[0])
         for ball in range(n - 1):
             free = not active[ball] and not active[ball + 1]
             rise = speeds[ball]
             if free and not apex_passed[ball] and 0.0 < rise <= tau:
                 apex_passed[ball] = True
-                if n_apex == apexes.shape[0]:  # only then: each call counts references
-                    apexes = _room_for_one(apexes, n_apex)
                 row = n_apex  # in order of time among this phase's apexes
                 while row > phase_apexes and apexes[row - 1, 1] > t + rise:
-                    apexes[row] = apexes[row - 1]
+                    for column in range(3):  # scalars: a row's view would be counted too
+                        apexes[row, column] = apexes[row - 1, column]
                     row -= 1
                 apexes[row, 0], apexes[row, 1] = ball, t + rise
                 apexes[row, 2] = heights[ball] + 0.5 * rise * rise
