@@ -51,7 +51,7 @@ STEPS = (
         "is another: a first bounce far below the textbook's.)",
     ),
     Step(
-        title="A tennis ball on a basketball",
+        title="A tennis ball held a little above a basketball",
         scene="drop",
         drop={
             "eps": TENNIS.eps,
