@@ -218,6 +218,8 @@ class StackScene(Scene):
             f"**eps per contact:** {plain(message)}. Using eps = {s.stack_eps:g} for every contact."
         )  # fmt: skip
         self.eps_message.visible = message is not None
+        if message is not None:  # opened: a wrong entry (from a link too) said where it is seen
+            self.advanced.collapsed = False
         return s.stack_eps if values is None else values
 
     def update(self) -> None:

@@ -56,6 +56,16 @@ def test_a_bad_stack_value_in_the_url_is_reported(browser, app_server):
         assert errors == []
     finally:
         context.close()
+    # eps per contact of the wrong length: its message seen without opening "advanced" (a new
+    # user found it only inside the folded card)
+    url = f"{base}/app?scene=stack&N=3&eps_contacts=0.9,0.8"
+    context, page, errors = open_page(browser, url)
+    try:
+        expect(page.get_by_text("give 3 values for 3 balls").first).to_be_visible(timeout=60_000)
+        expect(page.get_by_placeholder("e.g. 0.9, 0.8, 0.7")).to_be_visible()
+        assert errors == []
+    finally:
+        context.close()
 
 
 def test_a_stack_the_solver_refuses_says_why_and_the_app_goes_on(browser, app_server):
