@@ -109,3 +109,21 @@ def test_the_stored_reference_values_are_the_references():
         for stored, computed in ((row["h1_truth"], truth.h1), (row["h2_truth"], truth.h2)):
             assert abs(mpmath.mpf(stored) / computed - 1) < 1e-22
     assert int(row["contacts_first_truth"]) == truth.contacts_first[BALLS]
+
+
+def test_each_drop_is_reported_in_words_with_the_rule_s_verdict():
+    """The study's progress line names the drop, its contact counts, errors and conditioning,
+    and says whether the drop is within the rule (it printed the row's Python repr)."""
+    from twoball.studies.many_contacts import ManyContactsRow, progress_line
+
+    fields = dict(
+        eps=0.9, mu=0.01, tau_ratio=0.05, truth_seconds=1.0, h1_truth="1", h2_truth="2",
+        contacts_first=7, contacts_first_truth=7, rel_err_h2=1e-14, cond_h1=1e-15, cond_h2=1e-15,
+    )  # fmt: skip
+    within = progress_line(ManyContactsRow(rel_err_h1=2e-15, **fields))
+    assert (
+        "eps 0.9, mu 0.01, tau_ratio 0.05" in within and "7 ball contacts (reference 7)" in within
+    )
+    assert within.endswith("within the rule") and "ManyContactsRow" not in within
+    outside = progress_line(ManyContactsRow(rel_err_h1=1e-12, **fields))  # 1000 x conditioning
+    assert outside.endswith("OUTSIDE the rule") and "h1 1e-12" in outside

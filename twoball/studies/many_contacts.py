@@ -105,6 +105,17 @@ def measure(drop: tuple[float, float, float]) -> ManyContactsRow:
     )
 
 
+def progress_line(row: ManyContactsRow) -> str:
+    """One drop's result in words, as the study prints it."""
+    rule = "within the rule" if within_rule(row) else "OUTSIDE the rule"
+    return (
+        f"eps {row.eps:.4g}, mu {row.mu:.4g}, tau_ratio {row.tau_ratio:.4g}: "
+        f"{row.contacts_first} ball contacts (reference {row.contacts_first_truth}), "
+        f"relative error h1 {row.rel_err_h1:.2g}, h2 {row.rel_err_h2:.2g} "
+        f"(conditioning {row.cond_h1:.2g}, {row.cond_h2:.2g}): {rule}"
+    )
+
+
 def run_study(
     out: Path, *, count: int = SAMPLE, seed: int = SEED, workers: int = 2
 ) -> list[ManyContactsRow]:
@@ -121,7 +132,7 @@ def run_study(
     with Workers(min(workers, len(drops)), measure) as pool:
         for index, row, _ in pool.results([(drop,) for drop in drops]):
             rows[index] = row
-            print(f"  drop {index + 1}/{len(drops)}: {row}", flush=True)
+            print(f"  drop {index + 1}/{len(drops)}: {progress_line(row)}", flush=True)
     write_csv(rows, out / "many_contacts.csv", COLUMNS)
     worst = max(max(r.rel_err_h1, r.rel_err_h2) for r in rows)
     outside = sum(not within_rule(r) for r in rows)
