@@ -58,7 +58,7 @@ from .scene import (
     later,
     on_screen,
 )
-from .state import validate
+from .state import MAP_COLOURS, validate
 from .worksheet import slice_csv
 
 CUBE = "map"
@@ -67,7 +67,7 @@ HERTZ_CUBES = {1e2: "hertz-h1e2", 1e4: "hertz-h1e4"}
 MOST_PIXELS = 400  # per axis, of a cube not evenly spaced in log10 (log_grid)
 SMALLEST_OUTLINED = 4  # cells: a delayed-rebound patch smaller than this is not outlined
 PROJECTOR_MAP_HEIGHT = 490  # presentation mode (scene.py): both axes and the colour bar in 720 px
-SHOWN = ("h2_over_h1", "h1_over_icm", "h1_over_drop", "h2_over_drop", "contacts_first")
+SHOWN = MAP_COLOURS
 RATIO_CENTRES = {"h2_over_h1": 1.0, "h1_over_icm": 1.0}
 # the choice's words for a variable where the cube's long name is too long for it (the select
 # showed "number of ball-ball contact intervals bef"); the colour bar keeps the long name
@@ -290,6 +290,10 @@ class MapScene(Scene):
             stylesheets=for_a_room(self.state.presentation),
         )
         self.choice.link(self, value="variable")
+        # the variable is the state's, which a link carries (map_colour), and the choice shows it
+        self.variable = self.choice.value = self.state.map_colour
+        self.param.watch(self._variable_chosen, "variable")
+        self.state.param.watch(lambda event: setattr(self, "variable", event.new), "map_colour")
         self.force = pn.widgets.RadioButtonGroup.from_param(  # (no tooltip: see app/stack.py)
             self.state.param.map_force, name="force", width=160, description=None
         )
@@ -318,6 +322,9 @@ class MapScene(Scene):
             pn.bind(self._figure, self.param.variable, self.state.param.map_force),
             sizing_mode="stretch_width",
         )
+
+    def _variable_chosen(self, event: param.parameterized.Event) -> None:
+        self.state.map_colour = self.choice.value = event.new
 
     def cube_name(self) -> str:
         """The shipped cube shown: the map cube, or the Hertz cube nearest the drop's H."""

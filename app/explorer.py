@@ -150,7 +150,16 @@ class Explorer(Built):
                 document.add_timeout_callback(write, URL_DELAY_MS)
 
         stack = ["balls", "stack_ratio", "stack_eps", "stack_gap", "force", "stack_eps_contacts"]
-        watched = [*MODEL_PARAMETERS, "preset", "scene", "units", "step", "map_force", *stack]
+        watched = [
+            *MODEL_PARAMETERS,
+            "preset",
+            "scene",
+            "units",
+            "step",
+            "map_force",
+            "map_colour",
+            *stack,
+        ]
         self.state.param.watch(changed, watched)
         pn.state.onload(write)  # once the browser has reported its own URL
 

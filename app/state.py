@@ -33,6 +33,10 @@ STACK_URL_KEYS = {
 }
 
 
+# what the delayed-rebound map can colour (app/delayed_map.py), the first by default
+MAP_COLOURS = ("h2_over_h1", "h1_over_icm", "h1_over_drop", "h2_over_drop", "contacts_first")
+
+
 class ExplorerState(Parameters):
     """One session's drop (the model's parameters) and what is on screen.
 
@@ -100,6 +104,11 @@ class ExplorerState(Parameters):
         objects=["linear", "hertz"],
         doc="The contact force of the delayed-rebound map (the shipped cube shown).",
     )
+    map_colour = param.Selector(
+        default=MAP_COLOURS[0],
+        objects=list(MAP_COLOURS),
+        doc="The quantity the delayed-rebound map colours (a variable of its cubes).",
+    )
 
 
 def app_range(name: str) -> tuple[float, float]:
@@ -164,6 +173,14 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
             values[name] = value
             if message:
                 messages.append(f"URL {key}: {message}")
+    if "map_colour" in query:
+        if query["map_colour"] in MAP_COLOURS:
+            values["map_colour"] = query["map_colour"]
+        else:
+            messages.append(
+                f"URL map_colour: must be one of {', '.join(MAP_COLOURS)}; got "
+                f"{query['map_colour'][:40]!r}. Using {MAP_COLOURS[0]}."
+            )
     for name in ("force", "map_force"):
         if name in query:
             forces = ExplorerState.param[name].objects
@@ -308,6 +325,8 @@ def url_query(state: ExplorerState) -> dict[str, str]:
             query["eps_contacts"] = state.stack_eps_contacts.strip()
     if state.scene == "map" and state.map_force != "linear":
         query["map_force"] = state.map_force
+    if state.scene == "map" and state.map_colour != MAP_COLOURS[0]:
+        query["map_colour"] = state.map_colour
     if state.step:
         query["step"] = str(state.step)
     if state.presentation:

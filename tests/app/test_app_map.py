@@ -231,3 +231,24 @@ def test_a_map_first_opened_from_another_scene_shows_its_slice():
     scene._redraw()  # (what the page does on the next tick)
     assert scene.active and scene.slice_eps == nearest_eps(0.7)
     assert_same(sent(scene), drawn_by_holoviews(scene))
+
+
+def test_the_map_s_colour_travels_in_a_link():
+    """The quantity coloured is in the URL (map_colour), read back from a link, kept out of it
+    at its default and on other scenes, and a bad one is reported (a new user's shared link
+    reopened on h2/h1)."""
+    from app.state import read_query, url_query
+
+    explorer, scene = map_on_screen({"map_colour": "contacts_first"})
+    assert scene.variable == "contacts_first" and scene.choice.value == "contacts_first"
+    assert url_query(explorer.state)["map_colour"] == "contacts_first"
+    scene.choice.value = "h1_over_icm"  # chosen in the page
+    assert explorer.state.map_colour == scene.variable == "h1_over_icm"
+    assert url_query(explorer.state)["map_colour"] == "h1_over_icm"
+    explorer.state.map_colour = "h2_over_h1"  # (back to the default: a short link)
+    assert scene.variable == scene.choice.value == "h2_over_h1"
+    assert "map_colour" not in url_query(explorer.state)
+    explorer.state.param.update(map_colour="h2_over_drop", scene="drop")
+    assert "map_colour" not in url_query(explorer.state)
+    values, messages = read_query({"map_colour": "speed"}, explorer.state)
+    assert "map_colour" not in values and messages[0].startswith("URL map_colour: must be one")
