@@ -25,7 +25,7 @@ from bokeh.models import (
 from bokeh.plotting import figure
 
 from twoball.errors import ParameterError
-from twoball.stacks import StackResult, StackTrajectory, icm_chain, simulate_stack
+from twoball.stacks import StackResult, icm_chain, simulate_stack
 from twoball.units import number_text
 
 from .animation import Animation, FramePlayer
@@ -228,8 +228,8 @@ class StackScene(Scene):
         options = {"height": s.height, "force": s.force, "throw": False}
         self._run = (arguments, options)  # (the animation's frames are a run of their own)
         try:
-            # to h1 only (a tenth of the run or less): its time and the contacts before it
-            first = simulate_stack(*arguments, **options, until="first")
+            # one run to the second apex, its dense output kept: sampled once its end is known
+            result = simulate_stack(*arguments, **options, dense_output=True)
         except ParameterError as error:  # e.g. six balls, each 0.01 of the one below: 1e-10
             self.result = None
             self.summary.object = (
@@ -237,35 +237,28 @@ class StackScene(Scene):
                 "Choose fewer balls or a larger mass ratio."
             )
             return
-        # then the whole run, sampled on the way to a time that h2 = h1 would end at (past the
-        # end: NaN, dropped); a later end (h2 well above h1) is sampled in a run of its own
-        end = first.end_time
-        if first.h1 is not None:
-            end += 2.0 * np.sqrt(2.0 * max(first.h1, 0.0))
-        self.result = self._sampled(arguments, options, end, first.contacts)
-        r = self.result
-        if r.success and r.end_time > end:
-            self.result = self._sampled(arguments, options, r.end_time, r.contacts)
+        self.result = self._sampled(result)
         self.summary.object = self._summary_text()
         r = self.result
         self.times, self.slow = frame_times(r.end_time, r.contacts)  # the animation's
         self.player.end = len(self.times) - 1
 
     @staticmethod
-    def _sampled(arguments: tuple, options: dict, end: float, contacts: list) -> StackResult:
-        """The run to the top ball's second apex, its heights sampled at SAMPLES times to
-        ``end`` and through each of ``contacts``; the samples past the run's end dropped."""
+    def _sampled(result: StackResult) -> StackResult:
+        """``result`` (a run to the top ball's second apex, with its dense output) with its
+        heights at SAMPLES times to its end and through each contact before the top ball's
+        first apex (docs/performance.md, "The Stack scene's forces": one run a move, where
+        there were two, the first to learn the time span)."""
+        first = result.apex_t[0] if result.apex_t else result.end_time
+        contacts = [(c.start, min(c.end, first)) for c in result.contacts if c.start < first]
         through_each = max(2, min(9, CONTACT_SAMPLES // max(len(contacts), 1)))
         times = np.unique(
             np.concatenate(
-                [np.linspace(0.0, end, SAMPLES)]
-                + [np.linspace(c.start, c.end, through_each) for c in contacts]
+                [np.linspace(0.0, result.end_time, SAMPLES)]
+                + [np.linspace(start, end, through_each) for start, end in contacts]
             )
         )
-        result = simulate_stack(*arguments, **options, t_eval=times, nan_past_end=True)
-        tr = result.trajectory
-        kept = ~np.isnan(tr.x[:, 0])
-        result.trajectory = StackTrajectory(tr.t[kept], tr.x[kept], tr.v[kept], tr.f[kept])
+        result.trajectory = result.evaluate(times)
         return result
 
     @param.depends("revision", watch=True)

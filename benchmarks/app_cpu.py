@@ -7,7 +7,12 @@ its figures' data, Panel's widgets following the state) plus the PATCH-DOC messa
 send, serialised. The baseline, in the same process, is a page whose move only replaces a
 10-point line. Medians of ``--moves`` moves after two warm-up moves.
 
-    .venv/bin/python benchmarks/app_cpu.py [--moves 40]
+    .venv/bin/python benchmarks/app_cpu.py [--moves 40] [--scenes "stack (eps)" ...]
+        [--balls 3] [--force linear|hertz]
+
+``--balls`` and ``--force`` are the Stack scene's (its eps moved as
+benchmarks/stack_force_latency.py moves it, over ten values: a Hertz eps is calibrated once per
+process, and the first ten moves of each pay for it).
 """
 
 from __future__ import annotations
@@ -36,6 +41,7 @@ MOVES = {
     "map (star)": ("mu", np.linspace(0.01, 0.2, 7)),
     "map (eps slice)": ("eps", np.linspace(0.5, 0.95, 7)),
     "stack": ("stack_ratio", np.linspace(0.1, 0.5, 7)),
+    "stack (eps)": ("stack_eps", np.round(0.3 + 0.7 * (0.3 + 0.06 * np.arange(10)), 2)),
 }
 
 
@@ -57,12 +63,12 @@ def timed_moves(document: Document, move, count: int) -> tuple[list[float], int]
     return times, size
 
 
-def scene_moves(scene: str, count: int) -> tuple[list[float], int]:
+def scene_moves(scene: str, count: int, stack: dict[str, str]) -> tuple[list[float], int]:
     from app.explorer import Explorer
 
     document = Document()
     with set_curdoc(document):
-        explorer = Explorer({"scene": scene.split()[0]})
+        explorer = Explorer({"scene": scene.split()[0], **stack})
         explorer.page().server_doc(document)
     name, values = MOVES[scene]
 
@@ -94,6 +100,9 @@ def baseline_moves(count: int) -> tuple[list[float], int]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--moves", type=int, default=40)
+    parser.add_argument("--scenes", nargs="*", default=list(MOVES), choices=list(MOVES))
+    parser.add_argument("--balls", type=int, default=3, help="the Stack scene's")
+    parser.add_argument("--force", default="linear", choices=["linear", "hertz"])
     args = parser.parse_args()
     pn.extension()
     from app.app_hooks import bokeh_as_served
@@ -102,7 +111,8 @@ def main() -> None:
     warmup.warm_up()  # compiled kernels, as a running server has them
     bokeh_as_served()  # and Bokeh set up as the server sets it up
     rows = [("baseline (10-point line)", *baseline_moves(args.moves))]
-    rows += [(scene, *scene_moves(scene, args.moves)) for scene in MOVES]
+    stack = {"N": str(args.balls), "force": args.force}
+    rows += [(scene, *scene_moves(scene, args.moves, stack)) for scene in args.scenes]
     print(f"server CPU per slider move, median of {args.moves} (ms), and the patch sent (bytes)")
     for label, times, size in rows:
         print(f"{label:26s} {statistics.median(times):7.1f} ms {size:9d} B")

@@ -4,12 +4,12 @@
 
 (0e1a585 is the last revision with the compiled DOP853, before the Taylor series.)
 
-The other revision's twoball/kernels/hertz.py (``git show``; it must run on this tree's lower
-kernel modules) is loaded beside this tree's under another name, and both run the documented
-drops (benchmarks/stacks.py: mass ratio 0.2 between neighbours, eps 0.9, gaps 0.2, H = 1e4, to
-the top ball's second apex) on the same inputs, alternating kernel by kernel within each round,
-so that both are measured under the same load. Prints each round's median CPU time per drop and
-the median over the rounds, with each kernel's steps and h1, h2.
+The other revision's twoball/kernels/hertz.py and taylor.py (``git show``; they must run on
+this tree's lower kernel modules) are loaded beside this tree's under other names, and both run
+the documented drops (benchmarks/stacks.py: mass ratio 0.2 between neighbours, eps 0.9, gaps
+0.2, H = 1e4, to the top ball's second apex) on the same inputs, alternating kernel by kernel
+within each round, so that both are measured under the same load. Prints each round's median
+CPU time per drop and the median over the rounds, with each kernel's steps and h1, h2.
 """
 
 from __future__ import annotations
@@ -33,21 +33,24 @@ BALLS = ((2, 40), (3, 20), (6, 3))  # (balls, repeats per round)
 
 
 def load_base(revision: str):
-    """The kernel module of ``revision``, imported under another name."""
-    source = subprocess.run(
-        ["git", "show", f"{revision}:twoball/kernels/hertz.py"],
-        cwd=HERE,
-        capture_output=True,
-        text=True,
-        check=True,
-    ).stdout
+    """The kernel module of ``revision``, imported under another name, with its own Taylor
+    series module (taylor.py, under another name too)."""
     folder = Path(tempfile.mkdtemp(prefix="hertz-base-"))
-    path = folder / "hertz_base.py"
-    path.write_text(source)
-    spec = importlib.util.spec_from_file_location("hertz_base", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["hertz_base"] = module
-    spec.loader.exec_module(module)
+    for name in ("taylor", "hertz"):
+        source = subprocess.run(
+            ["git", "show", f"{revision}:twoball/kernels/{name}.py"],
+            cwd=HERE,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+        source = source.replace("from twoball.kernels.taylor import", "from taylor_base import")
+        path = folder / f"{name}_base.py"
+        path.write_text(source)
+        spec = importlib.util.spec_from_file_location(f"{name}_base", path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[f"{name}_base"] = module
+        spec.loader.exec_module(module)
     return module
 
 

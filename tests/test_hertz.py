@@ -391,3 +391,16 @@ def test_one_reference_value_recomputed():
             for name in ("h1_truth", "h2_truth"):
                 error = abs(mpmath.mpf(fresh[name]) / mpmath.mpf(stored[name]) - 1)
                 assert error < tolerance, (stored["eps"], name, error)
+
+
+def test_the_slider_s_damping_factors_are_the_calibrated_ones():
+    """The damping factors shipped for the app's eps slider (k / 100, k = 30 to 100) are what
+    the calibration computes, to the bit; an eps between two steps is calibrated."""
+    from twoball.stacks import hertz_contact
+
+    for k, factor in zip(hertz_contact.SLIDER_STEPS, hertz_contact.SLIDER_FACTORS, strict=True):
+        assert hertz_contact._calibrated(k / 100) == factor, k
+        assert hertz.damping_factor(k / 100) == factor
+    between = hertz.damping_factor(0.515)
+    assert between == hertz_contact._calibrated(0.515)
+    assert hertz.damping_factor(0.52) < between < hertz.damping_factor(0.51)

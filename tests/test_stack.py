@@ -199,7 +199,7 @@ def test_bad_options():
 
 def test_the_methods_are_one_mapping_of_one_signature(monkeypatch):
     """twoball.stacks.METHODS maps each force, then each name, to a solver of one signature,
-    solve(stack, apexes, t_end, times) -> StackResult, as twoball.METHODS does for two balls;
+    solve(stack, apexes, t_end, times, dense) -> StackResult, as twoball.METHODS does for two balls;
     simulate_stack runs what the mapping holds, and refuses a name it does not hold."""
     from twoball.stacks import METHODS, hertz
     from twoball.stacks.model import FORCES
@@ -207,15 +207,17 @@ def test_the_methods_are_one_mapping_of_one_signature(monkeypatch):
     assert list(METHODS) == list(FORCES)
     assert list(METHODS["hertz"]) == list(hertz.METHODS) == ["compiled", "DOP853"]
     stack = check_stack([0.1], 0.9, 0.1, height=100.0, force="hertz")
-    runs = {name: solve(stack, 1, math.inf, None) for name, solve in METHODS["hertz"].items()}
+    runs = {
+        name: solve(stack, 1, math.inf, None, False) for name, solve in METHODS["hertz"].items()
+    }
     for name, result in runs.items():
         assert (result.method, result.force, result.status) == (name, "hertz", Status.DONE)
     # two independent integrations of the same equations
     assert runs["compiled"].h1 == pytest.approx(runs["DOP853"].h1, rel=1e-9)
-    pair = METHODS["linear"]["compiled"](check_stack([0.01], 0.9, 0.01), 2, math.inf, None)
+    pair = METHODS["linear"]["compiled"](check_stack([0.01], 0.9, 0.01), 2, math.inf, None, False)
     assert pair.method == "compiled" and pair.h2 == pytest.approx(CLOSE_UP.h2, rel=1e-8)
 
-    def stub(stack, apexes, t_end, times):
+    def stub(stack, apexes, t_end, times, dense):
         return pair
 
     monkeypatch.setitem(METHODS["linear"], "compiled", stub)
@@ -483,3 +485,42 @@ def test_each_ball_s_apexes_are_the_kernel_s_rows_in_order():
             expected[int(ball)].append((when, where))
         assert result.apexes == expected
         assert sum(map(len, expected)) == out.apexes.shape[0]
+
+
+def test_dense_output_evaluates_the_run_once_it_has_ended():
+    """dense_output: a run sampled after its end is known, with no second run (the Stack
+    scene's move). Linear: the kernel's own closed forms, the very samples of t_eval. Hertz
+    (three balls): the cubics between the steps' ends within 2e-3 of the heights sampled on the
+    series (3e-5 of the largest compression; straight lines between the same states are off by
+    thousands), within 1 % of the largest force; a run kept dense ends where others do; the
+    reference method and a run without it refuse."""
+    for force in ("linear", "hertz"):
+        stack = ([0.2, 0.2], 0.9, 0.2)
+        run = simulate_stack(*stack, force=force, dense_output=True)
+        unsampled = simulate_stack(*stack, force=force)
+        assert run.apexes == unsampled.apexes and run.end_time == unsampled.end_time
+        times = np.unique(
+            np.concatenate(
+                [np.linspace(0.0, run.end_time, 2001)]
+                + [np.linspace(c.start, c.end, 9) for c in run.contacts]
+            )
+        )
+        sampled = simulate_stack(*stack, force=force, t_eval=times).trajectory
+        dense = run.evaluate(times)
+        if force == "linear":
+            for got, expected in zip(
+                (dense.x, dense.v, dense.f), (sampled.x, sampled.v, sampled.f), strict=True
+            ):
+                np.testing.assert_array_equal(got, expected)
+            continue
+        assert np.abs(dense.x - sampled.x).max() < 2e-3
+        assert np.abs(dense.v - sampled.v).max() < 0.05
+        assert np.abs(dense.f - sampled.f).max() < 0.01 * np.abs(sampled.f).max()
+        at_h1 = run.evaluate(run.apex_t[0])
+        assert at_h1.x[0, -1] == pytest.approx(run.h1, rel=1e-15)
+    with pytest.raises(ParameterError, match="t must lie within the run's time span"):
+        run.evaluate(1.01 * run.end_time)
+    with pytest.raises(ValueError, match="dense_output=True"):
+        unsampled.evaluate(0.0)
+    with pytest.raises(ParameterError, match="compiled methods only"):
+        simulate_stack(*stack, force="hertz", method="DOP853", dense_output=True)

@@ -50,6 +50,7 @@ KERNEL_MODULES = (
     "twoball.kernels.clusters",
     "twoball.kernels.stack",
     "twoball.kernels.taylor",
+    "twoball.kernels.certified",
     "twoball.kernels.hertz",
 )
 

@@ -100,7 +100,7 @@ def run_cells(masses, lam, x_start, apex_h, apex_t, contacts, status):
     ball-ball contacts before the first apex, how it ended. Runs without the GIL."""
     none = np.empty(0)
     for c in range(masses.shape[0]):
-        code, _end, apexes, _contacts, first, _samples, _steps = hertz_kernel.run(
+        code, _end, apexes, _contacts, first, _samples, _steps, _nodes = hertz_kernel.run(
             masses[c], lam[c], x_start[c], 2, np.inf, none
         )
         found = 0

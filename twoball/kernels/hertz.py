@@ -26,7 +26,9 @@ with a contact active is integrated by Taylor series of order :data:`ORDER` (doc
   sum moved on with exact products.
 - **The state at an event is the series' own** at the event's tau (the series is the step's
   dense output, at the step's accuracy): a switch is found on it by regula falsi, an apex or
-  a sample time by Newton's method on the clock's series.
+  a sample time by Newton's method on the clock's series. A run's dense output, when asked
+  (``dense``), is coarser: the state at every step's end (:func:`_node`), with cubics between
+  (:func:`between_nodes`), to sample a run once its end is known.
 
 No touch or release is stepped over, and most are stepped to in one step, found on the series
 (docs/stacks.md, "How each force is solved"): an open contact's overlap is concave in time (its
@@ -39,8 +41,9 @@ first root found. Where these do not hold (a contact open but still overlapping,
 a rho that may dip through zero and back), the certified steps of :mod:`twoball.stacks.hertz`
 (the energy, which never rises, bounds every force; with the contacts active in a phase that
 bounds eta'' towards each switch; each step keeps eta + eta' h - M h^2 / 2 on its side), ported
-as they are, cut the step on the clock; a span certified so holds for every step inside it, so
-:data:`AHEAD` steps are certified at once. The clamp (1 + lam delta' = 0) is looked for at
+as they are (:mod:`twoball.kernels.certified`), cut the step on the clock; a span certified so
+holds for every step inside it, so :data:`~twoball.kernels.certified.AHEAD` steps are certified
+at once. The clamp (1 + lam delta' = 0) is looked for at
 :data:`PROBES` points of each step in which eta', bounded from its series, can reach 1 / lam,
 and refined by regula falsi: estimated, not proven (as in :mod:`twoball.stacks.hertz`). A
 contact touching with neither compression nor speed (balls released touching) would stall the
@@ -56,6 +59,14 @@ import math
 import numpy as np
 
 from twoball.jit import njit
+from twoball.kernels.certified import (
+    STALL,
+    _needs_certifying,
+    _power,
+    _recertified,
+    _weights,
+    force_bounds,
+)
 from twoball.kernels.codes import STATUS_DONE, STATUS_FAILED, STATUS_PHASES, STATUS_REST
 from twoball.kernels.runs import _room_for_one
 from twoball.kernels.taylor import (
@@ -74,18 +85,10 @@ from twoball.kernels.taylor import (
 
 MAX_STEPS = 300_000  # a run that cannot end fails within seconds (a step takes ~4 us)
 PROBES = 8  # points per step where the clamp is looked for
-AHEAD = 4.0  # steps certified at once
-STALL = 1e-8  # a contact this close to delta = 0 and delta' = 0 would stall the time change
 
 
 # what ends a phase
 K_SWITCH, K_APEX, K_TIME, K_REST, K_STEPS, K_FAILED = 0, 1, 2, 3, 4, 5
-
-
-@njit
-def _power(delta: float) -> float:
-    """delta^(3/2), delta >= 0 (a square root: pow costs several times more)."""
-    return delta * math.sqrt(delta)
 
 
 @njit
@@ -97,61 +100,6 @@ def energy(masses, x, v) -> float:
         delta = max(-eta, 0.0)
         total += 0.5 * masses[j] * v[j] * v[j] + masses[j] * x[j] + 0.4 * delta * _power(delta)
     return total
-
-
-@njit
-def _weights(masses):
-    """W_c, the weight above contact c (its ball's and every ball's above)."""
-    n = masses.size
-    weights = np.empty(n)
-    above = 0.0
-    for c in range(n - 1, -1, -1):
-        above += masses[c]
-        weights[c] = above
-    return weights
-
-
-@njit
-def force_bounds(masses, lam, total) -> np.ndarray:
-    """F_c >= f_c for the rest of the run, from the energy ``total``, which never rises (the
-    argument of twoball.stacks.hertz._force_bounds)."""
-    n = masses.size
-    weights = _weights(masses)
-    wells = 0.6 * weights ** (5.0 / 3.0)
-    kinetic = total + wells.sum()
-    force = np.empty(n)
-    for c in range(n):
-        room = total + wells.sum() - wells[c]
-        delta = max(weights[c] ** (2.0 / 3.0), 1.0)
-        while 0.4 * delta**2.5 - weights[c] * delta <= room:
-            delta *= 1.5
-        closing = math.sqrt(2.0 * kinetic / masses[c])
-        if c >= 1:
-            closing += math.sqrt(2.0 * kinetic / masses[c - 1])
-        force[c] = delta**1.5 * (1.0 + lam[c] * closing)
-    return force
-
-
-@njit
-def _phase_bounds(masses, force, active, both, towards) -> None:
-    """Bounds on eta_c'' while the phase lasts (twoball.stacks.hertz._phase_bounds): |eta''| <=
-    both, and towards, the bound towards each contact's switch."""
-    n = masses.size
-    for c in range(n):
-        own_force = force[c] if active[c] else 0.0
-        own = own_force / masses[c]
-        if c >= 1:
-            own += own_force / masses[c - 1]
-        above = force[c + 1] if c + 1 < n and active[c + 1] else 0.0
-        neighbours = above / masses[c]
-        if c >= 1:
-            below = force[c - 1] if active[c - 1] else 0.0
-            neighbours += below / masses[c - 1]
-        else:
-            neighbours += 1.0  # gravity pulls ball 0 towards the floor
-        both[c] = max(own + neighbours, 1e-300)
-        toward = (max(own - 1.0, 0.0) if c == 0 else own) if active[c] else neighbours
-        towards[c] = max(toward, 1e-300)
 
 
 @njit
@@ -182,117 +130,6 @@ def _product(a, b):
     b_high -= b_high - b
     a_low, b_low = a - a_high, b - b_high
     return p, ((a_high * b_high - p) + a_high * b_low + a_low * b_high) + a_low * b_low
-
-
-@njit
-def _rounding(x, deta, t, c) -> float:
-    """The rounding of eta_c: 16 ulp of the heights plus eta' times 16 ulp of the clock."""
-    heights = 1.0
-    for j in range(x.size):
-        heights += abs(x[j])
-    return 16e-16 * (heights + abs(deta[c]) * (1.0 + abs(t)))
-
-
-@njit
-def _step_for(x, eta, deta, t, bound, active) -> float:
-    """The largest h keeping each eta (or -eta, for a contact that pushes) above -tol by
-    eta + eta' h - M h^2 / 2 (twoball.stacks.hertz._step_for)."""
-    step = math.inf
-    for c in range(eta.size):
-        value, rate = (-eta[c], -deta[c]) if active[c] else (eta[c], deta[c])
-        value = max(value, 0.0) + _rounding(x, deta, t, c)
-        root = math.sqrt(rate * rate + 2.0 * bound[c] * value)
-        h = (rate + root) / bound[c] if rate >= 0.0 else 2.0 * value / (root - rate)
-        step = min(step, h)
-    return step
-
-
-@njit
-def _local_forces(masses, lam, eta, deta, active, span, force_bound, both, towards, bound):
-    """Bounds F_c (into ``bound``) on each force over the next ``span``, by bootstrap
-    (twoball.stacks.hertz._local_forces); the run's bound when the bootstrap does not close."""
-    n = masses.size
-    for c in range(n):
-        delta = max(-eta[c], 0.0)
-        bound[c] = min(2.0 * _power(delta) * (1.0 + lam[c] * abs(deta[c])) + 1e-300, force_bound[c])
-    for _ in range(6):
-        _phase_bounds(masses, bound, active, both, towards)
-        holds = True
-        for c in range(n):
-            delta, speed = max(-eta[c], 0.0), abs(deta[c])
-            reach = delta + speed * span + 0.5 * both[c] * span * span
-            implied = _power(reach) * (1.0 + lam[c] * (speed + both[c] * span))
-            if implied >= bound[c]:
-                holds = False
-                both[c] = implied  # kept until the bounds are raised below
-            else:
-                both[c] = -1.0
-        if holds:
-            return
-        capped = True
-        for c in range(n):
-            if both[c] >= 0.0:
-                bound[c] = min(max(bound[c], 1.5 * both[c]), force_bound[c])
-            capped = capped and bound[c] == force_bound[c]
-        if capped:
-            break
-    bound[:] = force_bound
-
-
-@njit
-def certified_step(masses, lam, x, eta, deta, t, force_bound, active, wanted, work) -> float:
-    """A step over which no overlap changes sign unseen (twoball.stacks.hertz._certified_step): from
-    the run's force bounds, then doubled while the forces bounded over the step certify it.
-    ``wanted`` (the integrator's next step) is tried first: if certified, it is the answer.
-    ``work``: (3, N) scratch; its row 0 is left holding bounds on |eta''| valid over the step
-    returned (those of the last bounds tried, over that step or a longer span)."""
-    both, towards, local = work[0], work[1], work[2]
-    if wanted < math.inf:
-        _local_forces(masses, lam, eta, deta, active, wanted, force_bound, both, towards, local)
-        _phase_bounds(masses, local, active, both, towards)
-        if _step_for(x, eta, deta, t, towards, active) >= wanted:
-            return wanted
-    _phase_bounds(masses, force_bound, active, both, towards)
-    step = _step_for(x, eta, deta, t, towards, active)
-    for _ in range(60):
-        trial = 2.0 * step
-        _local_forces(masses, lam, eta, deta, active, trial, force_bound, both, towards, local)
-        _phase_bounds(masses, local, active, both, towards)
-        if _step_for(x, eta, deta, t, towards, active) < trial:
-            break
-        step = trial
-    return step
-
-
-@njit
-def _needs_certifying(eta, deta, active, rho_scales, speed_scales) -> bool:
-    """Whether a contact's switch could be stepped over unseen by the series alone: an open
-    contact still overlapping (clamped, its re-push), or an active one that would stall the time
-    change (it is left out of the series, :data:`STALL`). Any other open contact's overlap is
-    concave in time (its eta'' is minus its neighbours' forces over their masses, none
-    pulling), so if it is open at both ends of a step it is open throughout."""
-    for c in range(eta.size):
-        if active[c]:
-            rho = math.sqrt(max(-eta[c], 0.0))
-            if rho <= STALL * rho_scales[c] and deta[c] >= -STALL * speed_scales[c]:
-                return True
-        elif eta[c] < 0.0:
-            return True
-    return False
-
-
-@njit
-def _recertified(masses, lam, x, eta, deta, t, force_bound, active, certified, h_abs, work, bounds):
-    """The end of a certified span (:func:`certified_step`) holding at t,
-    a span certified before reused (it holds for every step inside it), else a few steps
-    ahead certified at once; ``bounds`` holds |eta''| bounds over it."""
-    if t + h_abs > certified:
-        span = certified_step(
-            masses, lam, x, eta, deta, t, force_bound, active, AHEAD * h_abs, work
-        )
-        certified = t + span
-        bounds[:] = work[0]
-    return certified
 
 
 @njit
@@ -453,6 +290,52 @@ def _sample_forces(row, lam, active) -> None:
                 row[2 * n + c] = _power(-eta) * max(1.0 - lam[c] * deta, 0.0)
 
 
+@njit(borrow=True)
+def _node(nodes, row, t, full, lam, active) -> None:
+    """Row ``row`` of ``nodes``, the dense output (docs/stacks.md, "How each force is solved"):
+    the state at t, time, heights, velocities and forces (from the carried overlaps
+    ``full[2:]``). Element by element, and the array borrowed: slices and reference counts cost
+    more than the copy."""
+    n = lam.size
+    nodes[row, 0] = t
+    for j in range(n):
+        nodes[row, 1 + j], nodes[row, 1 + n + j] = full[0, j], full[1, j]
+        force = 0.0
+        if active[j] and full[2, j] < 0.0:
+            force = _power(-full[2, j]) * max(1.0 - lam[j] * full[3, j], 0.0)
+        nodes[row, 1 + 2 * n + j] = force
+
+
+@njit
+def between_nodes(nodes, masses, times):
+    """Heights, velocities and forces (len(times), N) at ``times`` from the dense output
+    ``nodes`` (:func:`_node`): between two nodes each height is the cubic with their heights
+    and velocities, each velocity the cubic with their velocities and accelerations, each force
+    the straight line (docs/stacks.md, "How each force is solved"). Exact in free flight (a
+    parabola is such a cubic)."""
+    n, last = masses.size, nodes.shape[0] - 1
+    x, v, f = np.empty((times.size, n)), np.empty((times.size, n)), np.empty((times.size, n))
+    starts = np.searchsorted(nodes[:, 0], times, side="right") - 1
+    for k in range(times.size):
+        i = min(max(starts[k], 0), max(last - 1, 0))
+        j = min(i + 1, last)
+        h = nodes[j, 0] - nodes[i, 0]
+        s = (times[k] - nodes[i, 0]) / h if h > 0.0 else 0.0
+        # the cubic Hermite basis: the values at the two ends, then the slopes
+        start, end = (1.0 + 2.0 * s) * (1.0 - s) ** 2, s * s * (3.0 - 2.0 * s)
+        rising, falling = s * (1.0 - s) ** 2 * h, s * s * (s - 1.0) * h
+        for b in range(n):
+            a_i = nodes[i, 1 + 2 * n + b] - (nodes[i, 2 + 2 * n + b] if b + 1 < n else 0.0)
+            a_j = nodes[j, 1 + 2 * n + b] - (nodes[j, 2 + 2 * n + b] if b + 1 < n else 0.0)
+            a_i, a_j = a_i / masses[b] - 1.0, a_j / masses[b] - 1.0
+            x[k, b] = start * nodes[i, 1 + b] + rising * nodes[i, 1 + n + b]
+            x[k, b] += end * nodes[j, 1 + b] + falling * nodes[j, 1 + n + b]
+            v[k, b] = start * nodes[i, 1 + n + b] + rising * a_i
+            v[k, b] += end * nodes[j, 1 + n + b] + falling * a_j
+            f[k, b] = (1.0 - s) * nodes[i, 1 + 2 * n + b] + s * nodes[j, 1 + 2 * n + b]
+    return x, v, f
+
+
 @njit
 def _state_at(s, x0, v0, z, x, v) -> None:
     """Heights and velocities s after the step's start, from its w, w' = z."""
@@ -478,16 +361,18 @@ def _left_out_span(lam, eta, deta, c, both, span, limit) -> float:
 @njit
 def contact_phase(
     masses, lam, state, low, full, t, t_low, active, force_bound, t_end, steps, fresh, watch_rest,
-    times, samples, next_sample, scales, h_abs, level,
+    times, samples, next_sample, scales, h_abs, level, nodes, n_nodes,
 ):  # fmt: skip
     """Integrate a phase with a contact active to its first event by Taylor series (see the
     module), moving the carried state + low (and ``full``, their sum) on in place
     (:func:`_advance`), the clock as t + t_low (:func:`_tick`). ``scales``: each series' scale
     (the rows of :func:`_series`); ``h_abs``: the span on the clock of the last step (what is
-    certified ahead).
+    certified ahead); ``nodes``: the dense output so far, its first ``n_nodes`` rows (:func:`_node`;
+    empty: none kept).
 
-    Returns (kind, index, t, t_low, steps, next_sample, h_abs): kind K_FAILED when a step falls
-    below the spacing of the clock (beyond the domain double precision carries)."""
+    Returns (kind, index, t, t_low, steps, next_sample, h_abs, nodes, n_nodes): kind K_FAILED
+    when a step falls below the spacing of the clock (beyond the domain double precision
+    carries)."""
     n = masses.size
     rows_count = 1 + 3 * n
     S = np.zeros((rows_count, ORDER + 1))
@@ -518,7 +403,7 @@ def contact_phase(
     while steps < MAX_STEPS:
         c = _due(masses, lam, x, eta, deta, t, active, fresh, at_start, accel, forces)
         if c >= 0:
-            return K_SWITCH, c, t, t_low, steps, next_sample, h_abs
+            return K_SWITCH, c, t, t_low, steps, next_sample, h_abs, nodes, n_nodes
         at_start = False
         # the certified span only where a step's series cannot show the switch (see the
         # module): an open contact still overlapping (clamped), or one that would stall
@@ -584,8 +469,8 @@ def contact_phase(
         spacing = 10.0 * (np.nextafter(t, np.inf) - t)
         if not natural <= max_step and max_step < spacing:
             if max_step == t_end - t:  # the end, closer than a step can go
-                return K_TIME, -1, t_end, 0.0, steps, next_sample, h_abs
-            return K_FAILED, -1, t, t_low, steps, next_sample, h_abs
+                return K_TIME, -1, t_end, 0.0, steps, next_sample, h_abs, nodes, n_nodes
+            return K_FAILED, -1, t, t_low, steps, next_sample, h_abs, nodes, n_nodes
         steps += 1
         # the events in the step: each switching function at its end (and, where a clamp can
         # be reached, at probes); each watched ball's apex, exact (its parabola)
@@ -639,7 +524,7 @@ def contact_phase(
             root, kind, index = _time_root(S, max_step, root), K_TIME, -1
             s_root = _value(S, 0, root)
         if kind == K_TIME and not s_root > spacing:
-            return K_FAILED, -1, t, t_low, steps, next_sample, h_abs
+            return K_FAILED, -1, t, t_low, steps, next_sample, h_abs, nodes, n_nodes
         for j in range(n):
             if watched[j] and 0.0 < v[j] <= s_root:
                 root, kind, index, s_root = _time_root(S, v[j], root), K_APEX, j, v[j]
@@ -658,22 +543,29 @@ def contact_phase(
                 _state_at(at, x_old, v_old, z, row[:n], row[n : 2 * n])
                 _sample_forces(row, lam, active)
             next_sample += 1
+        if nodes.shape[0] > 0:  # the dense output, asked for
+            if n_nodes == nodes.shape[0]:
+                nodes = _room_for_one(nodes, n_nodes)
+            _node(nodes, n_nodes, t, full, lam, active)
+            n_nodes += 1
         if kind != K_TIME:
-            return kind, index, t, t_low, steps, next_sample, h_abs
+            return kind, index, t, t_low, steps, next_sample, h_abs, nodes, n_nodes
         if t >= t_end:
-            return K_TIME, -1, t, t_low, steps, next_sample, h_abs
+            return K_TIME, -1, t, t_low, steps, next_sample, h_abs, nodes, n_nodes
         if watch_rest and settled(masses, x, v, level):
-            return K_REST, -1, t, t_low, steps, next_sample, h_abs
-    return K_STEPS, -1, t, t_low, steps, next_sample, h_abs
+            return K_REST, -1, t, t_low, steps, next_sample, h_abs, nodes, n_nodes
+    return K_STEPS, -1, t, t_low, steps, next_sample, h_abs, nodes, n_nodes
 
 
 @njit
-def run(masses, lam, x_start, apexes_wanted, t_end, times):
+def run(masses, lam, x_start, apexes_wanted, t_end, times, dense=False):
     """Run a Hertz stack from rest at heights ``x_start`` until the top ball's
     ``apexes_wanted``-th apex, ``t_end`` or a proven rest, sampling at the sorted ``times``
     (empty: none). Returns (status, end time, apexes (ball, t, h) rows, contact (contact, start,
     end) rows, contacts before the top ball's first apex, samples (times, 3N), steps (the
-    integrator's, and one a free-flight phase, as the budget MAX_STEPS counts them))."""
+    integrator's, and one a free-flight phase, as the budget MAX_STEPS counts them), the dense
+    output: with ``dense``, the state at the start and at the end of every step and flight
+    (rows t, heights, velocities, forces), else no rows)."""
     n = masses.size
     state, low = np.zeros((4, n)), np.zeros((4, n))  # x, v, eta, eta', each as state + low
     full, zeros = np.zeros((4, n)), np.zeros(2 * n)  # state + low, rounded; no w in flight
@@ -709,6 +601,11 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
     switched_at = 0.0
     resting = False
     h_abs = math.inf
+    # the dense output, only when asked: the state at the start and at each step's end
+    nodes = np.empty((4096 if dense else 0, 1 + 3 * n))
+    if dense:
+        _node(nodes, 0, t, full, lam, active)
+    n_nodes = 1 if dense else 0
     while steps < MAX_STEPS:
         if not active.any():
             tau, kind, index = _next_in_flight(lam, full[2], full[3], full[1], t_end - t)
@@ -719,10 +616,15 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
             _advance(tau, zeros, state, low, full)
             t = t_next
             steps += 1
+            if dense:
+                if n_nodes == nodes.shape[0]:
+                    nodes = _room_for_one(nodes, n_nodes)
+                _node(nodes, n_nodes, t, full, lam, active)
+                n_nodes += 1
         else:
-            kind, index, t, t_low, steps, next_sample, h_abs = contact_phase(
+            kind, index, t, t_low, steps, next_sample, h_abs, nodes, n_nodes = contact_phase(
                 masses, lam, state, low, full, t, t_low, active, force_bound, t_end, steps, fresh,
-                not resting, times, samples, next_sample, scales, h_abs, level,
+                not resting, times, samples, next_sample, scales, h_abs, level, nodes, n_nodes,
             )  # fmt: skip
             steps += 1  # a phase counts, so that a run always ends
         if kind == K_TIME or (resting and next_sample == times.size):
@@ -774,4 +676,5 @@ def run(masses, lam, x_start, apexes_wanted, t_end, times):
             contacts[n_contacts, 0], contacts[n_contacts, 1] = c, opened[c]
             contacts[n_contacts, 2] = t
             n_contacts += 1
-    return status, t, apexes[:n_apex].copy(), contacts[:n_contacts].copy(), first, samples, steps
+    apexes, contacts = apexes[:n_apex].copy(), contacts[:n_contacts].copy()
+    return status, t, apexes, contacts, first, samples, steps, nodes[:n_nodes]

@@ -4,6 +4,7 @@ bound, and what a run of it returns (:class:`StackResult`; docs/model.md, "Stack
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -19,7 +20,7 @@ from twoball.model import (
     domain_error,
     floor_contact_time,
 )
-from twoball.observables import ContactInterval, Measured, RunStats
+from twoball.observables import ContactInterval, Measured, RunStats, as_times, check_span
 
 MAX_BALLS = 16
 
@@ -243,7 +244,7 @@ class StackResult(Measured):
     (:class:`~twoball.observables.Measured`): the top ball's apexes ``apex_t``, ``apex_h`` (and
     ``h1``, ``h2``, ...), the contact intervals numbered (0: the floor, i: ball i on ball i - 1)
     and ``contacts_first`` by the same numbers, how the run ended; and every ball's apexes in
-    free flight (``apexes``)."""
+    free flight (``apexes``). :meth:`evaluate` needs ``dense_output``."""
 
     stack: Stack
     force: str
@@ -256,6 +257,27 @@ class StackResult(Measured):
     trajectory: StackTrajectory | None = field(default=None, repr=False)
     reason: str | None = None  # None when the run reached what was asked, else why not
     stats: RunStats = field(default=RunStats(), compare=False)
+    dense: Callable[[np.ndarray], StackTrajectory] | None = field(
+        default=None, repr=False, compare=False
+    )
+
+    def evaluate(self, t: np.ndarray | float) -> StackTrajectory:
+        """The heights, velocities and forces at times ``t`` within the run, from its dense
+        output (``simulate_stack(..., dense_output=True)``): exact for the linear force (its
+        closed forms); for the Hertz force the cubics between its steps' ends
+        (:func:`twoball.stacks.hertz.between_nodes`, docs/stacks.md, "How each force is
+        solved"). A run sampled once its end is known, with no second run.
+
+        >>> from twoball.stacks import simulate_stack
+        >>> r = simulate_stack([0.2, 0.2], 0.9, 0.2, force="hertz", dense_output=True)
+        >>> bool(abs(r.evaluate(r.apex_t[0]).x[0, 2] - r.h1) < 1e-9 * r.h1)
+        True
+        """
+        if self.dense is None:
+            raise ValueError("evaluate needs a run with dense_output=True")
+        times = as_times("t", t)
+        check_span("t", times, self.end_time, False)
+        return self.dense(times)
 
     @property
     def apex_t(self) -> list[float]:

@@ -39,6 +39,7 @@ def simulate_stack(
     until: str | float = "second",
     t_eval: object = None,
     nan_past_end: bool = False,
+    dense_output: bool = False,
     throw: bool = True,
     method: str = "compiled",
 ) -> StackResult:
@@ -67,6 +68,11 @@ def simulate_stack(
         Times of ``t_eval`` past the run's end (when it did not end at rest) give NaN instead of
         a ParameterError: a run to an apex, whose time is not known beforehand, sampled in the
         same pass.
+    dense_output : bool
+        Keep what :meth:`StackResult.evaluate` needs to give the state at any times of the run
+        once it has ended (its end is known then): the linear run's phases, the Hertz run's
+        state at every step's end. Only when asked (a six-ball Hertz run keeps ~7 500 states);
+        the compiled methods only.
     throw : bool
         A run that fails raises :class:`~twoball.errors.SolverError`; with False the result says
         so (``success``, ``status``).
@@ -104,7 +110,7 @@ def simulate_stack(
     if t_eval is not None:
         times = as_times("t_eval", t_eval)
         check_span("t_eval", times, math.inf, False)  # no time before the release
-    result = solvers[method](stack, apexes_wanted, t_end, times)
+    result = solvers[method](stack, apexes_wanted, t_end, times, dense_output)
     stack = result.stack  # with the Hertz force its gaps are in units of the Hertz floor contact
     # after the end the closed form (linear) would be extrapolated, or nothing sampled (Hertz);
     # after a proven rest every later state is that rest's
@@ -131,18 +137,19 @@ def _blank_past(trajectory: StackTrajectory, end_time: float) -> None:
 
 
 def solve_linear(
-    stack: Stack, apexes_wanted: int, t_end: float, times: np.ndarray | None
+    stack: Stack, apexes_wanted: int, t_end: float, times: np.ndarray | None, dense: bool
 ) -> StackResult:
     """The linear force's exact solver, the compiled N-ball kernel
     (:func:`twoball.kernels.stack.run`), on a validated stack: to ``apexes_wanted`` apexes of the
-    top ball or ``t_end``, sampled at ``times`` if given."""
+    top ball or ``t_end``, sampled at ``times`` if given; with ``dense`` its phases kept for
+    :meth:`StackResult.evaluate`."""
     out = kernel.run(
         stack.masses,
         stack.zeta,
         stack.x_start,
         apexes_wanted,
         t_end,
-        times is not None,
+        times is not None or dense,
         _store_for(stack),
     )
     with _collector_paused():
@@ -150,10 +157,7 @@ def solve_linear(
         # three-ball drop's time outside the kernel)
         apexes = _apexes_by_ball(out.apexes, stack.balls)
         contacts = _intervals(out.contacts.tolist())
-    trajectory = None
-    if times is not None:
-        heights, speeds, forces = kernel.sample(out.phases, times, stack.masses, stack.zeta)
-        trajectory = StackTrajectory(times, heights, speeds, forces)
+    states = partial(_linear_states, out.phases, stack)
     return StackResult(
         stack=stack,
         force="linear",
@@ -163,8 +167,9 @@ def solve_linear(
         contacts_first=[int(count) for count in out.contacts_first],
         end_time=float(out.end_time),
         status=Status(out.status),
-        trajectory=trajectory,
+        trajectory=None if times is None else states(times),
         stats=RunStats(phases=out.phase_count),
+        dense=states if dense else None,
     )
 
 
@@ -197,6 +202,12 @@ def _intervals(rows: list[list[float]]) -> list[ContactInterval]:
     return intervals
 
 
+def _linear_states(phases: np.ndarray, stack: Stack, times: np.ndarray) -> StackTrajectory:
+    """The exact states at ``times`` from a linear run's recorded phases."""
+    heights, speeds, forces = kernel.sample(phases, times, stack.masses, stack.zeta)
+    return StackTrajectory(times, heights, speeds, forces)
+
+
 @contextmanager
 def _collector_paused() -> Iterator[None]:
     """Python's cycle collector paused while a run's apexes and contact intervals are built:
@@ -215,19 +226,25 @@ def _collector_paused() -> Iterator[None]:
 
 
 def _solve_hertz(
-    name: str, stack: Stack, apexes_wanted: int, t_end: float, times: np.ndarray | None
+    name: str,
+    stack: Stack,
+    apexes_wanted: int,
+    t_end: float,
+    times: np.ndarray | None,
+    dense: bool,
 ) -> StackResult:
     """The Hertz method ``name`` (:data:`twoball.stacks.hertz.METHODS`), imported when first run:
     it loads scipy's integrator, which the linear force does without."""
     from twoball.stacks import hertz
 
-    return hertz.METHODS[name](stack, apexes_wanted, t_end, times)
+    return hertz.METHODS[name](stack, apexes_wanted, t_end, times, dense)
 
 
 # Every method by force, then by name (as :data:`twoball.METHODS` for two balls): one signature,
-# solve(stack, apexes_wanted, t_end, times) -> StackResult, on a validated stack (check_stack),
-# with the apex count and end time of stop_rule and the sample times (or None) checked.
-StackSolver = Callable[[Stack, int, float, np.ndarray | None], StackResult]
+# solve(stack, apexes_wanted, t_end, times, dense) -> StackResult, on a validated stack
+# (check_stack), with the apex count and end time of stop_rule, the sample times (or None)
+# checked, and whether to keep the dense output (StackResult.evaluate).
+StackSolver = Callable[[Stack, int, float, np.ndarray | None, bool], StackResult]
 METHODS: dict[str, dict[str, StackSolver]] = {
     "linear": {"compiled": solve_linear},
     "hertz": {name: partial(_solve_hertz, name) for name in ("compiled", "DOP853")},
