@@ -173,23 +173,15 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
             values[name] = value
             if message:
                 messages.append(f"URL {key}: {message}")
-    if "map_colour" in query:
-        if query["map_colour"] in MAP_COLOURS:
-            values["map_colour"] = query["map_colour"]
-        else:
-            messages.append(
-                f"URL map_colour: must be one of {', '.join(MAP_COLOURS)}; got "
-                f"{query['map_colour'][:40]!r}. Using {MAP_COLOURS[0]}."
-            )
-    for name in ("force", "map_force"):
+    for name in ("force", "map_force", "map_colour", "units"):  # (a choice among names)
         if name in query:
-            forces = ExplorerState.param[name].objects
-            if query[name] in forces:
+            choices = ExplorerState.param[name].objects
+            if query[name] in choices:
                 values[name] = query[name]
             else:
                 messages.append(
-                    f"URL {name}: must be one of {', '.join(forces)}; got "
-                    f"{query[name][:40]!r}. Using linear."
+                    f"URL {name}: must be one of {', '.join(choices)}; got "
+                    f"{query[name][:40]!r}. Using {getattr(defaults, name, choices[0])}."
                 )
     if "eps_contacts" in query:
         text = query["eps_contacts"][:200]
@@ -200,14 +192,6 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
             messages.append(f"URL eps_contacts: {message}")
     if query.get("present") in ("1", "true", "yes"):
         values["presentation"] = True
-    if "units" in query:
-        if query["units"] in UNITS:
-            values["units"] = query["units"]
-        else:
-            messages.append(
-                f"URL units: must be one of {', '.join(UNITS)}; got {query['units']!r}. "
-                f"Using {defaults.units}."
-            )
     if "step" in query:
         text = query["step"]
         if text.isdigit() and 1 <= int(text) <= len(STEPS):
