@@ -65,7 +65,8 @@ class AccuracyScene(Scene):
         # a new Bokeh figure per result (the number of methods drawn varies; a figure built
         # whole arrives whole in the browser); drawn by HoloViews, a result cost about ten
         # times as much, and the scene's opening twice the others'
-        self.plot = pn.pane.Bokeh(self._figure([]), sizing_mode="stretch_width")
+        # (none until the first result: a figure without renderers is a mistake Bokeh reports)
+        self.plot = pn.pane.Bokeh(None, sizing_mode="stretch_width")
         self.table = Text(pn.bind(self._table, self.param.revision), sizing_mode="stretch_width")
         # what is being computed, said in words (Panel's loading overlay, set back from the
         # computation's callback, sometimes stayed on in the browser though the plots arrived)
@@ -138,7 +139,7 @@ class AccuracyScene(Scene):
 
     @param.depends("revision", watch=True)
     def _draw(self) -> None:
-        self.plot.object = self._figure(self.rows or [])
+        self.plot.object = self._figure(self.rows) if self.rows else None
 
     def _figure(self, rows: list[PrecisionRow]):
         """Error against run time, both logarithmic, a line and its points per method, the
