@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import types
 
+import panel as pn
 import panel.io.document
 import pytest
 from tornado.websocket import WebSocketClosedError, WebSocketHandler
@@ -190,3 +191,44 @@ def test_cached_bokeh_defaults_equal_bokehs_own_for_every_model_class(monkeypatc
     first.js_property_callbacks["value"] = []
     first.tags.append("moved")
     assert second.css_classes == [] and second.js_property_callbacks == {} and second.tags == []
+
+
+def test_panel_works_out_a_design_only_for_new_stylesheets(monkeypatch):
+    """app_hooks.design_resolved_for_new_stylesheets_only: a widget's change of value, and of
+    its style sheets, give the same message as Panel's own ``_update_properties``; the design
+    is worked out for the style sheets only."""
+    import param
+    from bokeh.document import Document
+    from panel.reactive import Reactive
+    from panel.theme.base import Design
+
+    from app.app_hooks import design_resolved_for_new_stylesheets_only
+
+    monkeypatch.setattr(Reactive, "_update_properties", Reactive._update_properties)
+    panels_own = Reactive._update_properties
+    slider = pn.widgets.FloatSlider(start=0, end=1, value=0.2, design=pn.theme.Material)
+    doc = Document()
+    slider.get_root(doc)
+
+    def event(name: str, new) -> param.parameterized.Event:
+        old = getattr(slider, name)
+        return param.parameterized.Event(
+            what="value", name=name, obj=slider, cls=type(slider), old=old, new=new,
+            type="changed",
+        )  # fmt: skip
+
+    def sent(message: dict) -> dict:
+        """The message, with the design's style sheets (a model each) by their address."""
+        sheets = [getattr(sheet, "url", sheet) for sheet in message.get("stylesheets", [])]
+        return message | ({"stylesheets": sheets} if sheets else {})
+
+    changes = [event("value", 0.7), event("stylesheets", [":host { color: red; }"])]
+    expected = [sent(panels_own(slider, change, doc=doc)) for change in changes]
+    assert sum(s.endswith(".css") for s in expected[1]["stylesheets"]) >= 3  # the design's
+    design_resolved_for_new_stylesheets_only()
+    design_resolved_for_new_stylesheets_only()  # (idempotent)
+    asked = []
+    params = Design.params
+    monkeypatch.setattr(Design, "params", lambda *a, **k: asked.append(1) or params(*a, **k))
+    assert [sent(slider._update_properties(change, doc=doc)) for change in changes] == expected
+    assert len(asked) == 1
