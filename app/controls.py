@@ -86,6 +86,21 @@ class Released:
         model.js_on_change("value_throttled", CustomJS(code=PENDING_JS))  # (app/static)
         return model
 
+    # The browser sends ``value`` at every step of a drag (and once more before each release);
+    # Panel handled each as a change (its event queue, param's watchers: about 1 ms of server
+    # CPU, tests/app/test_app_state.py counts them), for nothing: the explorer reads the release.
+    # So Panel does not follow ``value`` from the browser, and takes the released value as
+    # ``value`` too (Panel's own ``config.throttled`` does the same, for every slider of a page,
+    # but still handles each ``value``). The value the server sets still goes to the browser.
+    @property
+    def _linked_properties(self) -> tuple[str, ...]:
+        return tuple(name for name in super()._linked_properties if name != "value")
+
+    def _process_property_change(self, props: dict) -> dict:
+        if "value_throttled" in props:
+            props = {**props, "value": props["value_throttled"]}
+        return super()._process_property_change(props)
+
 
 class ReleasedSlider(Released, pn.widgets.FloatSlider):
     """:class:`Released` for real numbers."""

@@ -1,0 +1,47 @@
+"""The sliders as a browser moves them: Bokeh applies the browser's changes to the slider's
+model (``set_from_json``, as the server does with a PATCH-DOC), and Panel follows the release."""
+
+from __future__ import annotations
+
+import pytest
+from bokeh.document import Document
+from panel.io.state import set_curdoc
+from panel.reactive import Syncable
+
+from app.explorer import Explorer
+
+
+@pytest.mark.parametrize(("scene", "name"), [("drop", "eps"), ("drop", "mu"), ("stack", "eps")])
+def test_a_drag_costs_the_server_nothing_until_its_release(monkeypatch, scene, name):
+    """A drag's ``value`` changes reach the slider's model only: Panel handles none of them
+    (no event, no watcher, no drop computed); the release sets the slider's value and
+    value_throttled, the state, and one new drop."""
+    document = Document()
+    with set_curdoc(document):
+        explorer = Explorer({"scene": scene})
+        explorer.page().server_doc(document)
+    if scene == "stack":
+        slider = next(w for w in explorer.scenes["stack"].widgets if w.name == name)
+    else:
+        slider = explorer.controls.sliders[name]
+    model = next(m for m, _ in slider._models.values() if m.document is document)
+    handled = []
+    process = Syncable._process_events
+    monkeypatch.setattr(
+        Syncable,
+        "_process_events",
+        lambda self, events: handled.append(events) or process(self, events),
+    )
+    shown = explorer.scenes[scene]
+    computed = shown.computations
+    before = slider.value
+    low, high = slider.start, slider.end
+    steps = [low + (high - low) * f for f in (0.31, 0.42, 0.53, 0.64)]
+    for value in steps:  # the drag
+        model.set_from_json("value", value, setter="browser")
+    assert model.value == steps[-1] and slider.value == before
+    assert handled == [] and shown.computations == computed
+    model.set_from_json("value_throttled", steps[-1], setter="browser")  # the release
+    assert slider.value == slider.value_throttled == steps[-1]
+    assert [set(events) for events in handled] == [{"value_throttled"}]
+    assert shown.computations == computed + 1
