@@ -67,7 +67,6 @@ HERTZ_CUBES = {1e2: "hertz-h1e2", 1e4: "hertz-h1e4"}
 MOST_PIXELS = 400  # per axis, of a cube not evenly spaced in log10 (log_grid)
 SMALLEST_OUTLINED = 4  # cells: a delayed-rebound patch smaller than this is not outlined
 PROJECTOR_MAP_HEIGHT = 490  # presentation mode (scene.py): both axes and the colour bar in 720 px
-SHOWN = MAP_COLOURS
 RATIO_CENTRES = {"h2_over_h1": 1.0, "h1_over_icm": 1.0}
 # the choice's words for a variable where the cube's long name is too long for it (the select
 # showed "number of ball-ball contact intervals bef"); the colour bar keeps the long name
@@ -163,7 +162,7 @@ def computed_slice(eps: float, height: float, eps12: float | None) -> xr.Dataset
     block = compute_block([eps], mu, tau_ratio, height=height, eps12=eps12)
     variables = {
         name: (("mu", "tau_ratio"), block[name][0], cube[name].attrs)
-        for name in (*SHOWN, "delayed_rebound")
+        for name in (*MAP_COLOURS, "delayed_rebound")
     }
     return xr.Dataset(variables, coords={"mu": mu, "tau_ratio": tau_ratio, "eps": eps})
 
@@ -187,15 +186,16 @@ def outlined(delayed: np.ndarray, smallest: int = SMALLEST_OUTLINED) -> np.ndarr
     return kept
 
 
-def slice_image(slice_: xr.Dataset, variable: str) -> tuple[tuple, tuple | None]:
+def slice_image(slice_: xr.Dataset, variable: str) -> tuple[tuple, tuple[float, float]]:
     """The slice's ``variable`` on the map's log grid (log10 mu, log10 tau_ratio, the values
     with rows tau_ratio and columns mu: :func:`on_log_grid`), and its colour limits: for a
     ratio, symmetric about 1 on a log scale out to the 98th percentile (so that outliers do
-    not wash it out); None for the others (the values' own range)."""
+    not wash it out); for the others the values' own range, as HoloViews would take it."""
     values = slice_[variable].transpose("tau_ratio", "mu").values
     shown = on_log_grid(slice_, values)
     if variable not in RATIO_CENTRES:
-        return shown, None
+        finite = shown[2][np.isfinite(shown[2])]
+        return shown, (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
     finite = values[np.isfinite(values) & (values > 0)]
     spread = float(np.percentile(np.abs(np.log10(finite)), 98)) if finite.size else 1.0
     spread = max(spread, 0.05)
@@ -268,7 +268,7 @@ class MapScene(Scene):
     """Heat map of one eps slice of the cube; a click moves mu and tau_d/tau_f."""
 
     variable = param.Selector(
-        default="h2_over_h1", objects=list(SHOWN), doc="The quantity coloured on the map."
+        default="h2_over_h1", objects=list(MAP_COLOURS), doc="The quantity coloured on the map."
     )
     moved = param.Event(doc="mu or tau_ratio changed while the map is on screen: the star moves.")
     reframe = param.Event(doc="HoloViews draws the map's frame again (a slice on a new grid).")
@@ -284,7 +284,7 @@ class MapScene(Scene):
         self.error: str | None = None
         self.choice = pn.widgets.Select(
             label="Colour by",
-            options={CHOICE_LABELS.get(v, variable_label(v)): v for v in SHOWN},
+            options={CHOICE_LABELS.get(v, variable_label(v)): v for v in MAP_COLOURS},
             value=self.variable,
             width=270,  # (within the 300 px column beside the map)
             stylesheets=for_a_room(self.state.presentation),
@@ -433,9 +433,6 @@ class MapScene(Scene):
         if drawn.shape != shown.shape:
             return False
         source.data = {**source.data, "image": [on_screen(shown)]}
-        if clim is None:  # (HoloViews' range of the values shown)
-            finite = shown[np.isfinite(shown)]
-            clim = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
         mapper.update(low=clim[0], high=clim[1])
         path = self._outline_of_slice()
         self._outline_source.data = {
@@ -562,7 +559,7 @@ class MapScene(Scene):
         if ratio:
             opts = dict(cmap="RdBu_r", logz=True, clim=clim, colorbar_opts=ratio_colorbar())
         else:
-            opts = dict(cmap="viridis", logz=False, clim=(np.nan, np.nan))
+            opts = dict(cmap="viridis", logz=False, clim=clim or (np.nan, np.nan))
             if variable == "contacts_first":  # a count: whole numbers on its colour bar
                 opts["colorbar_opts"] = {"ticker": BasicTicker(min_interval=1)}
         return image.opts(
