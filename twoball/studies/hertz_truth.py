@@ -34,6 +34,8 @@ from dataclasses import dataclass
 import mpmath
 import numpy as np
 
+from .stack_truth import difference_conditioning
+
 DIGITS = 30
 ORDER = 28
 TOLERANCE = mpmath.mpf("1e-24")
@@ -260,7 +262,6 @@ def _refine(series, damping, active, which: int, low, high):
 SEED = 7
 DROPS_PER_SIZE = 8  # for each of N = 2, 3, 4
 TOLERANCE_H = 1e-10  # h1 and h2 within this of the reference, or ten times their conditioning
-DIFFERENCE_ULPS = 2.0**16
 
 
 def cases(seed: int = SEED, per_size: int = DROPS_PER_SIZE) -> list[dict]:
@@ -312,26 +313,4 @@ def conditioning(case: dict) -> np.ndarray:
     """(cond_h1, cond_h2) of a Hertz drop, measured as twoball.studies.conditioning measures a
     two-ball drop's: the relative move of h1 and h2 per one-ulp move of each input (each mass
     ratio, eps, the gap, H), by central differences over 2^16 ulps, summed."""
-    import math
-
-    base = _heights(case)
-    total = np.zeros(2)
-    inputs_ = [("eps", None), ("tau_ratios", None), ("height", None)]
-    inputs_ += [("mass_ratios", i) for i in range(len(case["mass_ratios"]))]
-    for name, index in inputs_:
-        value = case[name] if index is None else case[name][index]
-        step = DIFFERENCE_ULPS * math.ulp(value)
-        up, down = value + step, value - step
-        if name == "eps":
-            up = min(up, 1.0)
-        moved = []
-        for new in (up, down):
-            if index is None:
-                moved.append(_heights(case, **{name: new}))
-            else:
-                ratios = list(case[name])
-                ratios[index] = new
-                moved.append(_heights(case, mass_ratios=ratios))
-        slope = (moved[0] - moved[1]) / (up - down)
-        total += np.abs(slope) * math.ulp(value) / np.abs(base)
-    return total
+    return difference_conditioning(case, _heights)

@@ -381,16 +381,11 @@ def one_ulp_move(reference: dict) -> np.ndarray:
         )
 
 
-def conditioning(case: dict, reference: dict | None = None) -> np.ndarray:
-    """(cond_h1, cond_h2): the larger of two measures of how far h1 and h2 move when the inputs
-    move by an ulp (docs/accuracy.md, "The linear stack"). The first is the two-ball one
-    (:mod:`twoball.studies.conditioning`): the relative move per one-ulp move of each input (each
-    mass ratio, eps, the gap, H), by central differences over 2^16 ulps with the kernel, summed.
-    The second, if the stored ``reference`` values hold the moved drop's
-    (:func:`moved_reference`), is the 40-digit reference's own move between the drop and the
-    nearest distinct one (:func:`one_ulp_move`): where a contact order changes within 2^16 ulps
-    the difference quotient measures a secant across jumps, far below what one ulp does."""
-    base = _heights(case)
+def difference_conditioning(case: dict, heights) -> np.ndarray:
+    """(cond_h1, cond_h2) by central differences: the relative move of the drop's h1 and h2
+    (``heights(case, **changed)``) per one-ulp move of each input (each mass ratio, eps, the
+    gap, H), over 2^16 ulps, summed (as :mod:`twoball.studies.conditioning` for two balls)."""
+    base = heights(case)
     total = np.zeros(2)
     names = [("eps", None), ("tau_ratios", None), ("height", None)]
     names += [("mass_ratios", i) for i in range(len(case["mass_ratios"]))]
@@ -403,13 +398,26 @@ def conditioning(case: dict, reference: dict | None = None) -> np.ndarray:
         moved = []
         for new in (up, down):
             if index is None:
-                moved.append(_heights(case, **{name: new}))
+                moved.append(heights(case, **{name: new}))
             else:
                 ratios = list(case[name])
                 ratios[index] = new
-                moved.append(_heights(case, mass_ratios=ratios))
+                moved.append(heights(case, mass_ratios=ratios))
         slope = (moved[0] - moved[1]) / (up - down)
         total += np.abs(slope) * math.ulp(value) / np.abs(base)
+    return total
+
+
+def conditioning(case: dict, reference: dict | None = None) -> np.ndarray:
+    """(cond_h1, cond_h2): the larger of two measures of how far h1 and h2 move when the inputs
+    move by an ulp (docs/accuracy.md, "The linear stack"). The first is the two-ball one
+    (:mod:`twoball.studies.conditioning`): the relative move per one-ulp move of each input (each
+    mass ratio, eps, the gap, H), by central differences over 2^16 ulps with the kernel, summed.
+    The second, if the stored ``reference`` values hold the moved drop's
+    (:func:`moved_reference`), is the 40-digit reference's own move between the drop and the
+    nearest distinct one (:func:`one_ulp_move`): where a contact order changes within 2^16 ulps
+    the difference quotient measures a secant across jumps, far below what one ulp does."""
+    total = difference_conditioning(case, _heights)
     if reference is not None and "h2_truth_moved" in reference:
         total = np.maximum(total, one_ulp_move(reference))
     return total
