@@ -188,3 +188,25 @@ def test_both_trajectories_hold_a_column_per_ball_and_per_contact():
         np.testing.assert_allclose(mine, theirs, rtol=0, atol=1e-9 * scale)
     np.testing.assert_array_equal(single.x[:, 1], single.x2)
     np.testing.assert_array_equal(single.f[:, 0], single.f01)
+
+
+@pytest.mark.parametrize("method", ["exact", "LSODA"])
+def test_dense_output_samples_a_trajectory_only_when_it_is_read(monkeypatch, method):
+    """A run with dense output and no t_eval evaluates nothing until its ``trajectory`` is
+    read (the app's scenes evaluate at times of their own); then it holds the state at
+    ``plot_times`` (for the exact method, times through every contact) as ``evaluate`` gives
+    it there, and a pickled result samples the same."""
+    result = twoball.simulate(0.816, 0.05, 0.3, method=method, dense_output=True)
+    calls = []
+    dense = result.dense
+    monkeypatch.setattr(result, "dense", lambda t, side="right": calls.append(t) or dense(t, side))
+    starts = np.array([c.start for c in result.contacts])
+    assert calls == []
+    assert method != "exact" or np.all(np.isin(starts, result.plot_times))
+    sampled = result.trajectory
+    assert len(calls) == 1 and result.trajectory is sampled  # (once)
+    expected = result.evaluate(result.plot_times)
+    for name in ("t", "x1", "x2", "v1", "v2", "f01", "f12"):
+        assert np.array_equal(getattr(sampled, name), getattr(expected, name))
+    fresh = twoball.simulate(0.816, 0.05, 0.3, method=method, dense_output=True)
+    assert np.array_equal(pickle.loads(pickle.dumps(fresh)).trajectory.x2, sampled.x2)

@@ -215,8 +215,10 @@ class Result(Measured):
     or ended at rest); ``reason`` is None when the run reached what was asked, else why it
     stopped early, in words. ``contacts`` lists every contact interval found, numbered (0: the
     floor, 1: the balls), and ``contacts_first`` counts each before the first apex, ``[floor,
-    balls]``; ``trajectory`` is set only when asked (``t_eval`` or ``dense_output``);
-    :meth:`evaluate` needs ``dense_output``.
+    balls]``; ``trajectory`` is set only when asked (``t_eval`` or ``dense_output``; without
+    ``t_eval`` it is sampled at ``plot_times`` when first read, so that a caller who evaluates
+    the dense solution at times of its own does not pay for it); :meth:`evaluate` needs
+    ``dense_output``.
     """
 
     drop: Drop
@@ -235,6 +237,7 @@ class Result(Measured):
         default=None, repr=False, compare=False
     )
     stats: RunStats = field(default=RunStats(), compare=False)
+    plot_times: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def evaluate(self, t: np.ndarray | float, side: str = "right") -> Trajectory:
         """The state and forces at times ``t`` (exact at every t for the exact method).
@@ -293,6 +296,24 @@ class Result(Measured):
             "height": d.height,
             **self.measured(),
         }
+
+
+def _sampled_trajectory(self: Result) -> Trajectory | None:
+    if self._trajectory is None and self.plot_times is not None:
+        self._trajectory = trajectory_of(self.plot_times, self.dense(self.plot_times, "right"))
+    return self._trajectory
+
+
+def _set_trajectory(self: Result, trajectory: Trajectory | None) -> None:
+    self._trajectory = trajectory
+
+
+# (set after the dataclass is made: its __init__ sets the field through the property)
+Result.trajectory = property(
+    _sampled_trajectory,
+    _set_trajectory,
+    doc="The state sampled at ``t_eval``, or at ``plot_times`` (sampled when first read).",
+)
 
 
 def as_times(name: str, values: object) -> np.ndarray:

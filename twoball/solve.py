@@ -83,7 +83,7 @@ def simulate(
     dense_output : bool
         Keep a solution that ``Result.evaluate(t)`` evaluates at any times (exactly, for the
         exact method); without ``t_eval`` the trajectory is then sampled at plotting times
-        that show every contact.
+        that show every contact (``Result.plot_times``), when it is first read.
     throw : bool
         A run that fails (the root finder stuck, the phase limit, a scipy method's failure or
         no apex before its horizon, an apex that is not finite or above what the energy at
@@ -141,8 +141,10 @@ def simulate(
     if times is not None:
         at_rest = outcome.status is Status.REST and method == "exact"
         check_span("t_eval", times, float(outcome.end_time), at_rest)
-    if keep:
-        times = outcome.plot_times if times is None else times
+    plot_times = None
+    if keep and times is None:  # sampled when first read (Result.trajectory)
+        plot_times = outcome.plot_times
+    elif keep:
         trajectory = trajectory_of(times, outcome.evaluate(times))
     result = Result(
         drop=drop,
@@ -159,6 +161,7 @@ def simulate(
         status=outcome.status,
         dense=outcome.evaluate if dense_output else None,
         stats=outcome.stats,
+        plot_times=plot_times,
     )
     if throw and not result.success:
         raise SolverError(f"{method} failed on {drop}: {result.reason}", result)
