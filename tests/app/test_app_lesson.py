@@ -237,6 +237,11 @@ def test_a_projected_step_asks_large_and_answers_in_one_large_line(
         assert len(centres) == len(step.choices)
         assert all(abs(circle - words) <= 2 for _, circle, words in centres), centres
         assert _scene_canvases(page) == []  # covered
+        # Reveal whole on screen, below the last choice (step 1's long text to look for had
+        # pushed it to y 689..729 of 720)
+        reveal = page.get_by_role("button", name="Reveal the answer").bounding_box()
+        assert reveal["y"] >= choice_box["y"] + choice_box["height"], (reveal, choice_box)
+        assert reveal["y"] + reveal["height"] <= 720 - 10, reveal
         page.screenshot(path=shots / f"step{number}-projected-asked.png")
         page.keyboard.press("PageDown")
         answer = f"Answer: {step.choices[step.answer].split(':')[0]}"
