@@ -59,7 +59,10 @@ class Lesson(Built):
             stylesheets=[":host label { white-space: normal; }"],  # long answers wrap, not cut
         )
         self.reveal = pn.widgets.Button(label="Reveal the answer", color="primary")
-        self.answer = alert("", visible=False, sizing_mode="stretch_width")
+        # (the page scrolls to it after a reveal: lesson.js)
+        self.answer = alert(
+            "", visible=False, sizing_mode="stretch_width", css_classes=["twoball-answer"]
+        )
         self.previous = pn.widgets.Button(label="< Previous", width=110)
         self.next = pn.widgets.Button(label="Next >", color="primary", width=110)
         self.start = pn.widgets.Button(label="Start the lesson", color="primary")
