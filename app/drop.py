@@ -334,9 +334,19 @@ class DropScene(Scene):
             pinned = self.pinned.result
             top = max(top, max(pinned.x2_0, *pinned.apex_h) * units.length)
         # room above the highest apex for its label (larger on a projector)
-        low, high = -0.03 * top, (1.2 if self.state.presentation else 1.12) * top
+        # and below 0 room for the deepest squash (a heavy upper ball, mu = 10, presses the
+        # lower one into the floor by more than 3 % of the top, which had cut its bottom)
+        deepest = min(0.0, float(np.min(tr.x1, initial=0.0)), float(np.min(tr.x2, initial=0.0)))
+        deepest *= units.length
+        low = min(-0.03 * top, 1.05 * deepest)
+        high = (1.2 if self.state.presentation else 1.12) * top
         self.heights.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
-        room = high / (1 - 4 * BALL_RADIUS)  # the balls drawn on top of their heights fit
+        # the balls, drawn on top of their heights, fit: radii are fractions f of the stage's
+        # span, so the upper ball's top, high + 2 (f1 + f2) (room - low), is at most room (the
+        # upper ball is 10^(1/3) = 2.2 times the lower one at mu = 10: it was cut at the top
+        # when the room was made for two balls of the lower one's size)
+        diameters = 2 * sum(ball_radii(self.state.mu))
+        room = (high - diameters * low) / (1 - diameters)
         self.animation.y_range.update(start=low, end=room, reset_start=low, reset_end=room)
         self.heights.yaxis.axis_label = units.length_label
         self.heights.xaxis.axis_label = units.time_label

@@ -589,6 +589,24 @@ def test_the_animation_s_frames_are_the_drop_at_their_times():
     )  # frame 1, where the player is, drawn from the server
 
 
+@pytest.mark.parametrize("mu", ["0.0001", "1", "10"])
+@pytest.mark.parametrize("present", ["0", "1"])
+def test_the_drop_animation_s_balls_stay_on_its_stage(mu, present):
+    """Every frame's balls lie inside the stage's height, at every mass ratio: at mu = 10 the
+    upper ball, drawn 2.2 times the lower one's radius, was cut at the stage's top (the room
+    above the heights was made for two balls of the lower one's size)."""
+    explorer = rendered({"mu": mu, "H": "1e4", "present": present})
+    scene = explorer.scenes["drop"]
+    move_player(scene.player, 1)
+    frames = scene.animated.frames.data
+    radius, upper_radius = scene.balls.data["r"]
+    assert upper_radius / radius == pytest.approx(float(mu) ** (1 / 3))  # equal densities
+    span = scene.animation.y_range
+    lower, upper = np.asarray(frames["y0"]), np.asarray(frames["y1"])
+    assert upper.max() + upper_radius <= span.end, (upper.max() + upper_radius, span.end)
+    assert lower.min() - radius >= span.start
+
+
 def test_the_stack_animation_s_frames_are_the_stack_at_their_times():
     """The Stack scene's frames: each ball's drawn centre, less its radius and the diameters of
     the balls below it, is its height from an independent run of the solver at the frame's
