@@ -35,7 +35,17 @@ from twoball.units import units_named
 
 from .animation import Animation, FramePlayer
 from .collisions import collisions
-from .scene import Scene, Text, answers_pending, draw, later, on_screen, player_for_a_room, readable
+from .scene import (
+    PROJECTED_PLAYER_HEIGHT,
+    Scene,
+    Text,
+    answers_pending,
+    draw,
+    later,
+    on_screen,
+    player_for_a_room,
+    readable,
+)
 from .worksheet import drop_csv
 
 FLIGHT_FRAMES = 240  # evenly spread over the drop
@@ -196,6 +206,10 @@ def heights_and_stage(heights, animation, presentation: bool) -> pn.viewable.Vie
 
 
 PROJECTOR_PLOT_HEIGHT = 290  # presentation mode (scene.py): plots and player within 720 px
+# ... and the drop's stage there, beside the heights and the player, as tall as both: 220 x 290
+# beside the heights alone, its balls were small for a room (the player's row, beside the
+# trails box, left the width unused)
+PROJECTOR_STAGE = {"width": 270, "height": PROJECTOR_PLOT_HEIGHT + PROJECTED_PLAYER_HEIGHT}
 
 
 class DropScene(Scene):
@@ -244,7 +258,8 @@ class DropScene(Scene):
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # 1280x720: under the header, tabs and summary, the player
-            self.heights.height = self.animation.height = PROJECTOR_PLOT_HEIGHT
+            self.heights.height = PROJECTOR_PLOT_HEIGHT
+            self.animation.update(**PROJECTOR_STAGE)
 
     @param.depends("state.revealed", "state.step", watch=True)
     def _answer_replaces_summary(self) -> None:
@@ -483,6 +498,8 @@ class DropScene(Scene):
 
     def layout(self) -> pn.viewable.Viewable:
         self._draw()
+        if self.state.presentation:
+            return self._projected_layout()
         return pn.Column(
             self.summary,
             heights_and_stage(self.heights, self.animation, self.state.presentation),
@@ -500,6 +517,23 @@ class DropScene(Scene):
                 []
                 if self.state.presentation
                 else [pn.pane.Markdown(PLAYER_HELP, sizing_mode="stretch_width")]
+            ),
+            sizing_mode="stretch_width",
+        )
+
+    def _projected_layout(self) -> pn.viewable.Viewable:
+        """On a projector: the stage beside the heights and the player (:data:`PROJECTOR_STAGE`),
+        the trails box, Pin and Download in a row below."""
+        plots = pn.Column(
+            pn.pane.Bokeh(self.heights, sizing_mode="stretch_width"),
+            self.player,
+            sizing_mode="stretch_width",
+        )
+        return pn.Column(
+            self.summary,
+            pn.Row(plots, pn.pane.Bokeh(self.animation), sizing_mode="stretch_width"),
+            pn.FlexBox(
+                self.trails, self.pin, self.download, flex_wrap="wrap", sizing_mode="stretch_width"
             ),
             sizing_mode="stretch_width",
         )

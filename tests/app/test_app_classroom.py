@@ -237,6 +237,43 @@ def test_presentation_mode_fits_a_projector(browser, app_server, artifacts):
         context.close()
 
 
+def _overlap(a: dict, b: dict) -> bool:
+    return min(a["right"], b["right"]) - max(a["left"], b["left"]) > 1 and (
+        min(a["bottom"], b["bottom"]) - max(a["top"], b["top"]) > 1
+    )
+
+
+@pytest.mark.browser
+def test_a_projector_gives_the_drop_animation_room(browser, app_server, artifacts):
+    """Presentation mode at 1280x720: the drop's animation (220 x 290 px beside the heights,
+    its balls small for a room) stands beside the heights and the player, as tall as both,
+    inside the window and over nothing else."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?present=1", viewport=(1280, 720))
+    try:
+        page.wait_for_timeout(800)
+        plots = [
+            c for c in deep_query(page, "canvas")
+            if c["visible"] and c["width"] > 100 and c["height"] > 100
+        ]  # fmt: skip
+        stage = max(plots, key=lambda c: c["left"])  # right of the heights
+        heights = min(plots, key=lambda c: c["left"])
+        players = [b for b in deep_query(page, ".bk-btn-group, button.play") if b["visible"]]
+        buttons = [b for b in deep_query(page, "button, label") if b["visible"]]
+        below = [b for b in buttons if b["left"] > 330 and b["top"] > 250]
+        assert stage["width"] >= 250 and stage["height"] >= 380, stage
+        assert stage["right"] <= 1280 and stage["bottom"] <= 720, stage
+        assert heights["width"] >= 600, heights
+        assert not any(_overlap(stage, other) for other in [heights, *players, *below]), [
+            b for b in [heights, *players, *below] if _overlap(stage, b)
+        ]
+        assert all(b["bottom"] <= 720 for b in below), below
+        page.screenshot(path=artifacts / "presentation_drop_stage.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
 # the top margin of each paragraph that starts the drop's summary ("h1 = ...")
 SUMMARY_MARGINS_JS = """() => { const out = []; const walk = (root) => {
   for (const el of root.querySelectorAll("*")) { if (el.shadowRoot) walk(el.shadowRoot);
