@@ -143,6 +143,38 @@ def legend_above(fig, items: list[LegendItem]) -> None:
     fig.add_layout(legend, "above")
 
 
+APEX_LABEL_LIFT = 6  # px: an apex's label above its point
+
+
+def apex_label_offsets(
+    apexes: list[float], low: float, high: float, sizes: dict
+) -> tuple[list[float], float]:
+    """Each apex label's height above its point in px, and the top of the heights' range that
+    holds them. A label stands left of its point, just above it; when the two apexes are close
+    in height (a low eps), the lower one's label, left of the right-most point, ran into the
+    higher one's label and point (a phone at eps = 0.3): it then goes above the higher one's
+    label, and the range grows to hold it. ``sizes``: the plot area's height, a label's line
+    and a point's radius (px)."""
+    offsets = [float(APEX_LABEL_LIFT)] * len(apexes)
+    if len(apexes) != 2:
+        return offsets, high
+    lower, higher = sorted(range(2), key=lambda i: apexes[i])
+    frame, line, point = sizes["frame"], sizes["line"], sizes["point"]
+    for _ in range(3):  # (a grown range brings the points closer: checked again)
+        scale = frame / (high - low)
+        gap = (apexes[higher] - apexes[lower]) * scale
+        if gap - point - 2 >= APEX_LABEL_LIFT + line:  # under the higher point: apart
+            offsets[lower] = float(APEX_LABEL_LIFT)
+            return offsets, high
+        offsets[lower] = gap + 2 * APEX_LABEL_LIFT + line  # above the higher one's label
+        need = offsets[lower] - gap + line + 2  # px above the higher point
+        if (high - apexes[higher]) * scale >= need:
+            return offsets, high
+        # (high - h) frame / (high - low) = need, solved for high
+        high = (apexes[higher] - need * low / frame) / (1 - need / frame)
+    return offsets, high
+
+
 def height_axis(fig) -> None:
     """Heights on the y axis in grouped digits, no exponent (200,000, not 2.000e+5)."""
     fig.yaxis.formatter = NumeralTickFormatter(format="0,0.[0000]")
@@ -243,7 +275,7 @@ class DropScene(Scene):
         self._trail_lines: list | None = None  # (added when trails are first asked for)
         self.curves = ColumnDataSource({"t": [], "x1": [], "x2": []})
         answers_pending(self.curves)
-        self.apexes = ColumnDataSource({"t": [], "h": [], "text": []})
+        self.apexes = ColumnDataSource({"t": [], "h": [], "text": [], "dy": []})
         self.drop_line = Span(dimension="width", line_color="gray", line_dash="dashed")
         self.icm_line = Span(
             dimension="width", line_color="green", line_dash="dotted", line_width=2
@@ -295,7 +327,7 @@ class DropScene(Scene):
                 text_font_size="10pt",
                 text_align="right",  # left of the point: h2 is at the right edge of the plot
                 x_offset=-4,
-                y_offset=6,
+                y_offset="dy",  # (apex_label_offsets)
             )
         )
         for span in (self.drop_line, self.icm_line, self.cursor):
@@ -335,11 +367,6 @@ class DropScene(Scene):
             "x1": on_screen(tr.x1 * units.length),
             "x2": on_screen(tr.x2 * units.length),
         }
-        self.apexes.data = {
-            "t": np.array(r.apex_t) * units.time,
-            "h": np.array(r.apex_h) * units.length,
-            "text": [f"h{i + 1} = {units.height(h)}" for i, h in enumerate(r.apex_h)],
-        }
         self.drop_line.location = r.x2_0 * units.length
         self.icm_line.location = r.h_icm * units.length
         top = max(r.x2_0, *r.apex_h, r.h_icm) * units.length
@@ -355,6 +382,14 @@ class DropScene(Scene):
         deepest *= units.length
         low = min(-0.03 * top, 1.05 * deepest)
         high = (1.2 if self.state.presentation else 1.12) * top
+        apexes = [h * units.length for h in r.apex_h]
+        offsets, high = apex_label_offsets(apexes, low, high, self._label_sizes())
+        self.apexes.data = {
+            "t": np.array(r.apex_t) * units.time,
+            "h": np.array(apexes),
+            "text": [f"h{i + 1} = {units.height(h)}" for i, h in enumerate(r.apex_h)],
+            "dy": offsets,
+        }
         self.heights.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
         # the balls, drawn on top of their heights, fit: radii are fractions f of the stage's
         # span, so the upper ball's top, high + 2 (f1 + f2) (room - low), is at most room (the
@@ -366,6 +401,21 @@ class DropScene(Scene):
         self.heights.yaxis.axis_label = units.length_label
         self.heights.xaxis.axis_label = units.time_label
         self._animate(units)
+
+    def _label_sizes(self) -> dict:
+        """What :func:`apex_label_offsets` needs of the heights figure, in px: its plot area's
+        height (under-estimated: the figure less its title, legend and x axis), a label's line
+        and an apex point's radius (both larger on a projector: app/scene.readable)."""
+        fig = self.heights
+        labels = next(a for a in fig.center if isinstance(a, LabelSet))
+        size = labels.text_font_size
+        size = str(size.get("value") if isinstance(size, dict) else getattr(size, "value", size))
+        points = next(r.glyph for r in fig.renderers if isinstance(r.glyph, Scatter))
+        return {
+            "frame": fig.height - 120,
+            "line": float(size.removesuffix("pt")) * 4 / 3 * 1.2,
+            "point": points.size / 2,
+        }
 
     def _draw_pinned(self, units) -> None:
         pinned = self.pinned
