@@ -7,6 +7,7 @@ directly (for the map's cube slice), not against the app's own earlier output.
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import param
@@ -14,6 +15,7 @@ import pytest
 from bokeh.document import Document
 
 import twoball
+from app.collisions import collisions
 from app.delayed_map import map_cube
 from app.drop import TRAILS
 from app.explorer import Explorer
@@ -218,6 +220,40 @@ def test_closeup_shows_the_four_contacts_and_forces_only_inside_them():
     assert np.all(tr.f12[~inside_ball & ~edges] == 0)
     # all four ball contacts happen while the lower ball is on the floor (model.md)
     assert all(floor[0].start < c.start and c.end < floor[0].end for c in ball)
+
+
+@pytest.mark.parametrize(
+    "query",
+    [
+        {"eps": "1", "mu": "10", "tau_ratio": "10", "H": "1e8"},  # a new user's: 5 and 5
+        {"eps": "0.3", "mu": "0.01", "tau_ratio": "1"},  # a second floor bounce before h1
+        PAPER,  # all in one collision
+    ],
+)
+def test_closeup_s_table_lists_every_contact_its_summary_counts(query):
+    """The summary counts the contacts before the first apex; the table had listed only the
+    first collision's (at a large gap, the lower ball's floor bounce alone: '5 ball contacts'
+    over a table of 'floor 1'). Each contact the solver finds is a row, and the summary says
+    which rows the plots show."""
+    explorer = rendered({**query, "scene": "closeup"})
+    text = explorer.scenes["closeup"].table.object
+    s = explorer.state
+    solved = twoball.simulate(s.eps, s.mu, s.tau_ratio, height=s.height, until="first")
+    floors, balls = solved.contacts_first
+    rows = [line for line in text.splitlines() if re.match(r"\| (ball|floor) \d", line)]
+    for kind, count, name in ((BALLS, balls, "ball"), (FLOOR, floors, "floor")):
+        assert f"{count} {name} contact" in text.splitlines()[0]
+        starts = [float(r.split("|")[2]) for r in rows if r.startswith(f"| {name} ")]
+        exact = sorted(c.start for c in solved.contacts if c.contact == kind)
+        assert len(starts) == count == len(exact)
+        assert starts == pytest.approx(exact, rel=1e-5)
+    grouped = collisions(solved.contacts)
+    if len(grouped) > 1:  # the plots' window said, and where the table leaves it
+        assert "The plots show the first collision alone" in text
+        assert f"the table lists {len(solved.contacts) - len(grouped[0])} more" in text
+        assert "after the collision shown" in text
+    else:
+        assert "all in the first collision" in text and "after the collision" not in text
 
 
 def test_accuracy_computes_only_when_opened():
