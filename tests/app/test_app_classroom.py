@@ -473,7 +473,7 @@ def test_a_bad_typed_height_is_said_where_a_laptop_shows_it(browser, app_server)
         box.wait_for()
         box.fill("-5")
         box.press("Enter")
-        message = page.get_by_text("H: height must be", exact=False)
+        message = page.get_by_text("H: height -5 is outside the explorer's range", exact=False)
         message.wait_for()
         shown = message.bounding_box()
         assert shown is not None and shown["y"] >= 0 and shown["y"] + shown["height"] <= 768

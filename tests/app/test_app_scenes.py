@@ -20,9 +20,10 @@ from app.delayed_map import map_cube
 from app.drop import TRAILS
 from app.explorer import Explorer
 from app.scenes import SCENE_REGISTRY, SCENES
-from app.state import url_query
+from app.state import ExplorerState, url_query
 from twoball import presets
 from twoball.observables import BALLS, FLOOR
+from twoball.units import number_text
 
 PAPER = {"eps": "0.9", "mu": "0.01", "tau_ratio": "0.01"}
 
@@ -339,19 +340,43 @@ def test_the_accuracy_of_the_last_drop_is_dimmed_while_the_next_is_measured(monk
     assert scene.results.styles == {"opacity": "1"} and scene.status.object == ""
 
 
-def test_bad_typed_values_show_a_message_and_keep_a_valid_state():
-    explorer = rendered()
-    controls = explorer.controls
-    controls.height.value = "-5"
-    assert explorer.state.height == 1e4
-    typed = controls.typed_message  # (under the inputs, where the value was typed)
-    assert typed.visible and "height must be a number from 10 to" in typed.object
-    assert "got '-5'" in typed.object  # what was typed, not '-5.0' (a new user's puzzle)
-    controls.eps12.value = "2"
-    assert explorer.state.eps12 is None and "eps12" in controls.typed_message.object
-    controls.eps12.value = "0.5"
-    assert explorer.state.eps12 == 0.5
-    assert explorer.scenes["drop"].result.drop.eps12 == 0.5
+@pytest.mark.parametrize("units", ["dimensionless", "SI"])
+def test_typed_values_follow_one_rule_clamp_a_number_keep_the_last_for_text(units):
+    """Under "advanced", one rule (app/state.typed_value): a number out of range is clamped to
+    the nearest allowed value, text that is no number keeps the value in use, each with a
+    message under the inputs. (A typed H of 1e20 was clamped but 0 fell back to the default;
+    an eps12 of 2 fell back instead of being clamped.)"""
+    explorer = rendered({"units": units})
+    controls, state = explorer.controls, explorer.state
+    lowest, highest = ExplorerState.param.height.bounds
+    si = units == "SI"
+    typed_height = presets.metres_from_height if si else float  # (what the box takes)
+    message = controls.typed_message
+    for typed, expected in (("0", lowest), ("-5", lowest), ("1e20", highest), ("inf", highest)):
+        state.height = 2e4
+        controls.height.value = typed
+        assert state.height == pytest.approx(expected, rel=1e-12), typed
+        assert explorer.scenes["drop"].result.drop.height == state.height
+        assert message.visible and "outside the explorer's range" in message.object, typed
+        assert f"using the nearest, {number_text(typed_height(expected))}" in message.object
+    state.height = 2e4
+    controls.height.value = "abc"
+    assert state.height == 2e4  # kept
+    assert message.visible and "got 'abc'" in message.object and "Keeping" in message.object
+    low, high = ExplorerState.param.eps12.bounds
+    for typed, expected in (("2", high), ("0", low), ("-1", low)):
+        state.eps12 = 0.5
+        controls.eps12.value = typed
+        assert state.eps12 == expected, typed
+        assert "eps12" in message.object and "using the nearest" in message.object
+    state.eps12 = 0.5
+    controls.eps12.value = "half"
+    assert state.eps12 == 0.5 and "Keeping 0.5" in message.object
+    controls.eps12.value = ""
+    assert state.eps12 is None  # empty: equal to eps
+    controls.eps12.value = "0.7"
+    assert state.eps12 == 0.7 and not message.visible
+    assert explorer.scenes["drop"].result.drop.eps12 == 0.7
 
 
 @pytest.mark.parametrize("typed", ["0.0001", "1e9"])
