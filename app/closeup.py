@@ -24,6 +24,12 @@ from .collisions import first_collision
 from .drop import LOWER, UPPER, legend_above
 from .scene import Scene, Text, answers_pending, draw, on_screen, readable
 
+
+def plural(count: int, noun: str) -> str:
+    """``count`` and ``noun``, with an s for any count but 1."""
+    return f"{count} {noun}{'s' * (count != 1)}"
+
+
 SAMPLES = 600  # over the collision, with every contact's start and end: ~2 px apart at 1366 px
 MARGIN = 0.08  # of the collision's duration, shown before and after it
 
@@ -126,29 +132,50 @@ class CloseUpScene(Scene):
         self.result = dataclasses.replace(first, trajectory=first.evaluate(times))
 
     def _contacts_text(self, revision: bool, active: bool) -> str:
+        """The contacts before the first apex, which the summary counts, each in the table:
+        those of the first collision (the plots' window) first, then any after it, under a row
+        that says so. (The table had listed the first collision's alone: at a large gap that is
+        the lower ball's floor bounce, and the summary's 5 ball contacts came after it.)"""
         if not self.active:
             return ""  # off screen: nothing is computed
         self.current()
         units = units_named(self.state.units)
         r = self.result
         collision = first_collision(r.contacts)
-        ball = [c for c in collision if c.contact == BALLS]
-        floor = [c for c in collision if c.contact == FLOOR]
         floors, balls = r.contacts_first
-        lines = [
-            f"**{balls} ball contact{'s' * (balls != 1)}** and "
-            f"{floors} floor contact{'s' * (floors != 1)} "
-            "before the first apex (the table lists those of the first collision, shown above).",
-            "",
-            "| contact | starts | ends | lasts |",
-            "| --- | --- | --- | --- |",
-        ]
-        for name, intervals in (("ball", ball), ("floor", floor)):
-            for i, c in enumerate(intervals, 1):
-                lines.append(
-                    f"| {name} {i} | {c.start * units.time:.6g} | {c.end * units.time:.6g} "
-                    f"| {(c.end - c.start) * units.time:.4g} |"
-                )
+        counted = f"**{plural(balls, 'ball contact')}** and {plural(floors, 'floor contact')}"
+        later = [c for c in r.contacts if c not in collision]
+        if later:
+            shown = [sum(c.contact == kind for c in collision) for kind in (FLOOR, BALLS)]
+            first = min(c.start for c in collision) * units.time
+            last = max(c.end for c in collision) * units.time
+            intro = (
+                f"{counted} before the first apex, all listed below. The plots show the first "
+                f"collision alone, t = {first:.6g} to {last:.6g} "
+                f"({plural(shown[1], 'ball contact')}, {plural(shown[0], 'floor contact')}); "
+                f"the table lists {len(later)} more after it."
+            )
+        else:
+            intro = f"{counted} before the first apex, all in the first collision, shown above."
+        lines = [intro, "", "| contact | starts | ends | lasts |", "| --- | --- | --- | --- |"]
+        numbers = {}  # each contact's number among those of its kind, in time order
+        for kind in (BALLS, FLOOR):
+            ordered = sorted((c for c in r.contacts if c.contact == kind), key=lambda c: c.start)
+            numbers.update({id(c): i for i, c in enumerate(ordered, 1)})
+
+        def row(c: twoball.ContactInterval) -> str:
+            name = "ball" if c.contact == BALLS else "floor"
+            return (
+                f"| {name} {numbers[id(c)]} | {c.start * units.time:.6g} | "
+                f"{c.end * units.time:.6g} | {(c.end - c.start) * units.time:.4g} |"
+            )
+
+        # the first collision's ball contacts, then its floor contacts (as the plots stack
+        # them), then the later contacts in time order
+        lines += [row(c) for kind in (BALLS, FLOOR) for c in collision if c.contact == kind]
+        if later:
+            lines.append("| *after the collision shown:* | | | |")
+            lines += [row(c) for c in sorted(later, key=lambda c: c.start)]
         return "\n".join(lines)
 
     def layout(self) -> pn.viewable.Viewable:

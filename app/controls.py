@@ -1,8 +1,9 @@
 """The controls: sliders for eps, mu and tau_d/tau_f, presets, units, and the advanced inputs.
 
 mu and tau_d/tau_f move on logarithmic sliders (the slider holds log10 of the value and shows
-the value itself). Every typed value is checked by :func:`state.validate`: a bad one shows a
-message and falls back, the app keeps running.
+the value itself). A typed value follows one rule (:func:`state.typed_value`): a number out of
+range is clamped to the nearest allowed value, text that is no number keeps the value in use,
+and either way a message under the inputs says so; the app keeps running.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from bokeh.models import CustomJS, CustomJSTickFormatter
 from twoball import presets
 
 from .scene import PENDING_JS, Built, alert, for_a_room, join, later
-from .state import ExplorerState, app_range, preset_drop, span, validate
+from .state import ExplorerState, app_range, preset_drop, typed_value
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
 POWER_OF_TEN = "return Number((10 ** tick).toPrecision(3)).toString()"
@@ -244,48 +245,34 @@ class Controls(Built):
 
     def _take_height(self, text: str) -> None:
         """A typed drop height: H, or metres when the units are SI (checked and reported in the
-        units it was typed in, quoting what was typed)."""
-        si = self.state.units == "SI"
-        if si:
-            value, message = self._metres_checked(text)
+        units it was typed in, quoting what was typed: :func:`state.typed_value`)."""
+        low, high = app_range("height")
+        if self.state.units == "SI":
+            metres = presets.metres_from_height
+            value, message = typed_value(
+                text, metres(self.state.height), metres(low), metres(high), "drop height", " m"
+            )
+            # (H from metres kept within H's own range: the round trip gave 9.999999999999998
+            # for the lowest, which the state refused with a traceback)
+            value = min(max(presets.height_from_metres(value), low), high)
+            label = "drop height [m]"
         else:
-            value, message = validate("height", text, self.state.height)
-        label = "drop height [m]" if si else "H"
+            value, message = typed_value(text, self.state.height, low, high, "height")
+            label = "H"
         self.show_messages([f"{label}: {message}"] if message else [], typed=True)
         self.state.height = value
         self._show_state()
-
-    def _metres_checked(self, text: str) -> tuple[float, str | None]:
-        """(H, message) for a drop height typed in metres; the message speaks metres."""
-        low, high = (presets.metres_from_height(h) for h in app_range("height"))
-        current = presets.metres_from_height(self.state.height)
-        try:
-            typed = float(text)
-        except ValueError:
-            typed = math.nan
-        if not math.isfinite(typed) or typed <= 0:
-            return self.state.height, (
-                f"must be a positive number of metres; got {text[:40]!r}. Using {current:.4g} m."
-            )
-        if not low <= typed <= high:
-            clamped = min(max(typed, low), high)
-            # (H from the clamped metres, kept within H's own range: the round trip through
-            # metres gave 9.999999999999998 for the lowest, which the state refused with a
-            # traceback and left the drop unchanged)
-            lowest, highest = app_range("height")
-            height = min(max(presets.height_from_metres(clamped), lowest), highest)
-            return height, (
-                f"{typed:g} m is outside the explorer's range, {span(low, high, ' m')}; "
-                f"using {clamped:.4g} m."
-            )
-        return presets.height_from_metres(typed), None
 
     def _eps12_typed(self, event: param.parameterized.Event) -> None:
         if not self._syncing:
             later(lambda: self._take_eps12(event.new))
 
     def _take_eps12(self, text: str) -> None:
-        value, message = validate("eps12", text, self.state.eps12)
+        """A typed eps12 (:func:`state.typed_value`); empty or "none": equal to eps."""
+        if text.strip().lower() in ("", "none"):
+            value, message = None, None
+        else:
+            value, message = typed_value(text, self.state.eps12, *app_range("eps12"), "eps12")
         self.show_messages([message] if message else [], typed=True)  # (it names eps12)
         self.state.eps12 = value
         self._show_state()

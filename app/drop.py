@@ -35,7 +35,17 @@ from twoball.units import units_named
 
 from .animation import Animation, FramePlayer
 from .collisions import collisions
-from .scene import Scene, Text, answers_pending, draw, later, on_screen, player_for_a_room, readable
+from .scene import (
+    PROJECTED_PLAYER_HEIGHT,
+    Scene,
+    Text,
+    answers_pending,
+    draw,
+    later,
+    on_screen,
+    player_for_a_room,
+    readable,
+)
 from .worksheet import drop_csv
 
 FLIGHT_FRAMES = 240  # evenly spread over the drop
@@ -133,6 +143,38 @@ def legend_above(fig, items: list[LegendItem]) -> None:
     fig.add_layout(legend, "above")
 
 
+APEX_LABEL_LIFT = 6  # px: an apex's label above its point
+
+
+def apex_label_offsets(
+    apexes: list[float], low: float, high: float, sizes: dict
+) -> tuple[list[float], float]:
+    """Each apex label's height above its point in px, and the top of the heights' range that
+    holds them. A label stands left of its point, just above it; when the two apexes are close
+    in height (a low eps), the lower one's label, left of the right-most point, ran into the
+    higher one's label and point (a phone at eps = 0.3): it then goes above the higher one's
+    label, and the range grows to hold it. ``sizes``: the plot area's height, a label's line
+    and a point's radius (px)."""
+    offsets = [float(APEX_LABEL_LIFT)] * len(apexes)
+    if len(apexes) != 2:
+        return offsets, high
+    lower, higher = sorted(range(2), key=lambda i: apexes[i])
+    frame, line, point = sizes["frame"], sizes["line"], sizes["point"]
+    for _ in range(3):  # (a grown range brings the points closer: checked again)
+        scale = frame / (high - low)
+        gap = (apexes[higher] - apexes[lower]) * scale
+        if gap - point - 2 >= APEX_LABEL_LIFT + line:  # under the higher point: apart
+            offsets[lower] = float(APEX_LABEL_LIFT)
+            return offsets, high
+        offsets[lower] = gap + 2 * APEX_LABEL_LIFT + line  # above the higher one's label
+        need = offsets[lower] - gap + line + 2  # px above the higher point
+        if (high - apexes[higher]) * scale >= need:
+            return offsets, high
+        # (high - h) frame / (high - low) = need, solved for high
+        high = (apexes[higher] - need * low / frame) / (1 - need / frame)
+    return offsets, high
+
+
 def height_axis(fig) -> None:
     """Heights on the y axis in grouped digits, no exponent (200,000, not 2.000e+5)."""
     fig.yaxis.formatter = NumeralTickFormatter(format="0,0.[0000]")
@@ -196,6 +238,10 @@ def heights_and_stage(heights, animation, presentation: bool) -> pn.viewable.Vie
 
 
 PROJECTOR_PLOT_HEIGHT = 290  # presentation mode (scene.py): plots and player within 720 px
+# ... and the drop's stage there, beside the heights and the player, as tall as both: 220 x 290
+# beside the heights alone, its balls were small for a room (the player's row, beside the
+# trails box, left the width unused)
+PROJECTOR_STAGE = {"width": 270, "height": PROJECTOR_PLOT_HEIGHT + PROJECTED_PLAYER_HEIGHT}
 
 
 class DropScene(Scene):
@@ -229,7 +275,7 @@ class DropScene(Scene):
         self._trail_lines: list | None = None  # (added when trails are first asked for)
         self.curves = ColumnDataSource({"t": [], "x1": [], "x2": []})
         answers_pending(self.curves)
-        self.apexes = ColumnDataSource({"t": [], "h": [], "text": []})
+        self.apexes = ColumnDataSource({"t": [], "h": [], "text": [], "dy": []})
         self.drop_line = Span(dimension="width", line_color="gray", line_dash="dashed")
         self.icm_line = Span(
             dimension="width", line_color="green", line_dash="dotted", line_width=2
@@ -244,7 +290,8 @@ class DropScene(Scene):
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # 1280x720: under the header, tabs and summary, the player
-            self.heights.height = self.animation.height = PROJECTOR_PLOT_HEIGHT
+            self.heights.height = PROJECTOR_PLOT_HEIGHT
+            self.animation.update(**PROJECTOR_STAGE)
 
     @param.depends("state.revealed", "state.step", watch=True)
     def _answer_replaces_summary(self) -> None:
@@ -280,7 +327,7 @@ class DropScene(Scene):
                 text_font_size="10pt",
                 text_align="right",  # left of the point: h2 is at the right edge of the plot
                 x_offset=-4,
-                y_offset=6,
+                y_offset="dy",  # (apex_label_offsets)
             )
         )
         for span in (self.drop_line, self.icm_line, self.cursor):
@@ -320,11 +367,6 @@ class DropScene(Scene):
             "x1": on_screen(tr.x1 * units.length),
             "x2": on_screen(tr.x2 * units.length),
         }
-        self.apexes.data = {
-            "t": np.array(r.apex_t) * units.time,
-            "h": np.array(r.apex_h) * units.length,
-            "text": [f"h{i + 1} = {units.height(h)}" for i, h in enumerate(r.apex_h)],
-        }
         self.drop_line.location = r.x2_0 * units.length
         self.icm_line.location = r.h_icm * units.length
         top = max(r.x2_0, *r.apex_h, r.h_icm) * units.length
@@ -334,13 +376,46 @@ class DropScene(Scene):
             pinned = self.pinned.result
             top = max(top, max(pinned.x2_0, *pinned.apex_h) * units.length)
         # room above the highest apex for its label (larger on a projector)
-        low, high = -0.03 * top, (1.2 if self.state.presentation else 1.12) * top
+        # and below 0 room for the deepest squash (a heavy upper ball, mu = 10, presses the
+        # lower one into the floor by more than 3 % of the top, which had cut its bottom)
+        deepest = min(0.0, float(np.min(tr.x1, initial=0.0)), float(np.min(tr.x2, initial=0.0)))
+        deepest *= units.length
+        low = min(-0.03 * top, 1.05 * deepest)
+        high = (1.2 if self.state.presentation else 1.12) * top
+        apexes = [h * units.length for h in r.apex_h]
+        offsets, high = apex_label_offsets(apexes, low, high, self._label_sizes())
+        self.apexes.data = {
+            "t": np.array(r.apex_t) * units.time,
+            "h": np.array(apexes),
+            "text": [f"h{i + 1} = {units.height(h)}" for i, h in enumerate(r.apex_h)],
+            "dy": offsets,
+        }
         self.heights.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
-        room = high / (1 - 4 * BALL_RADIUS)  # the balls drawn on top of their heights fit
+        # the balls, drawn on top of their heights, fit: radii are fractions f of the stage's
+        # span, so the upper ball's top, high + 2 (f1 + f2) (room - low), is at most room (the
+        # upper ball is 10^(1/3) = 2.2 times the lower one at mu = 10: it was cut at the top
+        # when the room was made for two balls of the lower one's size)
+        diameters = 2 * sum(ball_radii(self.state.mu))
+        room = (high - diameters * low) / (1 - diameters)
         self.animation.y_range.update(start=low, end=room, reset_start=low, reset_end=room)
         self.heights.yaxis.axis_label = units.length_label
         self.heights.xaxis.axis_label = units.time_label
         self._animate(units)
+
+    def _label_sizes(self) -> dict:
+        """What :func:`apex_label_offsets` needs of the heights figure, in px: its plot area's
+        height (under-estimated: the figure less its title, legend and x axis), a label's line
+        and an apex point's radius (both larger on a projector: app/scene.readable)."""
+        fig = self.heights
+        labels = next(a for a in fig.center if isinstance(a, LabelSet))
+        size = labels.text_font_size
+        size = str(size.get("value") if isinstance(size, dict) else getattr(size, "value", size))
+        points = next(r.glyph for r in fig.renderers if isinstance(r.glyph, Scatter))
+        return {
+            "frame": fig.height - 120,
+            "line": float(size.removesuffix("pt")) * 4 / 3 * 1.2,
+            "point": points.size / 2,
+        }
 
     def _draw_pinned(self, units) -> None:
         pinned = self.pinned
@@ -473,6 +548,8 @@ class DropScene(Scene):
 
     def layout(self) -> pn.viewable.Viewable:
         self._draw()
+        if self.state.presentation:
+            return self._projected_layout()
         return pn.Column(
             self.summary,
             heights_and_stage(self.heights, self.animation, self.state.presentation),
@@ -490,6 +567,23 @@ class DropScene(Scene):
                 []
                 if self.state.presentation
                 else [pn.pane.Markdown(PLAYER_HELP, sizing_mode="stretch_width")]
+            ),
+            sizing_mode="stretch_width",
+        )
+
+    def _projected_layout(self) -> pn.viewable.Viewable:
+        """On a projector: the stage beside the heights and the player (:data:`PROJECTOR_STAGE`),
+        the trails box, Pin and Download in a row below."""
+        plots = pn.Column(
+            pn.pane.Bokeh(self.heights, sizing_mode="stretch_width"),
+            self.player,
+            sizing_mode="stretch_width",
+        )
+        return pn.Column(
+            self.summary,
+            pn.Row(plots, pn.pane.Bokeh(self.animation), sizing_mode="stretch_width"),
+            pn.FlexBox(
+                self.trails, self.pin, self.download, flex_wrap="wrap", sizing_mode="stretch_width"
             ),
             sizing_mode="stretch_width",
         )

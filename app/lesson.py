@@ -22,6 +22,9 @@ BEFORE_THE_LESSON = ("eps", "eps12", "mu", "tau_ratio", "height", "scene", "unit
 # read from the back of a room in presentation mode
 ASKED = {"font-size": "20px", "line-height": "1.4"}
 PROJECTED = {"font-size": "30px", "line-height": "1.3"}
+# what to look for, on a projector: smaller than the question (at 30 px step 1's five lines had
+# pushed Reveal below a 1280x720 screen); still read from the back of a room
+PROJECTED_LOOK_FOR = {"font-size": "24px", "line-height": "1.3"}
 # each circle centred on its words: Bokeh lifts a radio's words by 0.4 em, made for its own
 # 13 px circle and text; larger, the circle sat below them (a third of a line on a projector)
 CENTRED = (
@@ -56,7 +59,10 @@ class Lesson(Built):
             stylesheets=[":host label { white-space: normal; }"],  # long answers wrap, not cut
         )
         self.reveal = pn.widgets.Button(label="Reveal the answer", color="primary")
-        self.answer = alert("", visible=False, sizing_mode="stretch_width")
+        # (the page scrolls to it after a reveal: lesson.js)
+        self.answer = alert(
+            "", visible=False, sizing_mode="stretch_width", css_classes=["twoball-answer"]
+        )
         self.previous = pn.widgets.Button(label="< Previous", width=110)
         self.next = pn.widgets.Button(label="Next >", color="primary", width=110)
         self.start = pn.widgets.Button(label="Start the lesson", color="primary")
@@ -77,10 +83,19 @@ class Lesson(Built):
         # the question and its choices fill the main area while the class predicts
         # (:meth:`stage`; in the 300 px sidebar, beside an empty main area, they were small);
         # on a projector the reveal puts a large one-line answer above the scene
+        # what to look for (with, but on a projector, the step's title), then the question
+        self.look_for = pn.pane.Markdown(
+            sizing_mode="stretch_width",
+            styles=PROJECTED_LOOK_FOR if projected else ASKED,
+            css_classes=[] if projected else ["twoball-step-title"],
+            margin=(5, 10, 0, 10),
+            stylesheets=[":host p:last-child { margin-bottom: 0; }"],  # close to its question
+        )
         self.question = pn.pane.Markdown(
             sizing_mode="stretch_width",
             styles=PROJECTED if projected else ASKED,
-            css_classes=[] if projected else ["twoball-step-title"],
+            margin=(0, 10, 5, 10),
+            stylesheets=[":host p { margin-top: 0.6em; }"],
         )
         self.answer_line = pn.pane.Markdown(
             visible=False, sizing_mode="stretch_width", styles=PROJECTED
@@ -92,7 +107,12 @@ class Lesson(Built):
         self._steps = pn.Column(sizing_mode="stretch_width")  # in the card
         self._stage = pn.Column(sizing_mode="stretch_width")  # in the main area
         self._asking = pn.Column(
-            self.question, self.choices, self.reveal, sizing_mode="stretch_width", visible=False
+            self.look_for,
+            self.question,
+            self.choices,
+            self.reveal,
+            sizing_mode="stretch_width",
+            visible=False,
         )
         self._before: dict = {}  # the state when the lesson began (_begin)
         self._show()
@@ -165,10 +185,11 @@ class Lesson(Built):
             )
             return
         shown = STEPS[step - 1]
-        question = f"{shown.look_for}\n\n**{shown.question}**"
+        look_for = shown.look_for
         if not self.state.presentation:  # (a phone shows the main area above the card)
-            question = f"{self._title()}\n\n{question}"
-        self.question.object = question
+            look_for = f"{self._title()}\n\n{look_for}"
+        self.look_for.object = look_for
+        self.question.object = f"**{shown.question}**"
         self._place_title()
         self.choices.param.update(options=list(shown.choices), value=None, disabled=False)
         self.reveal.disabled = self._waits_for_a_choice()

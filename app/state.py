@@ -143,6 +143,37 @@ def validate(name: str, value: object, fallback: float | None) -> tuple[float | 
     return number, None
 
 
+def typed_value(
+    text: str, last: float | None, low: float, high: float, name: str, unit: str = ""
+) -> tuple[float | None, str | None]:
+    """(value to use, message or None) for a number typed under "advanced" (the drop height,
+    in H or metres, and eps12), by one rule:
+
+    - a number outside ``low``..``high`` (0, -5, 1e20, an eps12 of 2, even infinity) is clamped
+      to the nearest end, and the message says so;
+    - text that is no number (or NaN) keeps ``last``, the value in use, and the message says so.
+
+    (Before, a typed value the model refused, H = 0 or eps12 = 2, fell back while one it
+    accepted, H = 1e20, was clamped: the same mistake undone or corrected by chance.) A URL's
+    values are read by :func:`validate` instead: a link has no value in use to keep. Never
+    raises."""
+    try:
+        number = float(text)
+    except ValueError:
+        number = math.nan
+    allowed = span(low, high, unit)
+    if math.isnan(number):
+        kept = "equal to eps" if last is None else f"{number_text(last)}{unit}"
+        return last, (f"{name} must be a number {allowed}; got {str(text)[:40]!r}. Keeping {kept}.")
+    if number < low or number > high:
+        clamped = min(max(number, low), high)
+        return clamped, (
+            f"{name} {str(text).strip()[:40]}{unit} is outside the explorer's range, {allowed}; "
+            f"using the nearest, {number_text(clamped)}{unit}."
+        )
+    return number, None
+
+
 def span(low: float, high: float, unit: str = "") -> str:
     """A range in words for a message a student reads ("from 0.01 to 1", not "[0.01, 1]")."""
     return f"from {number_text(low)}{unit} to {number_text(high)}{unit}"

@@ -4,7 +4,10 @@
 //   the title shows it (0.01), not as the handle's own number (a log slider's exponent, -2.00);
 // - the animation player's buttons and frame slider, and each checkbox, get names;
 // - a keyboard focus is drawn as a thick orange ring, visible on a projector;
-// - the template's sidebar list (<ul> holding no <li>) is presented as what it is, a group.
+// - the template's sidebar list (<ul> holding no <li>) is presented as what it is, a group;
+// - two things Bokeh makes focusable (tabindex 0) had no name: each plot's event layer, which
+//   the keyboard reaches, is a group named by the plot's title (or its axis), and a toolbar's
+//   overflow (its "⋯") a button named "more plot tools".
 // New widgets appear as scenes are first visited: every second the page is looked over again,
 // and a handle's value is mended as soon as the slider changes it.
 (() => {
@@ -71,6 +74,21 @@
       }
     }
     for (const list of document.querySelectorAll("ul.nav")) set(list, "role", "presentation");
+    for (const root of shadowRoots(document, [])) {
+      for (const more of root.querySelectorAll(".bk-tool-overflow")) {
+        set(more, "role", "button");
+        set(more, "aria-label", "more plot tools");
+      }
+    }
+    for (const view of window.Bokeh ? Bokeh.index.all_views() : []) {
+      const events = view.canvas_view && view.canvas_view.events_el;
+      if (!events || !("title" in view.model)) continue;
+      const title = view.model.title && view.model.title.text;
+      const axis = (view.model.left || [])[0];
+      const about = title || (axis && axis.axis_label) || "";
+      set(events, "role", "group");  // (it holds the toolbar: an image may not)
+      set(events, "aria-label", about ? `plot: ${about}` : "plot");
+    }
   };
   document.adoptedStyleSheets = [...document.adoptedStyleSheets, ring];
   setInterval(mendAll, 1000);

@@ -2,7 +2,7 @@
 // shows the new step from its title; after a reveal, the answer and the buttons below it. A
 // long answer had pushed the card on, and the next step opened scrolled to its last choice
 // (a phone, a laptop) or with its buttons below the screen (a projector). The card is redrawn
-// by the server, so this waits a moment for it.
+// by the server, so this waits for it.
 (() => {
   const find = (root, selector) => {
     const hit = root.querySelector(selector);
@@ -29,5 +29,48 @@
     el.scrollIntoView({block, inline: "nearest", behavior: "instant"});
   }, 300);
   window.twoballShowStep = () => show(".twoball-step-title", "start");
-  window.twoballShowAnswer = () => show(".twoball-step-buttons", "end");
+  // After a reveal: the answer and the buttons below it, or, if both do not fit, the answer
+  // from its top. The answer comes from the server, with the uncovered scene above it (on a
+  // phone, the card lies below the scene): a busy server sent them after a fixed wait, and the
+  // answer was left below the screen. So this waits for the answer to be drawn, and places it
+  // again while the scene above grows (its plots are drawn later), for 4 s or until the user
+  // scrolls or touches the page.
+  let showing = 0; // the current reveal's number: a new one ends the last one's watch
+  window.twoballShowAnswer = () => {
+    const mine = ++showing;
+    const started = performance.now();
+    let placedAt = null; // when the answer was first placed
+    let placedTop = null; // its top then, after the scroll
+    let userMoved = false;
+    const moved = () => { userMoved = true; };
+    const events = ["wheel", "touchstart", "keydown", "mousedown"];
+    for (const name of events) window.addEventListener(name, moved, {once: true, passive: true});
+    const stop = () => { for (const name of events) window.removeEventListener(name, moved); };
+    const tick = () => {
+      if (mine !== showing || userMoved) return stop();
+      const now = performance.now();
+      const answer = find(document, ".twoball-answer");
+      const buttons = find(document, ".twoball-step-buttons");
+      const drawn = answer && buttons && answer.getBoundingClientRect().height > 0;
+      if (!drawn) {
+        if (now - started < 15000) setTimeout(tick, 100);
+        else stop();
+        return;
+      }
+      const top = answer.getBoundingClientRect().top;
+      if (placedTop === null || Math.abs(top - placedTop) > 1) {
+        const margin = header() + 8;
+        buttons.scrollIntoView({block: "end", inline: "nearest", behavior: "instant"});
+        if (answer.getBoundingClientRect().top < margin) {
+          answer.style.scrollMarginTop = `${margin}px`;
+          answer.scrollIntoView({block: "start", inline: "nearest", behavior: "instant"});
+        }
+        placedTop = answer.getBoundingClientRect().top;
+        if (placedAt === null) placedAt = now;
+      }
+      if (now - placedAt < 4000) setTimeout(tick, 150);
+      else stop();
+    };
+    setTimeout(tick, 300);
+  };
 })();

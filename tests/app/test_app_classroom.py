@@ -237,6 +237,110 @@ def test_presentation_mode_fits_a_projector(browser, app_server, artifacts):
         context.close()
 
 
+def _box(edges: list[float]) -> dict:
+    return dict(zip(("left", "top", "right", "bottom"), edges, strict=True))
+
+
+def _overlap(a: dict, b: dict) -> bool:
+    return min(a["right"], b["right"]) - max(a["left"], b["left"]) > 1 and (
+        min(a["bottom"], b["bottom"]) - max(a["top"], b["top"]) > 1
+    )
+
+
+@pytest.mark.browser
+def test_a_projector_gives_the_drop_animation_room(browser, app_server, artifacts):
+    """Presentation mode at 1280x720: the drop's animation (220 x 290 px beside the heights,
+    its balls small for a room) stands beside the heights and the player, as tall as both,
+    inside the window and over nothing else."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?present=1", viewport=(1280, 720))
+    try:
+        page.wait_for_timeout(800)
+        plots = [
+            c for c in deep_query(page, "canvas")
+            if c["visible"] and c["width"] > 100 and c["height"] > 100
+        ]  # fmt: skip
+        stage = max(plots, key=lambda c: c["left"])  # right of the heights
+        heights = min(plots, key=lambda c: c["left"])
+        players = [b for b in deep_query(page, ".bk-btn-group, button.play") if b["visible"]]
+        buttons = [b for b in deep_query(page, "button, label") if b["visible"]]
+        below = [b for b in buttons if b["left"] > 330 and b["top"] > 250]
+        assert stage["width"] >= 250 and stage["height"] >= 380, stage
+        assert stage["right"] <= 1280 and stage["bottom"] <= 720, stage
+        assert heights["width"] >= 600, heights
+        assert not any(_overlap(stage, other) for other in [heights, *players, *below]), [
+            b for b in [heights, *players, *below] if _overlap(stage, b)
+        ]
+        assert all(b["bottom"] <= 720 for b in below), below
+        page.screenshot(path=artifacts / "presentation_drop_stage.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
+# each apex label of the drop's heights as drawn: [text, left, top, right, bottom] in canvas
+# px, from the label's anchor (BokehJS's view), offsets, alignment and the text's measured width
+APEX_LABELS_JS = """() => {
+  const view = [...Bokeh.index.all_views()].find(
+    (v) => v.model && v.model.constructor.__name__ === "LabelSet");
+  const model = view.model, frame = view.parent.frame.bbox;
+  const size = model.text_font_size.value;
+  const px = parseFloat(size) * (size.endsWith("pt") ? 4 / 3 : 1);
+  const context = document.createElement("canvas").getContext("2d");
+  context.font = `${px}px ${model.text_font.value}`;
+  const out = [];
+  for (let i = 0; i < view.sx.length; i++) {
+    const text = view.text.get(i), width = context.measureText(text).width;
+    const x = view.sx[i] + view.x_offset.get(i), y = view.sy[i] - view.y_offset.get(i);
+    const align = model.text_align.value;
+    const left = align === "right" ? x - width : align === "center" ? x - width / 2 : x;
+    out.push([text, left, y - 1.2 * px, left + width, y]);  // (a line's height)
+  }
+  // each apex's point: its centre and radius
+  const points = [...Bokeh.index.all_views()].filter((v) => v.model && v.model.glyph &&
+    v.model.glyph.constructor.__name__ === "Scatter" && v.model.data_source === model.source)
+    .flatMap((v) => [...v.glyph.sx].map((x, i) => {
+      const r = v.model.glyph.size.value / 2, y = v.glyph.sy[i];
+      return [x - r, y - r, x + r, y + r]; }));
+  return {labels: out, points, frame: [frame.left, frame.top, frame.right, frame.bottom]};
+}"""
+
+
+APEX_LABEL_CASES = [
+    *((query, size) for query in ("eps=0.3", "eps=0.25", "eps=0.35", "eps=0.9&mu=1")
+      for size in ((390, 844), (1366, 768))),
+    ("present=1&eps=0.3", (1280, 720)),  # (a projector's)
+]  # fmt: skip
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize(("query", "size"), APEX_LABEL_CASES)
+def test_the_apex_labels_do_not_overlap(browser, app_server, artifacts, size, query):
+    """At a low eps the two apexes lie close together and the labels h1 and h2, each drawn
+    left of its point, ran into each other on a phone: the higher one is raised above the
+    other. Each label whole inside the plot."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?{query}", viewport=size)
+    try:
+        page.wait_for_timeout(500)
+        drawn = page.evaluate(APEX_LABELS_JS)
+        labels, (left, top, right, bottom) = drawn["labels"], drawn["frame"]
+        assert [label[0][:2] for label in labels] == ["h1", "h2"], labels
+        # apart from each other and from the other apex's point
+        boxes = [label[1:] for label in labels]
+        points = drawn["points"]
+        assert not _overlap(_box(boxes[0]), _box(boxes[1])), labels
+        for box, point in ((boxes[0], points[1]), (boxes[1], points[0])):
+            assert not _overlap(_box(box), _box(point)), (labels, points)
+        for _, x0, y0, x1, y1 in labels:
+            assert left - 1 <= x0 and x1 <= right + 1 and top - 1 <= y0 and y1 <= bottom + 1
+        name = query.replace("&", "_").replace("=", "")
+        page.screenshot(path=artifacts / f"apex_labels_{name}_{size[0]}.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
 # the top margin of each paragraph that starts the drop's summary ("h1 = ...")
 SUMMARY_MARGINS_JS = """() => { const out = []; const walk = (root) => {
   for (const el of root.querySelectorAll("*")) { if (el.shadowRoot) walk(el.shadowRoot);
@@ -369,7 +473,7 @@ def test_a_bad_typed_height_is_said_where_a_laptop_shows_it(browser, app_server)
         box.wait_for()
         box.fill("-5")
         box.press("Enter")
-        message = page.get_by_text("H: height must be", exact=False)
+        message = page.get_by_text("H: height -5 is outside the explorer's range", exact=False)
         message.wait_for()
         shown = message.bounding_box()
         assert shown is not None and shown["y"] >= 0 and shown["y"] + shown["height"] <= 768

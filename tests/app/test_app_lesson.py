@@ -237,6 +237,11 @@ def test_a_projected_step_asks_large_and_answers_in_one_large_line(
         assert len(centres) == len(step.choices)
         assert all(abs(circle - words) <= 2 for _, circle, words in centres), centres
         assert _scene_canvases(page) == []  # covered
+        # Reveal whole on screen, below the last choice (step 1's long text to look for had
+        # pushed it to y 689..729 of 720)
+        reveal = page.get_by_role("button", name="Reveal the answer").bounding_box()
+        assert reveal["y"] >= choice_box["y"] + choice_box["height"], (reveal, choice_box)
+        assert reveal["y"] + reveal["height"] <= 720 - 10, reveal
         page.screenshot(path=shots / f"step{number}-projected-asked.png")
         page.keyboard.press("PageDown")
         answer = f"Answer: {step.choices[step.answer].split(':')[0]}"
@@ -285,5 +290,51 @@ def test_each_new_step_shows_from_its_title(browser, app_server, artifacts, size
             following.click()
         page.screenshot(path=artifacts / "lesson" / f"step4-{width}x{height}.png")
         assert errors == []
+    finally:
+        context.close()
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize("number", [1, 4])
+def test_a_phone_shows_the_answer_after_a_reveal_from_a_slow_server(
+    browser, app_server, artifacts, number
+):
+    """On a phone the card, with the answer, lies below the scene: after Reveal the page
+    scrolls to it. With a busy server the answer and the uncovered scene came after the page
+    had scrolled (300 ms after the click), and the answer was left below the screen. Here the
+    server's messages are held for 1.5 s after the click."""
+    base, _ = app_server
+    step = STEPS[number - 1]
+    context = browser.new_context(viewport={"width": 390, "height": 844})
+    page = context.new_page()
+    link: dict = {"held": None}  # the page's websocket; its messages from the server, held
+
+    def route(ws):
+        server = ws.connect_to_server()
+        link["ws"] = ws
+        server.on_message(
+            lambda message: (
+                ws.send(message) if link["held"] is None else link["held"].append(message)
+            )
+        )
+
+    try:
+        page.route_web_socket("**/ws*", route)
+        page.goto(f"{base}/app?step={number}")
+        page.get_by_text(step.choices[step.answer], exact=True).click()
+        page.wait_for_timeout(1000)
+        link["held"] = []
+        page.get_by_role("button", name="Reveal the answer").click()
+        page.wait_for_timeout(1500)
+        while link["held"]:  # in order, with any that come meanwhile
+            link["ws"].send(link["held"].pop(0))
+        link["held"] = None
+        answer = page.get_by_text("Right.")
+        answer.wait_for()
+        page.wait_for_timeout(2500)  # the scene drawn, the page scrolled
+        header = page.locator("#header").bounding_box()
+        box = answer.bounding_box()
+        assert header["y"] + header["height"] <= box["y"] and box["y"] + box["height"] <= 844, box
+        page.screenshot(path=artifacts / "lesson" / f"step{number}-phone-revealed-slowly.png")
     finally:
         context.close()

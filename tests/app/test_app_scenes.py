@@ -7,6 +7,7 @@ directly (for the map's cube slice), not against the app's own earlier output.
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import param
@@ -14,13 +15,15 @@ import pytest
 from bokeh.document import Document
 
 import twoball
+from app.collisions import collisions
 from app.delayed_map import map_cube
 from app.drop import TRAILS
 from app.explorer import Explorer
 from app.scenes import SCENE_REGISTRY, SCENES
-from app.state import url_query
+from app.state import ExplorerState, url_query
 from twoball import presets
 from twoball.observables import BALLS, FLOOR
+from twoball.units import number_text
 
 PAPER = {"eps": "0.9", "mu": "0.01", "tau_ratio": "0.01"}
 
@@ -220,6 +223,40 @@ def test_closeup_shows_the_four_contacts_and_forces_only_inside_them():
     assert all(floor[0].start < c.start and c.end < floor[0].end for c in ball)
 
 
+@pytest.mark.parametrize(
+    "query",
+    [
+        {"eps": "1", "mu": "10", "tau_ratio": "10", "H": "1e8"},  # a new user's: 5 and 5
+        {"eps": "0.3", "mu": "0.01", "tau_ratio": "1"},  # a second floor bounce before h1
+        PAPER,  # all in one collision
+    ],
+)
+def test_closeup_s_table_lists_every_contact_its_summary_counts(query):
+    """The summary counts the contacts before the first apex; the table had listed only the
+    first collision's (at a large gap, the lower ball's floor bounce alone: '5 ball contacts'
+    over a table of 'floor 1'). Each contact the solver finds is a row, and the summary says
+    which rows the plots show."""
+    explorer = rendered({**query, "scene": "closeup"})
+    text = explorer.scenes["closeup"].table.object
+    s = explorer.state
+    solved = twoball.simulate(s.eps, s.mu, s.tau_ratio, height=s.height, until="first")
+    floors, balls = solved.contacts_first
+    rows = [line for line in text.splitlines() if re.match(r"\| (ball|floor) \d", line)]
+    for kind, count, name in ((BALLS, balls, "ball"), (FLOOR, floors, "floor")):
+        assert f"{count} {name} contact" in text.splitlines()[0]
+        starts = [float(r.split("|")[2]) for r in rows if r.startswith(f"| {name} ")]
+        exact = sorted(c.start for c in solved.contacts if c.contact == kind)
+        assert len(starts) == count == len(exact)
+        assert starts == pytest.approx(exact, rel=1e-5)
+    grouped = collisions(solved.contacts)
+    if len(grouped) > 1:  # the plots' window said, and where the table leaves it
+        assert "The plots show the first collision alone" in text
+        assert f"the table lists {len(solved.contacts) - len(grouped[0])} more" in text
+        assert "after the collision shown" in text
+    else:
+        assert "all in the first collision" in text and "after the collision" not in text
+
+
 def test_accuracy_computes_only_when_opened():
     explorer = rendered({"eps": "0.816", "mu": "0.05", "tau_ratio": "0.3"})
     explorer.state.mu = 0.06
@@ -303,19 +340,43 @@ def test_the_accuracy_of_the_last_drop_is_dimmed_while_the_next_is_measured(monk
     assert scene.results.styles == {"opacity": "1"} and scene.status.object == ""
 
 
-def test_bad_typed_values_show_a_message_and_keep_a_valid_state():
-    explorer = rendered()
-    controls = explorer.controls
-    controls.height.value = "-5"
-    assert explorer.state.height == 1e4
-    typed = controls.typed_message  # (under the inputs, where the value was typed)
-    assert typed.visible and "height must be a number from 10 to" in typed.object
-    assert "got '-5'" in typed.object  # what was typed, not '-5.0' (a new user's puzzle)
-    controls.eps12.value = "2"
-    assert explorer.state.eps12 is None and "eps12" in controls.typed_message.object
-    controls.eps12.value = "0.5"
-    assert explorer.state.eps12 == 0.5
-    assert explorer.scenes["drop"].result.drop.eps12 == 0.5
+@pytest.mark.parametrize("units", ["dimensionless", "SI"])
+def test_typed_values_follow_one_rule_clamp_a_number_keep_the_last_for_text(units):
+    """Under "advanced", one rule (app/state.typed_value): a number out of range is clamped to
+    the nearest allowed value, text that is no number keeps the value in use, each with a
+    message under the inputs. (A typed H of 1e20 was clamped but 0 fell back to the default;
+    an eps12 of 2 fell back instead of being clamped.)"""
+    explorer = rendered({"units": units})
+    controls, state = explorer.controls, explorer.state
+    lowest, highest = ExplorerState.param.height.bounds
+    si = units == "SI"
+    typed_height = presets.metres_from_height if si else float  # (what the box takes)
+    message = controls.typed_message
+    for typed, expected in (("0", lowest), ("-5", lowest), ("1e20", highest), ("inf", highest)):
+        state.height = 2e4
+        controls.height.value = typed
+        assert state.height == pytest.approx(expected, rel=1e-12), typed
+        assert explorer.scenes["drop"].result.drop.height == state.height
+        assert message.visible and "outside the explorer's range" in message.object, typed
+        assert f"using the nearest, {number_text(typed_height(expected))}" in message.object
+    state.height = 2e4
+    controls.height.value = "abc"
+    assert state.height == 2e4  # kept
+    assert message.visible and "got 'abc'" in message.object and "Keeping" in message.object
+    low, high = ExplorerState.param.eps12.bounds
+    for typed, expected in (("2", high), ("0", low), ("-1", low)):
+        state.eps12 = 0.5
+        controls.eps12.value = typed
+        assert state.eps12 == expected, typed
+        assert "eps12" in message.object and "using the nearest" in message.object
+    state.eps12 = 0.5
+    controls.eps12.value = "half"
+    assert state.eps12 == 0.5 and "Keeping 0.5" in message.object
+    controls.eps12.value = ""
+    assert state.eps12 is None  # empty: equal to eps
+    controls.eps12.value = "0.7"
+    assert state.eps12 == 0.7 and not message.visible
+    assert explorer.scenes["drop"].result.drop.eps12 == 0.7
 
 
 @pytest.mark.parametrize("typed", ["0.0001", "1e9"])
@@ -587,6 +648,24 @@ def test_the_animation_s_frames_are_the_drop_at_their_times():
         scene.result.evaluate(scene.times[1:2]).x1[0] * units.length + scene.balls.data["r"][0],
         rel=1e-12,
     )  # frame 1, where the player is, drawn from the server
+
+
+@pytest.mark.parametrize("mu", ["0.0001", "1", "10"])
+@pytest.mark.parametrize("present", ["0", "1"])
+def test_the_drop_animation_s_balls_stay_on_its_stage(mu, present):
+    """Every frame's balls lie inside the stage's height, at every mass ratio: at mu = 10 the
+    upper ball, drawn 2.2 times the lower one's radius, was cut at the stage's top (the room
+    above the heights was made for two balls of the lower one's size)."""
+    explorer = rendered({"mu": mu, "H": "1e4", "present": present})
+    scene = explorer.scenes["drop"]
+    move_player(scene.player, 1)
+    frames = scene.animated.frames.data
+    radius, upper_radius = scene.balls.data["r"]
+    assert upper_radius / radius == pytest.approx(float(mu) ** (1 / 3))  # equal densities
+    span = scene.animation.y_range
+    lower, upper = np.asarray(frames["y0"]), np.asarray(frames["y1"])
+    assert upper.max() + upper_radius <= span.end, (upper.max() + upper_radius, span.end)
+    assert lower.min() - radius >= span.start
 
 
 def test_the_stack_animation_s_frames_are_the_stack_at_their_times():
