@@ -45,7 +45,13 @@ from .state import contact_eps
 # Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first (all
 # eight: up to eight balls)
 PALETTE = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#F0E442", "#000000")
-BALL_RADIUS = 0.05  # the bottom ball, as a fraction of the plot's height
+# The stage draws the stack at rest STACK_SHARE of its height tall, the bottom ball's radius at
+# most BALL_RADIUS of it: eight balls, each with a radius of 0.05, had made the stage five
+# times the heights' span, the stack 40 px tall on a projector with its top ball under a pixel.
+BALL_RADIUS = 0.08  # the bottom ball, as a fraction of the stage's height, at most
+STACK_SHARE = 0.45
+SMALLEST_BALL = 0.2  # a ball's radius over the bottom ball's, at least: visible (a ball 1e-5
+# as heavy has 0.02 of its radius at equal density)
 SAMPLES = 400  # plotted times over the drop (as app/drop.py's PLOTTED), plus through contacts:
 CONTACT_SAMPLES = 3600  # all contacts' together at most, 9 a contact at most, 2 at least (its
 # start and end): an eight-ball stack's 2 500 contacts at 9 each were 23 000 times of 8 balls,
@@ -61,8 +67,19 @@ CAPTION_HELP = (
 
 
 PROJECTOR_PLOT_HEIGHT = 300  # presentation mode (scene.py): plots and player in 720 px, with
-# room to spare for a touch screen's taller buttons; the legend stands right of the curves
-# there (below them, at 310 px, it left the curves 115 px)
+# room to spare for a touch screen's taller buttons; the legend stands above the curves there,
+# in one row (below them, at 310 px, it left the curves 115 px; right of them, a third of the
+# plot's width)
+APEX_COLUMNS = ("t", "h", "text", "align", "dx")  # each label's alignment and offset its own
+
+
+def ball_sizes(masses: np.ndarray) -> np.ndarray:
+    """Each ball's radius on the stage, as a fraction of its height: as the cube root of its
+    mass (equal density), at least :data:`SMALLEST_BALL` of the bottom ball's, the stack's
+    diameters together :data:`STACK_SHARE` of the stage (the bottom ball's radius at most
+    :data:`BALL_RADIUS`)."""
+    sizes = np.maximum(np.asarray(masses, dtype=float) ** (1 / 3), SMALLEST_BALL)
+    return sizes * min(BALL_RADIUS, STACK_SHARE / (2 * sizes.sum()))
 
 
 class StackScene(Scene):
@@ -138,7 +155,7 @@ class StackScene(Scene):
         self.curves = ColumnDataSource({"t": []})
         self._lines: list = []  # a line per ball drawn so far (:meth:`_add_lines`)
         answers_pending(self.curves)
-        self.apexes = ColumnDataSource({"t": [], "h": [], "text": []})
+        self.apexes = ColumnDataSource({c: [] for c in APEX_COLUMNS})
         self.balls_drawn = ColumnDataSource({"x": [], "y": [], "r": [], "color": []})
         self.icm_line = Span(
             dimension="width", line_color="green", line_dash="dotted", line_width=2
@@ -161,7 +178,9 @@ class StackScene(Scene):
         fig = figure(
             height=400,
             sizing_mode="stretch_width",
-            title="Heights to the top ball's h2",
+            # (on a projector the teacher says what it shows, and the legend's row stands
+            # there: under both, the stage beside had 157 px, its eight balls 60 px tall)
+            title=None if self.state.presentation else "Heights to the top ball's h2",
             y_range=Range1d(0.0, 1.0),
             tools="pan,box_zoom,wheel_zoom,reset,save",
             x_axis_label="time tau (dimensionless)",
@@ -172,19 +191,28 @@ class StackScene(Scene):
         draw(
             fig, Scatter(x="t", y="h", size=8, fill_color="black", line_color="black"), self.apexes
         )
+        # h1 centred above its point (left of it, on a phone and on a projector, it ran over
+        # the height axis' labels), h2 left of its point (it is at the plot's right edge)
         fig.add_layout(
             LabelSet(
                 x="t", y="h", text="text", source=self.apexes, text_font_size="10pt",
-                text_align="right", x_offset=-4, y_offset=6,  # left of the point: h2 is at the edge
+                text_align="align", x_offset="dx", y_offset=8,
             )
         )  # fmt: skip
+        # (six labels of 0 to 14000 ran into each other on a phone; a projector's are 4 too)
+        fig.xaxis.ticker.desired_num_ticks = 4
         fig.add_layout(self.icm_line)
         fig.add_layout(self.cursor)
         # outside the curves (inside, eight balls' legend hid them and the apex labels): below
-        # them, four a row; on a projector, whose height is what is short, right of them
+        # them, four a row; on a projector, whose height is what is short, one row above them,
+        # "ball 1", then each number (right of them, "ball 1" to "ball 8" took a third of the
+        # plot's width at 1280x720)
         if self.state.presentation:
-            self.legend = Legend(items=[], orientation="vertical")
-            fig.add_layout(self.legend, "right")
+            self.legend = Legend(
+                items=[], orientation="horizontal", padding=0, margin=4, spacing=14,
+                label_standoff=4, border_line_alpha=0,
+            )  # fmt: skip
+            fig.add_layout(self.legend, "above")
         else:
             self.legend = Legend(items=[], orientation="horizontal", ncols=4)
             fig.add_layout(self.legend, "below")
@@ -199,7 +227,8 @@ class StackScene(Scene):
         for ball in range(len(self._lines), balls):
             glyph = Line(x="t", y=f"x{ball}", line_color=PALETTE[ball], line_width=2)
             self._lines.append(draw(self.heights, glyph, self.curves))
-            item = LegendItem(label=f"ball {ball + 1}", renderers=[self._lines[-1]])
+            label = f"{ball + 1}" if self.state.presentation and ball else f"ball {ball + 1}"
+            item = LegendItem(label=label, renderers=[self._lines[-1]])
             self.legend.items = [*self.legend.items, item]
         underneath(self.heights, self._lines)  # (ball 1's drawn first, as before)
         readable(self.heights, self.state.presentation)
@@ -269,7 +298,7 @@ class StackScene(Scene):
         r = self.result
         if r is None:  # refused (the summary says why): nothing drawn rather than the last stack
             self.curves.data = {"t": [], **{f"x{ball}": [] for ball in range(len(self._lines))}}
-            self.apexes.data = {"t": [], "h": [], "text": []}
+            self.apexes.data = {c: [] for c in APEX_COLUMNS}
             self.animated.clear()
             return
         tr = r.trajectory
@@ -286,6 +315,8 @@ class StackScene(Scene):
             "t": [t for t, _ in top],
             "h": [h for _, h in top],
             "text": [f"h{i + 1} = {number_text(h)}" for i, (_, h) in enumerate(top)],
+            "align": ["center" if i == 0 else "right" for i in range(len(top))],
+            "dx": [0 if i == 0 else -6 for i in range(len(top))],
         }
         icm = icm_chain(r.stack)[-1]
         self.icm_line.location = icm
@@ -293,19 +324,20 @@ class StackScene(Scene):
         # room above the highest apex for its label (larger on a projector: 16 pt)
         low, high = -0.03 * highest, (1.25 if self.state.presentation else 1.12) * highest
         self.heights.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
-        room = high / (1 - 2 * BALL_RADIUS * n)
+        # the stack's top at ``high`` at most: each ball at its height, on the balls below
+        room = low + (high - low) / (1 - 2 * ball_sizes(r.stack.masses).sum())
         self.animation.y_range.update(start=low, end=room, reset_start=low, reset_end=room)
         self._animate()
 
     def _animate(self) -> None:
         """The animation of this stack, played in the browser (app/animation.py): each ball
         on its height, stacked, ball i standing on ball i-1 when X_i = X_(i-1) (their overlap
-        is the compression); radii follow the masses (equal density). The frames are the
-        solver's at their times, in a run of their own when the player first moves; the frame
-        on screen now is read off the plotted curves."""
+        is the compression); radii follow the masses (equal density, :func:`ball_sizes`). The
+        frames are the solver's at their times, in a run of their own when the player first
+        moves; the frame on screen now is read off the plotted curves."""
         r = self.result
         span = self.animation.y_range.end - self.animation.y_range.start
-        radii = span * BALL_RADIUS * r.stack.masses ** (1 / 3)
+        radii = span * ball_sizes(r.stack.masses)
         below = np.concatenate([[0.0], np.cumsum(2 * radii)[:-1]]) + radii
         frame = min(self.player.value_throttled, self.times.size - 1)
         tr = r.trajectory
