@@ -71,6 +71,12 @@ PROJECTOR_PLOT_HEIGHT = 300  # presentation mode (scene.py): plots and player in
 # in one row (below them, at 310 px, it left the curves 115 px; right of them, a third of the
 # plot's width)
 APEX_COLUMNS = ("t", "h", "text", "align", "dx")  # each label's alignment and offset its own
+# A stack the solver refuses (too light a top ball, too small a gap for five balls, a Hertz
+# contact too damped at the explorer's H...): the summary says why, and the plots keep the last
+# stack it carried, dimmed, named in the summary. Not sliders' ranges that exclude every refused
+# stack: what is refused depends on N, the ratio, the gap, eps per contact, the force and H
+# (a two-ball slider), together; ranges that moved with each other would also move a value the
+# teacher set. (Emptied, the plots left a class looking at blank axes.) See :meth:`_dim`.
 
 
 def ball_sizes(masses: np.ndarray) -> np.ndarray:
@@ -98,7 +104,10 @@ class StackScene(Scene):
 
     def __init__(self, **params):
         super().__init__(**params)
-        self.result: StackResult | None = None
+        self.result: StackResult | None = None  # the last stack the solver carried
+        self.refused: str | None = None  # why it refused the stack asked for, if it did
+        self._plots: pn.viewable.Viewable | None = None  # (built by :meth:`layout`)
+        self._carried = ""  # the last stack carried, in words (for a refusal's message)
         self._run: tuple[tuple, dict] = ((), {})  # simulate_stack's arguments, options (update)
         self.times = np.zeros(1)
         self.slow = np.zeros(1, dtype=bool)  # (frames in slow motion: frame_times)
@@ -156,6 +165,9 @@ class StackScene(Scene):
         self._lines: list = []  # a line per ball drawn so far (:meth:`_add_lines`)
         answers_pending(self.curves)
         self.apexes = ColumnDataSource({c: [] for c in APEX_COLUMNS})
+        # a refusal changes no plotted data: this answers the change (the page's "pending")
+        self.refusals = ColumnDataSource({"n": []})
+        answers_pending(self.refusals)
         self.balls_drawn = ColumnDataSource({"x": [], "y": [], "r": [], "color": []})
         self.icm_line = Span(
             dimension="width", line_color="green", line_dash="dotted", line_width=2
@@ -236,6 +248,7 @@ class StackScene(Scene):
     def _animation_figure(self):
         fig = stage()
         draw(fig, balls_glyph(), self.balls_drawn)
+        draw(fig, Scatter(x="n", y="n", size=0), self.refusals).visible = False  # (never drawn)
         return fig
 
     def contact_eps(self) -> list[float] | float:
@@ -255,22 +268,34 @@ class StackScene(Scene):
         s = self.state
         arguments = ([s.stack_ratio] * (s.balls - 1), self.contact_eps(), s.stack_gap)
         options = {"height": s.height, "force": s.force, "throw": False}
-        self._run = (arguments, options)  # (the animation's frames are a run of their own)
         try:
             # one run to the second apex, its dense output kept: sampled once its end is known
             result = simulate_stack(*arguments, **options, dense_output=True)
         except ParameterError as error:  # e.g. six balls, each 0.01 of the one below: 1e-10
-            self.result = None
-            self.summary.object = (
-                f"**This stack is outside what the solver carries:** {plain(str(error))}. "
-                "Choose fewer balls or a larger mass ratio."
-            )
+            self.refused = self._refusal_text(str(error))
+            self.summary.object = self.refused
             return
+        self.refused = None
+        self._run = (arguments, options)  # (the animation's frames are a run of their own)
         self.result = self._sampled(result)
+        self._carried = f"{s.balls} balls with mass ratio {s.stack_ratio:g}"
         self.summary.object = self._summary_text()
         r = self.result
         self.times, self.slow = frame_times(r.end_time, r.contacts)  # the animation's
         self.player.end = len(self.times) - 1
+
+    def _refusal_text(self, error: str) -> str:
+        """What the summary says of a stack the solver refuses: why, what to change, and that
+        the dimmed plots are the last stack it carried (README, "The Stack scene")."""
+        change = (
+            "Choose fewer balls or a larger mass ratio."
+            if "mass_ratios" in error
+            else "Change the value it names."
+        )
+        text = f"**This stack is outside what the solver carries:** {plain(error)}. {change}"
+        if self.result is None:  # (a page opened on it: nothing carried yet)
+            return text
+        return f"{text}  \n*Dimmed below: the last stack it carried, {self._carried}.*"
 
     @staticmethod
     def _sampled(result: StackResult) -> StackResult:
@@ -295,12 +320,15 @@ class StackScene(Scene):
         if not self.active:
             return
         self.current()
+        self._dim()
         r = self.result
-        if r is None:  # refused (the summary says why): nothing drawn rather than the last stack
-            self.curves.data = {"t": [], **{f"x{ball}": [] for ball in range(len(self._lines))}}
-            self.apexes.data = {c: [] for c in APEX_COLUMNS}
-            self.animated.clear()
+        if self.refused is not None:  # the summary says why; the last stack's plots stay, dimmed
+            self.refusals.data = {"n": [self.computations]}  # (answers the change)
             return
+        if r is None:
+            return
+        if self.refusals.data["n"]:  # back from a refusal: (answers the change; the stack
+            self.refusals.data = {"n": []}  # carried again may bring the same data as before)
         tr = r.trajectory
         n = r.stack.balls
         self._add_lines(n)
@@ -406,8 +434,16 @@ class StackScene(Scene):
         """The stack's sliders, its force and its eps per contact, for the sidebar."""
         return self._controls
 
+    def _dim(self) -> None:
+        """The plots dimmed while they show the last stack carried, not the one asked for."""
+        if self._plots is not None:
+            # (not {}: BokehJS keeps a style that is dropped rather than set)
+            self._plots.styles = {"opacity": "0.35" if self.refused is not None else "1"}
+
     def layout(self) -> pn.viewable.Viewable:
-        self._draw()
         plots = heights_and_stage(self.heights, self.animation, self.state.presentation)
+        self._plots = plots
+        self._draw()
+        self._dim()
         caption = pn.pane.Markdown(CAPTION_HELP, sizing_mode="stretch_width")
         return pn.Column(self.summary, plots, self.player, caption, sizing_mode="stretch_width")

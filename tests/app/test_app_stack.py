@@ -68,10 +68,33 @@ def test_a_bad_stack_value_in_the_url_is_reported(browser, app_server):
         context.close()
 
 
+# The opacity of each plot's canvas as seen: its own times that of every element around it
+# (through Panel's shadow roots).
+PLOT_OPACITY_JS = """() => {
+  const out = [];
+  const walk = (root) => {
+    for (const el of root.querySelectorAll("*")) {
+      if (el.shadowRoot) walk(el.shadowRoot);
+      if (el.tagName !== "CANVAS" || !el.checkVisibility()) continue;
+      const box = el.getBoundingClientRect();
+      if (box.width < 100 || box.height < 100) continue;
+      let opacity = 1;
+      for (let node = el; node; node = node.parentNode || node.host) {
+        if (node.nodeType === 1) opacity *= parseFloat(getComputedStyle(node).opacity);
+      }
+      out.push(opacity);
+    }
+  };
+  walk(document);
+  return out;
+}"""
+
+
 def test_a_stack_the_solver_refuses_says_why_and_the_app_goes_on(browser, app_server):
-    """Six balls, each 0.01 of the one below: each slider within its range, the top ball 1e-10
-    of the bottom one, outside the solver's masses. A message, no stale plot, no traceback
-    (the server log is checked by the fixture); a valid ratio then draws again."""
+    """Opened on six balls, each 0.01 of the one below (each slider within its range, the top
+    ball 1e-10 of the bottom one, outside the solver's masses): a message, nothing plotted (no
+    stack carried yet), no traceback (the server log is checked by the fixture); a valid ratio
+    then draws again."""
     base, _ = app_server
     context, page, errors = open_page(browser, f"{base}/app?scene=stack&N=6&ratio=0.01")
     try:
@@ -79,6 +102,39 @@ def test_a_stack_the_solver_refuses_says_why_and_the_app_goes_on(browser, app_se
         assert not [s for s in sources_with(page, "t", "h", "text") if s["t"]]  # no apexes
         page.goto(f"{base}/app?scene=stack&N=6&ratio=0.2")
         expect(page.get_by_text("6 balls, linear force")).to_be_visible(timeout=60_000)
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_a_slider_into_a_refused_stack_keeps_the_last_one_dimmed(browser, app_server, artifacts):
+    """Seven balls, each 0.04 of the one below, then the balls slider to eight: the top ball
+    is 1.6e-10 of the bottom one, refused. The plots went empty; now the message says why and
+    what the plots show, the last stack carried stays on them, dimmed, the page is not left
+    "pending", and a step back draws seven balls again, undimmed."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?scene=stack&N=7&ratio=0.04")
+    try:
+        expect(page.get_by_text("7 balls, linear force")).to_be_visible(timeout=60_000)
+        seven = [s["text"] for s in sources_with(page, "t", "h", "text") if s["t"]]
+        assert seven and page.evaluate(PLOT_OPACITY_JS) == [1, 1, 1, 1]
+        balls = next(i for i, t in enumerate(slider_titles(page)) if t.startswith("balls N"))
+        assert press_slider(page, balls) > 0, "the refusal did not answer the slider's move"
+        expect(page.get_by_text("outside what the solver carries")).to_be_visible()
+        expect(page.get_by_text("Choose fewer balls or a larger mass ratio")).to_be_visible()
+        last = "Dimmed below: the last stack it carried, 7 balls with mass ratio 0.04"
+        expect(page.get_by_text(last)).to_be_visible()
+        assert [s["text"] for s in sources_with(page, "t", "h", "text") if s["t"]] == seven
+        page.wait_for_function(f"() => ({PLOT_OPACITY_JS})().every((o) => o < 0.5)")
+        assert page.evaluate("document.body.classList.contains('twoball-pending')") is False
+        page.wait_for_timeout(600)
+        assert page_query(page)["N"] == "8"  # (the URL says what was asked for)
+        page.screenshot(path=artifacts / "stack" / "refused-dimmed.png", full_page=True)
+        assert press_slider(page, balls, key="ArrowLeft") > 0  # (the same stack as before)
+        expect(page.get_by_text("7 balls, linear force")).to_be_visible()
+        assert page.evaluate("document.body.classList.contains('twoball-pending')") is False
+        expect(page.get_by_text("outside what the solver carries")).to_be_hidden()
+        page.wait_for_function(f"() => ({PLOT_OPACITY_JS})().every((o) => o == 1)")
         assert errors == []
     finally:
         context.close()
