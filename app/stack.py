@@ -45,7 +45,13 @@ from .state import contact_eps
 # Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first (all
 # eight: up to eight balls)
 PALETTE = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#F0E442", "#000000")
-BALL_RADIUS = 0.05  # the bottom ball, as a fraction of the plot's height
+# The stage draws the stack at rest STACK_SHARE of its height tall, the bottom ball's radius at
+# most BALL_RADIUS of it: eight balls, each with a radius of 0.05, had made the stage five
+# times the heights' span, the stack 40 px tall on a projector with its top ball under a pixel.
+BALL_RADIUS = 0.08  # the bottom ball, as a fraction of the stage's height, at most
+STACK_SHARE = 0.45
+SMALLEST_BALL = 0.2  # a ball's radius over the bottom ball's, at least: visible (a ball 1e-5
+# as heavy has 0.02 of its radius at equal density)
 SAMPLES = 400  # plotted times over the drop (as app/drop.py's PLOTTED), plus through contacts:
 CONTACT_SAMPLES = 3600  # all contacts' together at most, 9 a contact at most, 2 at least (its
 # start and end): an eight-ball stack's 2 500 contacts at 9 each were 23 000 times of 8 balls,
@@ -61,8 +67,25 @@ CAPTION_HELP = (
 
 
 PROJECTOR_PLOT_HEIGHT = 300  # presentation mode (scene.py): plots and player in 720 px, with
-# room to spare for a touch screen's taller buttons; the legend stands right of the curves
-# there (below them, at 310 px, it left the curves 115 px)
+# room to spare for a touch screen's taller buttons; the legend stands above the curves there,
+# in one row (below them, at 310 px, it left the curves 115 px; right of them, a third of the
+# plot's width)
+APEX_COLUMNS = ("t", "h", "text", "align", "dx")  # each label's alignment and offset its own
+# A stack the solver refuses (too light a top ball, too small a gap for five balls, a Hertz
+# contact too damped at the explorer's H...): the summary says why, and the plots keep the last
+# stack it carried, dimmed, named in the summary. Not sliders' ranges that exclude every refused
+# stack: what is refused depends on N, the ratio, the gap, eps per contact, the force and H
+# (a two-ball slider), together; ranges that moved with each other would also move a value the
+# teacher set. (Emptied, the plots left a class looking at blank axes.) See :meth:`_dim`.
+
+
+def ball_sizes(masses: np.ndarray) -> np.ndarray:
+    """Each ball's radius on the stage, as a fraction of its height: as the cube root of its
+    mass (equal density), at least :data:`SMALLEST_BALL` of the bottom ball's, the stack's
+    diameters together :data:`STACK_SHARE` of the stage (the bottom ball's radius at most
+    :data:`BALL_RADIUS`)."""
+    sizes = np.maximum(np.asarray(masses, dtype=float) ** (1 / 3), SMALLEST_BALL)
+    return sizes * min(BALL_RADIUS, STACK_SHARE / (2 * sizes.sum()))
 
 
 class StackScene(Scene):
@@ -81,7 +104,10 @@ class StackScene(Scene):
 
     def __init__(self, **params):
         super().__init__(**params)
-        self.result: StackResult | None = None
+        self.result: StackResult | None = None  # the last stack the solver carried
+        self.refused: str | None = None  # why it refused the stack asked for, if it did
+        self._plots: pn.viewable.Viewable | None = None  # (built by :meth:`layout`)
+        self._carried = ""  # the last stack carried, in words (for a refusal's message)
         self._run: tuple[tuple, dict] = ((), {})  # simulate_stack's arguments, options (update)
         self.times = np.zeros(1)
         self.slow = np.zeros(1, dtype=bool)  # (frames in slow motion: frame_times)
@@ -138,7 +164,10 @@ class StackScene(Scene):
         self.curves = ColumnDataSource({"t": []})
         self._lines: list = []  # a line per ball drawn so far (:meth:`_add_lines`)
         answers_pending(self.curves)
-        self.apexes = ColumnDataSource({"t": [], "h": [], "text": []})
+        self.apexes = ColumnDataSource({c: [] for c in APEX_COLUMNS})
+        # a refusal changes no plotted data: this answers the change (the page's "pending")
+        self.refusals = ColumnDataSource({"n": []})
+        answers_pending(self.refusals)
         self.balls_drawn = ColumnDataSource({"x": [], "y": [], "r": [], "color": []})
         self.icm_line = Span(
             dimension="width", line_color="green", line_dash="dotted", line_width=2
@@ -161,7 +190,9 @@ class StackScene(Scene):
         fig = figure(
             height=400,
             sizing_mode="stretch_width",
-            title="Heights to the top ball's h2",
+            # (on a projector the teacher says what it shows, and the legend's row stands
+            # there: under both, the stage beside had 157 px, its eight balls 60 px tall)
+            title=None if self.state.presentation else "Heights to the top ball's h2",
             y_range=Range1d(0.0, 1.0),
             tools="pan,box_zoom,wheel_zoom,reset,save",
             x_axis_label="time tau (dimensionless)",
@@ -172,19 +203,28 @@ class StackScene(Scene):
         draw(
             fig, Scatter(x="t", y="h", size=8, fill_color="black", line_color="black"), self.apexes
         )
+        # h1 centred above its point (left of it, on a phone and on a projector, it ran over
+        # the height axis' labels), h2 left of its point (it is at the plot's right edge)
         fig.add_layout(
             LabelSet(
                 x="t", y="h", text="text", source=self.apexes, text_font_size="10pt",
-                text_align="right", x_offset=-4, y_offset=6,  # left of the point: h2 is at the edge
+                text_align="align", x_offset="dx", y_offset=8,
             )
         )  # fmt: skip
+        # (six labels of 0 to 14000 ran into each other on a phone; a projector's are 4 too)
+        fig.xaxis.ticker.desired_num_ticks = 4
         fig.add_layout(self.icm_line)
         fig.add_layout(self.cursor)
         # outside the curves (inside, eight balls' legend hid them and the apex labels): below
-        # them, four a row; on a projector, whose height is what is short, right of them
+        # them, four a row; on a projector, whose height is what is short, one row above them,
+        # "ball 1", then each number (right of them, "ball 1" to "ball 8" took a third of the
+        # plot's width at 1280x720)
         if self.state.presentation:
-            self.legend = Legend(items=[], orientation="vertical")
-            fig.add_layout(self.legend, "right")
+            self.legend = Legend(
+                items=[], orientation="horizontal", padding=0, margin=4, spacing=14,
+                label_standoff=4, border_line_alpha=0,
+            )  # fmt: skip
+            fig.add_layout(self.legend, "above")
         else:
             self.legend = Legend(items=[], orientation="horizontal", ncols=4)
             fig.add_layout(self.legend, "below")
@@ -199,7 +239,8 @@ class StackScene(Scene):
         for ball in range(len(self._lines), balls):
             glyph = Line(x="t", y=f"x{ball}", line_color=PALETTE[ball], line_width=2)
             self._lines.append(draw(self.heights, glyph, self.curves))
-            item = LegendItem(label=f"ball {ball + 1}", renderers=[self._lines[-1]])
+            label = f"{ball + 1}" if self.state.presentation and ball else f"ball {ball + 1}"
+            item = LegendItem(label=label, renderers=[self._lines[-1]])
             self.legend.items = [*self.legend.items, item]
         underneath(self.heights, self._lines)  # (ball 1's drawn first, as before)
         readable(self.heights, self.state.presentation)
@@ -207,6 +248,7 @@ class StackScene(Scene):
     def _animation_figure(self):
         fig = stage()
         draw(fig, balls_glyph(), self.balls_drawn)
+        draw(fig, Scatter(x="n", y="n", size=0), self.refusals).visible = False  # (never drawn)
         return fig
 
     def contact_eps(self) -> list[float] | float:
@@ -226,22 +268,34 @@ class StackScene(Scene):
         s = self.state
         arguments = ([s.stack_ratio] * (s.balls - 1), self.contact_eps(), s.stack_gap)
         options = {"height": s.height, "force": s.force, "throw": False}
-        self._run = (arguments, options)  # (the animation's frames are a run of their own)
         try:
             # one run to the second apex, its dense output kept: sampled once its end is known
             result = simulate_stack(*arguments, **options, dense_output=True)
         except ParameterError as error:  # e.g. six balls, each 0.01 of the one below: 1e-10
-            self.result = None
-            self.summary.object = (
-                f"**This stack is outside what the solver carries:** {plain(str(error))}. "
-                "Choose fewer balls or a larger mass ratio."
-            )
+            self.refused = self._refusal_text(str(error))
+            self.summary.object = self.refused
             return
+        self.refused = None
+        self._run = (arguments, options)  # (the animation's frames are a run of their own)
         self.result = self._sampled(result)
+        self._carried = f"{s.balls} balls with mass ratio {s.stack_ratio:g}"
         self.summary.object = self._summary_text()
         r = self.result
         self.times, self.slow = frame_times(r.end_time, r.contacts)  # the animation's
         self.player.end = len(self.times) - 1
+
+    def _refusal_text(self, error: str) -> str:
+        """What the summary says of a stack the solver refuses: why, what to change, and that
+        the dimmed plots are the last stack it carried (README, "The Stack scene")."""
+        change = (
+            "Choose fewer balls or a larger mass ratio."
+            if "mass_ratios" in error
+            else "Change the value it names."
+        )
+        text = f"**This stack is outside what the solver carries:** {plain(error)}. {change}"
+        if self.result is None:  # (a page opened on it: nothing carried yet)
+            return text
+        return f"{text}  \n*Dimmed below: the last stack it carried, {self._carried}.*"
 
     @staticmethod
     def _sampled(result: StackResult) -> StackResult:
@@ -266,12 +320,15 @@ class StackScene(Scene):
         if not self.active:
             return
         self.current()
+        self._dim()
         r = self.result
-        if r is None:  # refused (the summary says why): nothing drawn rather than the last stack
-            self.curves.data = {"t": [], **{f"x{ball}": [] for ball in range(len(self._lines))}}
-            self.apexes.data = {"t": [], "h": [], "text": []}
-            self.animated.clear()
+        if self.refused is not None:  # the summary says why; the last stack's plots stay, dimmed
+            self.refusals.data = {"n": [self.computations]}  # (answers the change)
             return
+        if r is None:
+            return
+        if self.refusals.data["n"]:  # back from a refusal: (answers the change; the stack
+            self.refusals.data = {"n": []}  # carried again may bring the same data as before)
         tr = r.trajectory
         n = r.stack.balls
         self._add_lines(n)
@@ -286,6 +343,8 @@ class StackScene(Scene):
             "t": [t for t, _ in top],
             "h": [h for _, h in top],
             "text": [f"h{i + 1} = {number_text(h)}" for i, (_, h) in enumerate(top)],
+            "align": ["center" if i == 0 else "right" for i in range(len(top))],
+            "dx": [0 if i == 0 else -6 for i in range(len(top))],
         }
         icm = icm_chain(r.stack)[-1]
         self.icm_line.location = icm
@@ -293,19 +352,20 @@ class StackScene(Scene):
         # room above the highest apex for its label (larger on a projector: 16 pt)
         low, high = -0.03 * highest, (1.25 if self.state.presentation else 1.12) * highest
         self.heights.y_range.update(start=low, end=high, reset_start=low, reset_end=high)
-        room = high / (1 - 2 * BALL_RADIUS * n)
+        # the stack's top at ``high`` at most: each ball at its height, on the balls below
+        room = low + (high - low) / (1 - 2 * ball_sizes(r.stack.masses).sum())
         self.animation.y_range.update(start=low, end=room, reset_start=low, reset_end=room)
         self._animate()
 
     def _animate(self) -> None:
         """The animation of this stack, played in the browser (app/animation.py): each ball
         on its height, stacked, ball i standing on ball i-1 when X_i = X_(i-1) (their overlap
-        is the compression); radii follow the masses (equal density). The frames are the
-        solver's at their times, in a run of their own when the player first moves; the frame
-        on screen now is read off the plotted curves."""
+        is the compression); radii follow the masses (equal density, :func:`ball_sizes`). The
+        frames are the solver's at their times, in a run of their own when the player first
+        moves; the frame on screen now is read off the plotted curves."""
         r = self.result
         span = self.animation.y_range.end - self.animation.y_range.start
-        radii = span * BALL_RADIUS * r.stack.masses ** (1 / 3)
+        radii = span * ball_sizes(r.stack.masses)
         below = np.concatenate([[0.0], np.cumsum(2 * radii)[:-1]]) + radii
         frame = min(self.player.value_throttled, self.times.size - 1)
         tr = r.trajectory
@@ -374,8 +434,16 @@ class StackScene(Scene):
         """The stack's sliders, its force and its eps per contact, for the sidebar."""
         return self._controls
 
+    def _dim(self) -> None:
+        """The plots dimmed while they show the last stack carried, not the one asked for."""
+        if self._plots is not None:
+            # (not {}: BokehJS keeps a style that is dropped rather than set)
+            self._plots.styles = {"opacity": "0.35" if self.refused is not None else "1"}
+
     def layout(self) -> pn.viewable.Viewable:
-        self._draw()
         plots = heights_and_stage(self.heights, self.animation, self.state.presentation)
+        self._plots = plots
+        self._draw()
+        self._dim()
         caption = pn.pane.Markdown(CAPTION_HELP, sizing_mode="stretch_width")
         return pn.Column(self.summary, plots, self.player, caption, sizing_mode="stretch_width")

@@ -488,6 +488,21 @@ def test_a_stack_outside_the_solver_is_refused_with_a_message():
     assert len(scene.curves.data["t"]) > 0
 
 
+def test_a_stack_refused_after_one_carried_keeps_that_one_dimmed():
+    """Seven balls at 0.04, then eight (the top ball 1.6e-10 of the bottom one): the message
+    names the stack still plotted, dimmed; back to seven, undimmed."""
+    explorer = rendered({"scene": "stack", "N": "7", "ratio": "0.04"})
+    scene = explorer.scenes["stack"]
+    plotted = scene.curves.data
+    explorer.state.balls = 8
+    assert scene.refused is not None and scene.result.stack.balls == 7
+    assert "the last stack it carried, 7 balls with mass ratio 0.04" in scene.summary.object
+    assert scene.curves.data is plotted and scene._plots.styles["opacity"] == "0.35"
+    explorer.state.balls = 7
+    assert scene.refused is None and "7 balls, linear force" in scene.summary.object
+    assert scene._plots.styles["opacity"] == "1"
+
+
 def test_accuracy_explains_a_drop_without_a_bounce():
     """eps = 0.01, mu = 1: the upper ball comes to rest (simulate says so), so there is no
     apex to compare the methods on; the scene says that instead of a table of NaN."""
