@@ -286,7 +286,8 @@ class StackScene(Scene):
 
     def _refusal_text(self, error: str) -> str:
         """What the summary says of a stack the solver refuses: why, what to change, and that
-        the dimmed plots are the last stack it carried (README, "The Stack scene")."""
+        the dimmed plots are the last stack it carried (why not sliders' ranges: above
+        :func:`ball_sizes`; README says so too)."""
         change = (
             "Choose fewer balls or a larger mass ratio."
             if "mass_ratios" in error
