@@ -13,13 +13,15 @@ def collisions(contacts: list[twoball.ContactInterval]) -> list[list[twoball.Con
     one collision, the lower ball's next floor bounce, long after, starts another.
     """
     groups: list[list[twoball.ContactInterval]] = []
+    stop = 0.0  # the current collision's end so far (kept, not recomputed: an eight-ball stack
+    # has thousands of contacts, and the max over each group at each contact took 0.7 s a move)
     for contact in sorted(contacts, key=lambda c: c.start):
-        if groups:
-            start, stop = groups[-1][0].start, max(c.end for c in groups[-1])
-            if contact.start <= stop + (stop - start):
-                groups[-1].append(contact)
-                continue
+        if groups and contact.start <= stop + (stop - groups[-1][0].start):
+            groups[-1].append(contact)
+            stop = max(stop, contact.end)
+            continue
         groups.append([contact])
+        stop = contact.end
     return groups
 
 
