@@ -248,3 +248,24 @@ def test_a_stack_run_to_a_time_before_the_top_balls_apexes_says_why():
     assert reason and "no apex of the top ball before t = 500" in reason[0]
     finished = _run("stack", "--mass-ratios", "0.2,0.2")
     assert not [line for line in finished.stdout.splitlines() if line.startswith("reason")]
+
+
+def test_a_first_use_says_the_solver_is_compiling(monkeypatch, tmp_path, capsys):
+    """With no machine code of the command's kernels on disk, one line on stderr says that the
+    first run compiles; with it there, nothing is said (jit.compiled_on_disk reads the cache)."""
+    from twoball import cli, jit
+
+    monkeypatch.setattr(jit, "CACHE_DIR", tmp_path)
+    assert not jit.compiled_on_disk("twoball.kernels.runs")
+    assert cli.main(["simulate", "--eps", "0.9", "--mu", "0.01", "--tau-ratio", "0.01"]) == 0
+    said = capsys.readouterr().err.splitlines()
+    assert len(said) == 1 and "compiling the solver" in said[0]
+    for module, argv in (
+        ("runs", ["simulate", "--eps", "0.9", "--mu", "0.01", "--tau-ratio", "0.01"]),
+        ("stack", ["stack", "--mass-ratios", "0.2,0.2", "--eps", "0.9"]),
+    ):
+        (tmp_path / "twoball" / "kernels").mkdir(parents=True, exist_ok=True)
+        (tmp_path / "twoball" / "kernels" / f"{module}.run-12.py311.nbi").write_bytes(b"")
+        assert cli.main(argv) == 0
+        assert capsys.readouterr().err == ""
+    assert not jit.compiled_on_disk("twoball.kernels.hertz")

@@ -593,6 +593,30 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def kernels_used(args: argparse.Namespace) -> str | None:
+    """The kernel module a command's runs spend their time in (None: it solves nothing)."""
+    if args.command == "report":
+        return None
+    if getattr(args, "force", None) == "hertz":
+        return "twoball.kernels.hertz"
+    return "twoball.kernels.stack" if args.command == "stack" else "twoball.kernels.runs"
+
+
+def say_if_compiling(args: argparse.Namespace) -> None:
+    """One line on stderr when the command's kernels are not compiled yet on this machine: the
+    first run then spends seconds to minutes in numba's compiler, silently otherwise."""
+    from twoball import jit
+
+    module = kernels_used(args)
+    if module is not None and not jit.compiled_on_disk(module):
+        print(
+            "twoball: compiling the solver for its first use on this machine (about 20 s on two "
+            "idle cores, minutes on a busy machine; kept for later runs)...",
+            file=sys.stderr,
+            flush=True,
+        )
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``twoball`` console script; returns the exit status."""
     argv = sys.argv[1:] if argv is None else argv
@@ -600,6 +624,7 @@ def main(argv: list[str] | None = None) -> int:
         if argv[:1] == ["serve"]:
             return _serve(argv[1:])
         args = build_parser().parse_args(argv)
+        say_if_compiling(args)
         status = args.func(args)
         sys.stdout.flush()  # a closed reader is found here, not at the interpreter's exit
         return status

@@ -125,6 +125,14 @@ if isinstance(CACHE_DIR, Path):
     _numba_config.CACHE_DIR = str(CACHE_DIR)
 
 
+def compiled_on_disk(module: str) -> bool:
+    """Whether the disk cache holds machine code of kernels of ``module`` (one of
+    :data:`KERNEL_MODULES`) compiled from these sources: if not, their first call compiles."""
+    if not isinstance(CACHE_DIR, Path):
+        return False
+    return any(CACHE_DIR.rglob(f"{source_of(module).stem}.*.nbi"))
+
+
 def njit(
     function: Callable | None = None,
     *,
