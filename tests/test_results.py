@@ -210,3 +210,11 @@ def test_dense_output_samples_a_trajectory_only_when_it_is_read(monkeypatch, met
         assert np.array_equal(getattr(sampled, name), getattr(expected, name))
     fresh = twoball.simulate(0.816, 0.05, 0.3, method=method, dense_output=True)
     assert np.array_equal(pickle.loads(pickle.dumps(fresh)).trajectory.x2, sampled.x2)
+
+
+def test_a_time_outside_the_run_is_quoted_as_given():
+    result = twoball.simulate(0.816, 0.05, 0.3, dense_output=True)
+    with pytest.raises(ParameterError, match=r"time span \[0, .*\]; got -1 \(run further"):
+        result.evaluate(-1.0)
+    with pytest.raises(ParameterError, match=r"got times from -1 to 1e\+09"):
+        result.evaluate([-1.0, 1e9])

@@ -225,6 +225,8 @@ def test_the_methods_are_one_mapping_of_one_signature(monkeypatch):
     for force, method in (("linear", "DOP853"), ("hertz", "RK45")):
         with pytest.raises(ParameterError, match=f"method must be one of .* {force} force"):
             simulate_stack([0.2], 0.9, 0.2, force=force, method=method)
+    with pytest.raises(ParameterError, match="'compiled' is the stacks' exact solver"):
+        simulate_stack([0.2], 0.9, 0.2, method="exact")  # (the two-ball solver's name)
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -393,3 +393,12 @@ def test_default_chunks_are_whole_planes_of_about_chunk_drops():
     assert grid("0.5:1:3", "0.01:0.3:150", "0.01:1:100").chunks == (1, 150, 100)  # big planes
     assert grid("0.5:1:4", "0.01:0.3:10", "0.01:1:10").chunks == (4, 10, 10)  # the whole grid
     assert len(paper.chunk_slices()) == 10
+
+
+def test_a_one_drop_plan_reads_as_one_drop():
+    from twoball.batch.sweep import Grid, parse_axis, plan
+
+    grid = Grid(parse_axis("eps", "0.9"), parse_axis("mu", "0.01"), parse_axis("tau_ratio", "0.1"))
+    text = plan(grid, 2)
+    assert text.startswith("1 drop (1 x 1 x 1), about 1 s on 2 workers (once the solver is")
+    assert "at most 1 MB stored" in text and "0 s" not in text and "0 MB" not in text

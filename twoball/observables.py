@@ -355,9 +355,10 @@ def check_span(name: str, times: np.ndarray, end_time: float, open_ended: bool) 
     # a few ulp of slack: a run to a time ends there up to the rounding of its clock
     if low < 0.0 or (high > end_time + 1e-12 * max(abs(end_time), 1.0) and not open_ended):
         span = f"[0, {end_time:.10g}]" if not open_ended else "[0, inf) (the run ended at rest)"
+        got = f"{low:g}" if low == high else f"times from {low:g} to {high:g}"
         raise ParameterError(
-            f"{name} must lie within the run's time span {span}; got times from {low:g} to "
-            f"{high:g} (run further with until=... to sample later times)"
+            f"{name} must lie within the run's time span {span}; got {got} (run further with "
+            "until=... to sample later times)"
         )
 
 

@@ -662,10 +662,11 @@ def plan(grid: Grid, workers: int) -> str:
     stored = 4 if grid.dtype == "float32" else 8
     megabytes = grid.size * len(VARIABLES) * stored / 1e6
     shape = " x ".join(str(n) for n in grid.shape)
+    stored_text = f"{megabytes:,.0f} MB" if megabytes >= 1 else "1 MB"
     return (
-        f"{grid.size:,} drops ({shape}), about {_duration(seconds)} on {workers} "
-        f"worker{'s' if workers > 1 else ''}, at most {megabytes:,.0f} MB stored "
-        f"(before compression)"
+        f"{grid.size:,} drop{'s' if grid.size > 1 else ''} ({shape}), about "
+        f"{_duration(seconds)} on {workers} worker{'s' if workers > 1 else ''} (once the solver "
+        f"is compiled), at most {stored_text} stored (before compression)"
     )
 
 
@@ -685,7 +686,7 @@ def _duration(seconds: float) -> str:
     for unit, size in (("days", 86400), ("h", 3600), ("min", 60)):
         if seconds >= size:
             return f"{seconds / size:,.1f} {unit}"
-    return f"{seconds:.0f} s"
+    return f"{seconds:.0f} s" if seconds >= 1 else "1 s"
 
 
 def _connect(scheduler: str):

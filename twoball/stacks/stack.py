@@ -101,9 +101,12 @@ def simulate_stack(
     solvers = METHODS[force]
     if method not in solvers:
         elsewhere = [other for other, named in METHODS.items() if method in named]
+        hint = f" (it applies to the {elsewhere[0]} force only)" if elsewhere else ""
+        if method == "exact":  # the two-ball name of the exact solver
+            hint = " ('compiled' is the stacks' exact solver)"
         raise ParameterError(
             f"method must be one of {', '.join(solvers)} with the {force} force; got {method!r}"
-            + (f" (it applies to the {elsewhere[0]} force only)" if elsewhere else "")
+            + hint
         )
     apexes_wanted, t_end = stop_rule(until)
     times = None
