@@ -269,3 +269,22 @@ def test_a_first_use_says_the_solver_is_compiling(monkeypatch, tmp_path, capsys)
         assert cli.main(argv) == 0
         assert capsys.readouterr().err == ""
     assert not jit.compiled_on_disk("twoball.kernels.hertz")
+
+
+def test_serve_help_without_the_app_extra_says_what_to_install(tmp_path):
+    """Without Panel, ``twoball serve --help`` still helps (status 0, what to install); serving
+    itself says which extra it needs, in one line, status 2."""
+    fake = tmp_path / "panel"
+    fake.mkdir()
+    (fake / "__init__.py").write_text(
+        'raise ModuleNotFoundError("No module named \'panel\'", name="panel")\n'
+    )
+    environment = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    run = [sys.executable, "-m", "twoball", "serve"]
+    helped = subprocess.run(
+        [*run, "--help"], capture_output=True, text=True, timeout=120, env=environment
+    )
+    assert helped.returncode == 0 and helped.stderr == ""
+    assert "usage: twoball serve" in helped.stdout and "pip install 'twoball[app]'" in helped.stdout
+    served = subprocess.run(run, capture_output=True, text=True, timeout=120, env=environment)
+    assert "'app' extra" in _one_line_error(served)

@@ -557,9 +557,19 @@ def _add_serve(subparsers: argparse._SubParsersAction) -> None:
 
 def _serve(options: list[str]) -> int:
     """``twoball serve``: Panel's serve command on the explorer (the app extra), which parses
-    its own options (twoball_app/serve.py, in the repository's app/)."""
-    from twoball_app import serve
-
+    its own options (twoball_app/serve.py, in the repository's app/). Its help is there
+    without the extra too, with what to install."""
+    try:
+        from twoball_app import serve
+    except ModuleNotFoundError as error:
+        if not {"-h", "--help"} & set(options) or EXTRAS.get(error.name or "") != "app":
+            raise
+        print(
+            "usage: twoball serve [--port PORT] [--address ADDRESS] [--num-procs N] [panel serve "
+            "options]\n\nServe the classroom explorer at /app. It needs the 'app' extra: pip "
+            "install 'twoball[app]'; then 'twoball serve --help' lists every option."
+        )
+        return 0
     return serve.main(options)
 
 
