@@ -26,6 +26,7 @@ from tornado.websocket import WebSocketClosedError
 
 from twoball import warmup
 
+from .accuracy import measure_ahead
 from .bokeh_defaults import cache_property_defaults
 from .delayed_map import map_cube
 from .scenes import SCENE_REGISTRY
@@ -107,9 +108,12 @@ def on_server_loaded(server_context) -> None:
     loop = IOLoop.current().asyncio_loop
     loop.set_exception_handler(closed_socket_handler(loop.get_exception_handler()))
     started = time.monotonic()
-    warmup.compile_in_background(
-        done=lambda: log.info("compiled kernels in use after %.1f s", time.monotonic() - started)
-    )
+
+    def compiled() -> None:
+        log.info("compiled kernels in use after %.1f s", time.monotonic() - started)
+        measure_ahead()  # (in the compiler's thread, not the event loop's)
+
+    warmup.compile_in_background(done=compiled)
     for entry in SCENE_REGISTRY.values():  # imported now, not by the first page to visit one
         entry.viewer_class()
     try:
