@@ -9,6 +9,8 @@ chosen for the two-ball scenes (the presets are for a basketball and one ball on
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import panel as pn
 import param
@@ -26,6 +28,7 @@ from bokeh.plotting import figure
 
 from twoball.errors import ParameterError
 from twoball.stacks import StackResult, icm_chain, simulate_stack
+from twoball.stacks.model import MASS_RATIO_RANGE
 from twoball.units import number_text
 
 from .animation import Animation, FramePlayer
@@ -288,12 +291,28 @@ class StackScene(Scene):
         """What the summary says of a stack the solver refuses: why, what to change, and that
         the dimmed plots are the last stack it carried (why not sliders' ranges: above
         :func:`ball_sizes`; README says so too)."""
-        change = (
-            "Choose fewer balls or a larger mass ratio."
-            if "mass_ratios" in error
-            else "Change the value it names."
-        )
-        text = f"**This stack is outside what the solver carries:** {plain(error)}. {change}"
+        s = self.state
+        lightest = s.stack_ratio ** (s.balls - 1)
+        if "mass_ratios" in error and lightest < MASS_RATIO_RANGE[0]:
+            # in the class's words, not the library's (a teacher read "ball 0" and
+            # "products of mass_ratios" in it; the legend counts balls from 1)
+            low = MASS_RATIO_RANGE[0]
+            fewest = 1 + math.floor(math.log(low) / math.log(s.stack_ratio))
+            why = (
+                f"with {s.balls} balls, each {s.stack_ratio:g} of the one below, the top ball is "
+                f"{lightest:.1g} of the bottom one, and the solver carries masses down to {low:g} "
+                f"of it. Choose a mass ratio of at least "
+                f"{math.ceil(100 * low ** (1 / (s.balls - 1))) / 100:g}, "
+                f"or at most {fewest} balls."
+            )
+        else:
+            change = (
+                "Choose fewer balls or a larger mass ratio."
+                if "mass_ratios" in error
+                else ("Change the value it names.")
+            )
+            why = f"{plain(error)}. {change}"
+        text = f"**This stack is outside what the solver carries:** {why}"
         if self.result is None:  # (a page opened on it: nothing carried yet)
             return text
         return f"{text}  \n*Dimmed below: the last stack it carried, {self._carried}.*"

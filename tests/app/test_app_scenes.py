@@ -21,8 +21,9 @@ from app.drop import TRAILS
 from app.explorer import Explorer
 from app.scenes import SCENE_REGISTRY, SCENES
 from app.state import ExplorerState, url_query
-from twoball import presets
+from twoball import ParameterError, presets
 from twoball.observables import BALLS, FLOOR
+from twoball.stacks import simulate_stack
 from twoball.units import number_text
 
 PAPER = {"eps": "0.9", "mu": "0.01", "tau_ratio": "0.01"}
@@ -497,6 +498,13 @@ def test_a_stack_refused_after_one_carried_keeps_that_one_dimmed():
     explorer.state.balls = 8
     assert scene.refused is not None and scene.result.stack.balls == 7
     assert "the last stack it carried, 7 balls with mass ratio 0.04" in scene.summary.object
+    # in the class's words, with a way out that the solver takes
+    assert "each 0.04 of the one below, the top ball is 2e-10 of the bottom" in scene.summary.object
+    assert "ratio of at least 0.06, or at most 7 balls" in scene.summary.object
+    assert "mass_ratios" not in scene.summary.object
+    simulate_stack([0.06] * 7, 0.9, 0.2)  # (accepted: eight balls at 0.06)
+    with pytest.raises(ParameterError):
+        simulate_stack([0.05] * 7, 0.9, 0.2)
     assert scene.curves.data is plotted and scene._plots.styles["opacity"] == "0.35"
     explorer.state.balls = 7
     assert scene.refused is None and "7 balls, linear force" in scene.summary.object

@@ -121,7 +121,7 @@ def test_a_slider_into_a_refused_stack_keeps_the_last_one_dimmed(browser, app_se
         balls = next(i for i, t in enumerate(slider_titles(page)) if t.startswith("balls N"))
         assert press_slider(page, balls) > 0, "the refusal did not answer the slider's move"
         expect(page.get_by_text("outside what the solver carries")).to_be_visible()
-        expect(page.get_by_text("Choose fewer balls or a larger mass ratio")).to_be_visible()
+        expect(page.get_by_text("ratio of at least 0.06, or at most 7 balls")).to_be_visible()
         last = "Dimmed below: the last stack it carried, 7 balls with mass ratio 0.04"
         expect(page.get_by_text(last)).to_be_visible()
         assert [s["text"] for s in sources_with(page, "t", "h", "text") if s["t"]] == seven
