@@ -208,12 +208,19 @@ class Lesson(Built):
             self.heading.object = "" if asked else self._title()
 
     def _add_step_widgets(self) -> None:
-        # the question in the main area (the stage), the answer and the buttons in the card
+        # the question in the main area (the stage), the answer and the buttons in the card;
+        # on a projector the buttons come first, under the step's title: the long answer in
+        # the narrow sidebar had pushed Next below a 720 px screen (to y 1303 on step 1), and
+        # the class reads the one-line answer in the main area, the teacher the rest
         self._stage.objects = [self._asking, self.answer_line]
-        self._steps.objects = [self.answer, self._buttons()]
+        if self.state.presentation:
+            self._steps.objects = [self._buttons(), self.answer]
+        else:
+            self._steps.objects = [self.answer, self._buttons()]
 
     def _buttons(self) -> pn.Row:
-        """Previous and Next, a row that the page scrolls to after a reveal (lesson.js)."""
+        """Previous and Next, a row that the page scrolls to after a reveal (lesson.js), but on
+        a projector, where it lies above the answer."""
         return pn.Row(self.previous, self.next, css_classes=["twoball-step-buttons"])
 
     def stage(self) -> pn.Column:
