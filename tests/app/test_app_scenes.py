@@ -870,3 +870,25 @@ def test_the_accuracy_plot_draws_each_measured_method_from_its_rows():
         if drop == 0:
             explorer.state.mu = 0.1  # measured again: a new figure
     assert figures[0] is not figures[1]
+
+
+def test_the_tennis_preset_says_why_it_is_no_textbook_bounce():
+    """The tennis preset holds the balls touching: its first bounce is below the drop and its
+    second higher (a delayed rebound), not the classic 3.7 times a teacher expects. Shown under
+    the preset, with the solver's numbers and the gap that gives the textbook bounce."""
+    explorer = rendered()
+    explorer.controls.preset.value = "tennis"
+    shown = explorer.controls.preset_source.object
+    preset = presets.PRESETS["tennis"]
+    height = presets.height_from_metres(presets.DEFAULT_DROP_METRES)
+
+    def drop(tau_ratio):
+        return twoball.simulate(preset.eps, preset.mu, tau_ratio, eps12=preset.eps12, height=height)
+
+    touching, apart = drop(preset.tau_ratio), drop(1.0)
+    assert touching.h1_over_drop < 1 and touching.delayed_rebound
+    assert f"held touching (tau_d/tau_f = {preset.tau_ratio:g})" in shown
+    assert f"{touching.h1_over_drop:.2f} times the drop height" in shown
+    assert f"second bounce {touching.h2_over_h1:.1f} times higher" in shown
+    assert not apart.delayed_rebound and round(apart.h1_over_drop, 1) == 3.7
+    assert "a gap of tau_d/tau_f = 1 gives the textbook 3.7 times" in shown
