@@ -18,7 +18,7 @@ from bokeh.models import CustomJS, CustomJSTickFormatter
 from twoball import presets
 
 from .scene import PENDING_JS, Built, alert, for_a_room, join, later
-from .state import ExplorerState, app_range, preset_drop, typed_value
+from .state import ExplorerState, app_range, metres_text, preset_drop, typed_value
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
 POWER_OF_TEN = "return Number((10 ** tick).toPrecision(3)).toString()"
@@ -264,7 +264,13 @@ class Controls(Built):
         if self.state.units == "SI":
             metres = presets.metres_from_height
             value, message = typed_value(
-                text, metres(self.state.height), metres(low), metres(high), "drop height", " m"
+                text,
+                metres(self.state.height),
+                metres(low),
+                metres(high),
+                "drop height",
+                " m",
+                shown=metres_text,  # (limits rounded: "from about 0.99 mm to 9.9 km")
             )
             # (H from metres kept within H's own range: the round trip gave 9.999999999999998
             # for the lowest, which the state refused with a traceback)

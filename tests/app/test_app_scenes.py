@@ -20,7 +20,7 @@ from app.delayed_map import map_cube
 from app.drop import TRAILS
 from app.explorer import Explorer
 from app.scenes import SCENE_REGISTRY, SCENES
-from app.state import ExplorerState, url_query
+from app.state import ExplorerState, metres_text, url_query
 from twoball import presets
 from twoball.observables import BALLS, FLOOR
 from twoball.units import number_text
@@ -350,7 +350,8 @@ def test_typed_values_follow_one_rule_clamp_a_number_keep_the_last_for_text(unit
     controls, state = explorer.controls, explorer.state
     lowest, highest = ExplorerState.param.height.bounds
     si = units == "SI"
-    typed_height = presets.metres_from_height if si else float  # (what the box takes)
+    # (what the box takes, as its messages write it: metres rounded, app/state.metres_text)
+    shown = (lambda h: metres_text(presets.metres_from_height(h))) if si else number_text
     message = controls.typed_message
     for typed, expected in (("0", lowest), ("-5", lowest), ("1e20", highest), ("inf", highest)):
         state.height = 2e4
@@ -358,7 +359,7 @@ def test_typed_values_follow_one_rule_clamp_a_number_keep_the_last_for_text(unit
         assert state.height == pytest.approx(expected, rel=1e-12), typed
         assert explorer.scenes["drop"].result.drop.height == state.height
         assert message.visible and "outside the explorer's range" in message.object, typed
-        assert f"using the nearest, {number_text(typed_height(expected))}" in message.object
+        assert f"using the nearest, {shown(expected)}" in message.object
     state.height = 2e4
     controls.height.value = "abc"
     assert state.height == 2e4  # kept
@@ -892,3 +893,24 @@ def test_the_tennis_preset_says_why_it_is_no_textbook_bounce():
     assert f"second bounce {touching.h2_over_h1:.1f} times higher" in shown
     assert not apart.delayed_rebound and round(apart.h1_over_drop, 1) == 3.7
     assert "a gap of tau_d/tau_f = 1 gives the textbook 3.7 times" in shown
+
+
+@pytest.mark.parametrize("typed", ["0.0001", "1e9"])
+def test_a_drop_height_in_metres_out_of_range_names_its_limits_rounded(typed):
+    """In metres, the message states the range as a student reads it, "from about 0.99 mm to
+    9.9 km" (it said "from 0.0009949 m to 9,949 m; using the nearest, 0.0009949 m"), while the
+    height used is exactly the model's end of the range (H, not metres rounded)."""
+    from app.state import app_range
+
+    explorer = rendered({"units": "SI"})
+    lowest, highest = app_range("height")
+    low_m, high_m = presets.metres_from_height(lowest), presets.metres_from_height(highest)
+    assert 1e-4 < low_m < 1e-2 and 1e3 < high_m < 1e4  # (an end in mm, one in km)
+    explorer.controls.height.value = typed
+    expected = lowest if float(typed) < 1 else highest
+    assert explorer.state.height == expected  # exactly the model's end
+    message = explorer.controls.typed_message.object
+    assert f"from about {low_m * 1e3:.2g} mm to {high_m / 1e3:.2g} km" in message, message
+    nearest = f"{low_m * 1e3:.2g} mm" if expected == lowest else f"{high_m / 1e3:.2g} km"
+    assert f"using the nearest, about {nearest}." in message, message
+    assert number_text(low_m) not in message and number_text(high_m) not in message
