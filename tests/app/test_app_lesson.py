@@ -54,6 +54,9 @@ def test_the_answers_quote_the_solver():
     assert f"{ping_pong.h_icm * metres:.1f} m" in STEPS[2].explanation
     # step 1's second bounce, higher still; the tennis preset: one contact, a delayed rebound
     assert textbook.delayed_rebound and f"to {textbook.h2 * metres:.1f} m" in STEPS[0].explanation
+    # ... named where the class looks, under the answer in the main area (the plot's tallest)
+    assert textbook.h2 > textbook.h1 and f"h2 = {textbook.h2 * metres:.1f} m" in STEPS[0].aside
+    assert "delayed rebound" in STEPS[0].aside
     touching = presets.PRESETS["tennis"]
     preset = twoball.simulate(touching.eps, touching.mu, touching.tau_ratio, eps12=touching.eps12)
     assert preset.contacts_first[BALLS] == 1 and preset.delayed_rebound
@@ -248,6 +251,11 @@ def test_a_projected_step_asks_large_and_answers_in_one_large_line(
         page.get_by_text(answer, exact=True).wait_for()
         assert _font_px(page, answer) >= 28
         assert page.get_by_text(answer, exact=True).bounding_box()["height"] < 60  # one line
+        if step.aside:  # (step 1's second bounce, the plot's tallest, said under the answer)
+            aside = page.get_by_text(step.aside, exact=True)
+            aside.wait_for()
+            box = aside.bounding_box()
+            assert box["x"] > 330 and box["y"] + box["height"] <= 720, box
         if step.scene == "accuracy":
             page.get_by_text("Computing:").wait_for(state="hidden", timeout=120_000)
         page.wait_for_timeout(1500)
