@@ -100,6 +100,15 @@ class Lesson(Built):
         self.answer_line = pn.pane.Markdown(
             visible=False, sizing_mode="stretch_width", styles=PROJECTED
         )
+        # the step's aside (steps.Step.aside), under it, on every screen: what the scene shows
+        # beyond the question, where the class looks
+        self.aside = pn.pane.Markdown(
+            visible=False,
+            sizing_mode="stretch_width",
+            styles=PROJECTED_LOOK_FOR if projected else ASKED,
+            margin=(0, 10),
+            css_classes=["twoball-aside"],
+        )
         choices_css = PROJECTED_CHOICES if projected else ASKED_CHOICES
         self.choices.stylesheets = [*self.choices.stylesheets, choices_css]
         # The step's widgets join the page when the lesson starts: a page opened without it
@@ -165,6 +174,7 @@ class Lesson(Built):
             object=f"**Answer: {correct.split(':')[0]}**",
             visible=self.state.presentation,
         )
+        self.aside.param.update(object=shown.aside, visible=bool(shown.aside))
         self.reveal.disabled = True
         self.choices.disabled = True
         self.state.revealed = True  # the scene comes out from under its cover
@@ -176,7 +186,7 @@ class Lesson(Built):
         for widget in (self.choices, self.reveal, self.previous, self.next):
             widget.visible = lesson_on
         self.start.visible = not lesson_on
-        self.answer.visible = self.answer_line.visible = False
+        self.answer.visible = self.answer_line.visible = self.aside.visible = False
         if lesson_on and not self._steps.objects:
             self._add_step_widgets()
         if not lesson_on:
@@ -208,12 +218,19 @@ class Lesson(Built):
             self.heading.object = "" if asked else self._title()
 
     def _add_step_widgets(self) -> None:
-        # the question in the main area (the stage), the answer and the buttons in the card
-        self._stage.objects = [self._asking, self.answer_line]
-        self._steps.objects = [self.answer, self._buttons()]
+        # the question in the main area (the stage), the answer and the buttons in the card;
+        # on a projector the buttons come first, under the step's title: the long answer in
+        # the narrow sidebar had pushed Next below a 720 px screen (to y 1303 on step 1), and
+        # the class reads the one-line answer in the main area, the teacher the rest
+        self._stage.objects = [self._asking, self.answer_line, self.aside]
+        if self.state.presentation:
+            self._steps.objects = [self._buttons(), self.answer]
+        else:
+            self._steps.objects = [self.answer, self._buttons()]
 
     def _buttons(self) -> pn.Row:
-        """Previous and Next, a row that the page scrolls to after a reveal (lesson.js)."""
+        """Previous and Next, a row that the page scrolls to after a reveal (lesson.js), but on
+        a projector, where it lies above the answer."""
         return pn.Row(self.previous, self.next, css_classes=["twoball-step-buttons"])
 
     def stage(self) -> pn.Column:

@@ -9,7 +9,7 @@ value gives a message and a valid fallback.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import param
 
@@ -144,13 +144,20 @@ def validate(name: str, value: object, fallback: float | None) -> tuple[float | 
 
 
 def typed_value(
-    text: str, last: float | None, low: float, high: float, name: str, unit: str = ""
+    text: str,
+    last: float | None,
+    low: float,
+    high: float,
+    name: str,
+    unit: str = "",
+    shown: Callable[[float], str] | None = None,
 ) -> tuple[float | None, str | None]:
     """(value to use, message or None) for a number typed under "advanced" (the drop height,
     in H or metres, and eps12), by one rule:
 
     - a number outside ``low``..``high`` (0, -5, 1e20, an eps12 of 2, even infinity) is clamped
-      to the nearest end, and the message says so;
+      to the nearest end, and the message says so (the ends and the value used as ``shown``
+      writes them, if given: :func:`metres_text`, else the number and ``unit``);
     - text that is no number (or NaN) keeps ``last``, the value in use, and the message says so.
 
     (Before, a typed value the model refused, H = 0 or eps12 = 2, fell back while one it
@@ -161,7 +168,7 @@ def typed_value(
         number = float(text)
     except ValueError:
         number = math.nan
-    allowed = span(low, high, unit)
+    allowed = span(low, high, unit, shown)
     if math.isnan(number):
         kept = "equal to eps" if last is None else f"{number_text(last)}{unit}"
         return last, (f"{name} must be a number {allowed}; got {str(text)[:40]!r}. Keeping {kept}.")
@@ -169,14 +176,38 @@ def typed_value(
         clamped = min(max(number, low), high)
         return clamped, (
             f"{name} {str(text).strip()[:40]}{unit} is outside the explorer's range, {allowed}; "
-            f"using the nearest, {number_text(clamped)}{unit}."
+            f"using the nearest, {shown(clamped) if shown else number_text(clamped) + unit}."
         )
     return number, None
 
 
-def span(low: float, high: float, unit: str = "") -> str:
-    """A range in words for a message a student reads ("from 0.01 to 1", not "[0.01, 1]")."""
-    return f"from {number_text(low)}{unit} to {number_text(high)}{unit}"
+def span(
+    low: float, high: float, unit: str = "", shown: Callable[[float], str] | None = None
+) -> str:
+    """A range in words for a message a student reads ("from 0.01 to 1", not "[0.01, 1]"),
+    each end written by ``shown`` if given ("from about 0.99 mm to 9.9 km")."""
+    if shown is None:
+        return f"from {number_text(low)}{unit} to {number_text(high)}{unit}"
+    ends = [shown(low), shown(high)]
+    if all(end.startswith("about ") for end in ends):  # (one "about" for both)
+        ends[1] = ends[1].removeprefix("about ")
+    return f"from {ends[0]} to {ends[1]}"
+
+
+def metres_text(metres: float) -> str:
+    """A length for a student, to two digits in mm, m or km: "about 0.99 mm", "about 9.9 km",
+    "2 m". The drop height's limits in metres are the model's in H converted, 0.0009949 m and
+    9,949 m, odd numbers to read; the value used stays the model's own (controls._take_height)."""
+    value, unit = (
+        (metres * 1e3, "mm")
+        if metres < 0.01
+        else (metres / 1e3, "km")
+        if metres >= 1e3
+        else (metres, "m")
+    )
+    rounded = float(f"{value:.2g}")
+    about = "" if math.isclose(rounded, value, rel_tol=1e-9) else "about "
+    return f"{about}{number_text(rounded)} {unit}"
 
 
 def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, list[str]]:

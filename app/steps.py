@@ -28,6 +28,12 @@ class Step:
     choices: tuple[str, ...]
     answer: int  # index into choices
     explanation: str
+    # a line under the answer in the main area, where the class looks, for what the revealed
+    # scene shows beyond the question: step 1's plot goes on to a second bounce, the tallest
+    # thing on screen, which only the end of the card's explanation named (below a projector's
+    # screen). Said, not cut: the drop scene ends at the second apex for every drop, and the
+    # steps that follow compare the two bounces
+    aside: str = ""
 
 
 STEPS = (
@@ -49,6 +55,8 @@ STEPS = (
         "a very light ball. (Its second bounce goes higher still, to 21.1 m, when the balls "
         "meet again: the summary calls any h2 > h1 a delayed rebound. The surprise of step 3 "
         "is another: a first bounce far below the textbook's.)",
+        aside="The second peak, h2 = 21.1 m, comes after the balls meet again; any h2 above "
+        "h1 counts as a delayed rebound. Step 3 shows another kind.",
     ),
     Step(
         title="A tennis ball held a little above a basketball",

@@ -2,7 +2,8 @@
 // shows the new step from its title; after a reveal, the answer and the buttons below it. A
 // long answer had pushed the card on, and the next step opened scrolled to its last choice
 // (a phone, a laptop) or with its buttons below the screen (a projector). The card is redrawn
-// by the server, so this waits for it.
+// by the server, so this waits for it. On a projector the buttons lie above the answer: the
+// card then shows from the step's title.
 (() => {
   const find = (root, selector) => {
     const hit = root.querySelector(selector);
@@ -60,8 +61,17 @@
       const top = answer.getBoundingClientRect().top;
       if (placedTop === null || Math.abs(top - placedTop) > 1) {
         const margin = header() + 8;
-        buttons.scrollIntoView({block: "end", inline: "nearest", behavior: "instant"});
-        if (answer.getBoundingClientRect().top < margin) {
+        // A projector's card puts the buttons above the answer (app/lesson.py): it shows the
+        // step's title and the buttons below it, the answer's end left below the screen.
+        const title = find(document, ".twoball-step-title");
+        const above = buttons.getBoundingClientRect().top < top;
+        if (above && title) {
+          title.style.scrollMarginTop = `${margin}px`;
+          title.scrollIntoView({block: "start", inline: "nearest", behavior: "instant"});
+        } else {
+          buttons.scrollIntoView({block: "end", inline: "nearest", behavior: "instant"});
+        }
+        if (!above && answer.getBoundingClientRect().top < margin) {
           answer.style.scrollMarginTop = `${margin}px`;
           answer.scrollIntoView({block: "start", inline: "nearest", behavior: "instant"});
         }

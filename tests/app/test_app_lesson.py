@@ -54,6 +54,9 @@ def test_the_answers_quote_the_solver():
     assert f"{ping_pong.h_icm * metres:.1f} m" in STEPS[2].explanation
     # step 1's second bounce, higher still; the tennis preset: one contact, a delayed rebound
     assert textbook.delayed_rebound and f"to {textbook.h2 * metres:.1f} m" in STEPS[0].explanation
+    # ... named where the class looks, under the answer in the main area (the plot's tallest)
+    assert textbook.h2 > textbook.h1 and f"h2 = {textbook.h2 * metres:.1f} m" in STEPS[0].aside
+    assert "delayed rebound" in STEPS[0].aside
     touching = presets.PRESETS["tennis"]
     preset = twoball.simulate(touching.eps, touching.mu, touching.tau_ratio, eps12=touching.eps12)
     assert preset.contacts_first[BALLS] == 1 and preset.delayed_rebound
@@ -248,6 +251,11 @@ def test_a_projected_step_asks_large_and_answers_in_one_large_line(
         page.get_by_text(answer, exact=True).wait_for()
         assert _font_px(page, answer) >= 28
         assert page.get_by_text(answer, exact=True).bounding_box()["height"] < 60  # one line
+        if step.aside:  # (step 1's second bounce, the plot's tallest, said under the answer)
+            aside = page.get_by_text(step.aside, exact=True)
+            aside.wait_for()
+            box = aside.bounding_box()
+            assert box["x"] > 330 and box["y"] + box["height"] <= 720, box
         if step.scene == "accuracy":
             page.get_by_text("Computing:").wait_for(state="hidden", timeout=120_000)
         page.wait_for_timeout(1500)
@@ -336,5 +344,51 @@ def test_a_phone_shows_the_answer_after_a_reveal_from_a_slow_server(
         box = answer.bounding_box()
         assert header["y"] + header["height"] <= box["y"] and box["y"] + box["height"] <= 844, box
         page.screenshot(path=artifacts / "lesson" / f"step{number}-phone-revealed-slowly.png")
+    finally:
+        context.close()
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize("size", [(1280, 720), (1366, 768)], ids=["1280x720", "1366x768"])
+def test_a_projected_reveal_keeps_the_step_title_and_its_buttons_on_screen(
+    browser, app_server, artifacts, size
+):
+    """Presentation mode, every step: after a reveal the step's title and Previous/Next stay
+    whole inside the window (the long answer in the 330 px sidebar had pushed Next to y 1303 of
+    720 on step 1, and scrolling the sidebar to it hid the title)."""
+    base, _ = app_server
+    width, height = size
+    context, page, errors = open_page(browser, f"{base}/app?step=1&present=1", viewport=size)
+    try:
+        for number, step in enumerate(STEPS, start=1):
+            title = page.get_by_text(f"Step {number} of {len(STEPS)}: {step.title}")
+            title.wait_for()
+            page.get_by_text(step.question, exact=True).wait_for()
+            page.wait_for_timeout(600)
+            page.keyboard.press("PageDown")  # reveal, with no choice made
+            answer = f"Answer: {step.choices[step.answer].split(':')[0]}"
+            page.get_by_text(answer, exact=True).wait_for()
+            page.get_by_text("The answer:").wait_for()  # the card's explanation, drawn
+            page.wait_for_timeout(2000)  # (the page places the card after a reveal)
+            following = "Next >" if number < len(STEPS) else "End the lesson"
+            boxes = {
+                "title": title.bounding_box(),
+                "previous": page.get_by_role("button", name="< Previous").bounding_box(),
+                "next": page.get_by_role("button", name=following).bounding_box(),
+            }
+            for name, box in boxes.items():
+                inside = (
+                    box is not None
+                    and box["x"] >= 0
+                    and box["y"] >= 0
+                    and box["x"] + box["width"] <= width
+                    and box["y"] + box["height"] <= height
+                )
+                assert inside, (number, name, box)
+            page.screenshot(
+                path=artifacts / "lesson" / f"step{number}-{width}x{height}-revealed.png"
+            )
+            page.keyboard.press("PageDown")  # on to the next step
+        assert errors == []
     finally:
         context.close()

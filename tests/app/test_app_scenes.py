@@ -20,7 +20,7 @@ from app.delayed_map import map_cube
 from app.drop import TRAILS
 from app.explorer import Explorer
 from app.scenes import SCENE_REGISTRY, SCENES
-from app.state import ExplorerState, url_query
+from app.state import ExplorerState, metres_text, url_query
 from twoball import ParameterError, presets
 from twoball.observables import BALLS, FLOOR
 from twoball.stacks import simulate_stack
@@ -351,7 +351,8 @@ def test_typed_values_follow_one_rule_clamp_a_number_keep_the_last_for_text(unit
     controls, state = explorer.controls, explorer.state
     lowest, highest = ExplorerState.param.height.bounds
     si = units == "SI"
-    typed_height = presets.metres_from_height if si else float  # (what the box takes)
+    # (what the box takes, as its messages write it: metres rounded, app/state.metres_text)
+    shown = (lambda h: metres_text(presets.metres_from_height(h))) if si else number_text
     message = controls.typed_message
     for typed, expected in (("0", lowest), ("-5", lowest), ("1e20", highest), ("inf", highest)):
         state.height = 2e4
@@ -359,7 +360,7 @@ def test_typed_values_follow_one_rule_clamp_a_number_keep_the_last_for_text(unit
         assert state.height == pytest.approx(expected, rel=1e-12), typed
         assert explorer.scenes["drop"].result.drop.height == state.height
         assert message.visible and "outside the explorer's range" in message.object, typed
-        assert f"using the nearest, {number_text(typed_height(expected))}" in message.object
+        assert f"using the nearest, {shown(expected)}" in message.object
     state.height = 2e4
     controls.height.value = "abc"
     assert state.height == 2e4  # kept
@@ -878,3 +879,46 @@ def test_the_accuracy_plot_draws_each_measured_method_from_its_rows():
         if drop == 0:
             explorer.state.mu = 0.1  # measured again: a new figure
     assert figures[0] is not figures[1]
+
+
+def test_the_tennis_preset_says_why_it_is_no_textbook_bounce():
+    """The tennis preset holds the balls touching: its first bounce is below the drop and its
+    second higher (a delayed rebound), not the classic 3.7 times a teacher expects. Shown under
+    the preset, with the solver's numbers and the gap that gives the textbook bounce."""
+    explorer = rendered()
+    explorer.controls.preset.value = "tennis"
+    shown = explorer.controls.preset_source.object
+    preset = presets.PRESETS["tennis"]
+    height = presets.height_from_metres(presets.DEFAULT_DROP_METRES)
+
+    def drop(tau_ratio):
+        return twoball.simulate(preset.eps, preset.mu, tau_ratio, eps12=preset.eps12, height=height)
+
+    touching, apart = drop(preset.tau_ratio), drop(1.0)
+    assert touching.h1_over_drop < 1 and touching.delayed_rebound
+    assert f"held touching (tau_d/tau_f = {preset.tau_ratio:g})" in shown
+    assert f"{touching.h1_over_drop:.2f} times the drop height" in shown
+    assert f"second bounce {touching.h2_over_h1:.1f} times higher" in shown
+    assert not apart.delayed_rebound and round(apart.h1_over_drop, 1) == 3.7
+    assert "a gap of tau_d/tau_f = 1 gives the textbook 3.7 times" in shown
+
+
+@pytest.mark.parametrize("typed", ["0.0001", "1e9"])
+def test_a_drop_height_in_metres_out_of_range_names_its_limits_rounded(typed):
+    """In metres, the message states the range as a student reads it, "from about 0.99 mm to
+    9.9 km" (it said "from 0.0009949 m to 9,949 m; using the nearest, 0.0009949 m"), while the
+    height used is exactly the model's end of the range (H, not metres rounded)."""
+    from app.state import app_range
+
+    explorer = rendered({"units": "SI"})
+    lowest, highest = app_range("height")
+    low_m, high_m = presets.metres_from_height(lowest), presets.metres_from_height(highest)
+    assert 1e-4 < low_m < 1e-2 and 1e3 < high_m < 1e4  # (an end in mm, one in km)
+    explorer.controls.height.value = typed
+    expected = lowest if float(typed) < 1 else highest
+    assert explorer.state.height == expected  # exactly the model's end
+    message = explorer.controls.typed_message.object
+    assert f"from about {low_m * 1e3:.2g} mm to {high_m / 1e3:.2g} km" in message, message
+    nearest = f"{low_m * 1e3:.2g} mm" if expected == lowest else f"{high_m / 1e3:.2g} km"
+    assert f"using the nearest, about {nearest}." in message, message
+    assert number_text(low_m) not in message and number_text(high_m) not in message
