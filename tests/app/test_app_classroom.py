@@ -247,6 +247,14 @@ def _overlap(a: dict, b: dict) -> bool:
     )
 
 
+def plots_on(page) -> list[dict]:
+    """The plots the page shows: its visible canvases larger than 100 x 100 px."""
+    return [
+        c for c in deep_query(page, "canvas")
+        if c["visible"] and c["width"] > 100 and c["height"] > 100
+    ]  # fmt: skip
+
+
 @pytest.mark.browser
 def test_a_projector_gives_the_drop_animation_room(browser, app_server, artifacts):
     """Presentation mode at 1280x720: the drop's animation (220 x 290 px beside the heights,
@@ -256,10 +264,7 @@ def test_a_projector_gives_the_drop_animation_room(browser, app_server, artifact
     context, page, errors = open_page(browser, f"{base}/app?present=1", viewport=(1280, 720))
     try:
         page.wait_for_timeout(800)
-        plots = [
-            c for c in deep_query(page, "canvas")
-            if c["visible"] and c["width"] > 100 and c["height"] > 100
-        ]  # fmt: skip
+        plots = plots_on(page)
         stage = max(plots, key=lambda c: c["left"])  # right of the heights
         heights = min(plots, key=lambda c: c["left"])
         players = [b for b in deep_query(page, ".bk-btn-group, button.play") if b["visible"]]
@@ -364,10 +369,7 @@ def test_presentation_mode_shows_each_scene_on_one_screen(
         if scene == "accuracy":  # its figure comes with the results (a few seconds)
             page.get_by_text("Computing:").wait_for(state="hidden", timeout=120_000)
         page.wait_for_timeout(800)
-        plots = [
-            c for c in deep_query(page, "canvas")
-            if c["visible"] and c["width"] > 100 and c["height"] > 100
-        ]  # fmt: skip
+        plots = plots_on(page)
         sliders = [s for s in deep_query(page, ".noUi-target") if s["visible"]]
         expected = 4 if scene == "stack" else 3  # the two-ball sliders, or the stack's
         assert plots and len(sliders) >= expected, (plots, sliders)
@@ -412,10 +414,7 @@ def test_a_laptop_shows_the_plots_the_balls_and_the_player_without_scrolling(
     context, page, errors = open_page(browser, f"{base}/app?scene={scene}", viewport=(1366, 768))
     try:
         page.wait_for_timeout(800)
-        plots = [
-            c for c in deep_query(page, "canvas")
-            if c["visible"] and c["width"] > 100 and c["height"] > 100
-        ]  # fmt: skip
+        plots = plots_on(page)
         animation = min(plots, key=lambda c: c["width"])
         heights = max(plots, key=lambda c: c["width"])
         assert animation["left"] >= heights["right"] - 1, (animation, heights)  # beside it
@@ -445,10 +444,7 @@ def test_a_laptop_shows_the_collision_and_the_map_without_scrolling(
         if scene == "map":
             page.get_by_text("Slice of the shipped cube").wait_for()
         page.wait_for_timeout(800)
-        plots = [
-            c for c in deep_query(page, "canvas")
-            if c["visible"] and c["width"] > 100 and c["height"] > 100
-        ]  # fmt: skip
+        plots = plots_on(page)
         plots = list({(c["left"], c["top"]): c for c in plots}.values())  # (canvas layers)
         assert len(plots) == (3 if scene == "closeup" else 1), plots
         assert all(c["bottom"] <= 768 and c["right"] <= 1366 for c in plots), plots
