@@ -514,8 +514,10 @@ class MapScene(Scene):
                 "use the **linear** force (the Stack scene offers the Hertz force)."
             )
         lines = [
-            f"{source}. Black outlines: delayed rebound (h2 > h1); star: current parameters. "
-            + click
+            f"{source}. Black outlines: delayed rebound (h2 > h1; its holes, islands and odd "
+            "single cells are real: mostly where one brief contact more or fewer happens, h2 "
+            "jumps); "
+            "star: current parameters. " + click
         ]
         for name, what in (("mu", "mu"), ("tau_ratio", "tau_d/tau_f")):
             low, high = float(cube[name].min()), float(cube[name].max())
