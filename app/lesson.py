@@ -158,6 +158,11 @@ class Lesson(Built):
     def _reveal(self) -> None:
         shown = STEPS[self.state.step - 1]
         correct = shown.choices[shown.answer]
+        # disabled before the answer shows: a clicker's next press, once the answer is on
+        # screen, must find Next, not Reveal still enabled (its change sent after the answer's:
+        # the press revealed again and the lesson stayed, test_a_presentation_clicker_...)
+        self.reveal.disabled = True
+        self.choices.disabled = True
         if self.choices.value is None:
             verdict = f"The answer: {correct.lower()}."
         elif self.choices.value == correct:
@@ -175,8 +180,6 @@ class Lesson(Built):
             visible=self.state.presentation,
         )
         self.aside.param.update(object=shown.aside, visible=bool(shown.aside))
-        self.reveal.disabled = True
-        self.choices.disabled = True
         self.state.revealed = True  # the scene comes out from under its cover
 
     @param.depends("state.step", watch=True)

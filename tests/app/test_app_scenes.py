@@ -457,6 +457,19 @@ def test_a_lesson_step_covers_its_scene_until_the_answer_is_revealed():
     assert not asked(rendered())
 
 
+def test_a_reveal_disables_itself_before_the_answer_shows():
+    """The browser applies the server's changes in order: while the answer is on screen,
+    Reveal must already be disabled, or a clicker's next press (keys.js: Reveal while it is
+    enabled, else Next) reveals again instead of going on."""
+    explorer = rendered({"step": "1", "present": "1"})
+    lesson = explorer.lesson
+    order = []
+    lesson.reveal.param.watch(lambda e: order.append(("reveal disabled", e.new)), "disabled")
+    lesson.answer.param.watch(lambda e: order.append(("answer shown", e.new)), "visible")
+    lesson._reveal()
+    assert order.index(("reveal disabled", True)) < order.index(("answer shown", True))
+
+
 def test_the_end_of_the_lesson_gives_back_the_teachers_drop():
     """A teacher's own drop, scene and units before Start come back at the lesson's end (the
     last step's drop and scene stayed, a new user's set-up lost)."""
