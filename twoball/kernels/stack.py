@@ -478,6 +478,9 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
     # the two-ball solver's rest proof, for N = 2 (for more balls a placeholder of the same type)
     pair = prepare(masses[1] if n == 2 else 1.0, zeta[0], zeta[1] if n == 2 else 0.1)
     phase_count = 0
+    # the store's arrays read at every phase, taken out once: each read of a named tuple's array
+    # counts a reference up and down (atomically)
+    ready, eta_rest, noise = store.ready, store.eta_rest, store.noise
     for _ in range(MAX_PHASES):
         phase_count += 1
         if record_phases:
@@ -501,7 +504,7 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
         horizon, horizon_ball = t_end - t, -1
         if not active[n - 1] and 0.0 < speeds[n - 1] < horizon:
             horizon, horizon_ball = speeds[n - 1], n - 1  # a free ball's apex is v away
-        if not _clusters_ready(active, store.ready):
+        if not _clusters_ready(active, ready):
             _ensure_clusters(active, store, masses, zeta)
         if n >= 3 and active.all():
             work.rest_rounding[:] = _rest_rounding(
@@ -554,8 +557,8 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
             cid = _cluster_id(0, grounded_top, True, n)
             offset = 0.0  # summed in a loop: a slice and np.abs allocated and counted
             for c in range(grounded_top + 1):
-                offset += abs(store.eta_rest[cid, c])
-            carried = max(carried, ROUNDING * store.noise[cid] * offset)
+                offset += abs(eta_rest[cid, c])
+            carried = max(carried, ROUNDING * noise[cid] * offset)
         entered_by = index if event == EVENT_SWITCH else -1
         t += tau
         if event == EVENT_SWITCH:
