@@ -699,6 +699,30 @@ def _check_contact(
 
 
 @njit(borrow=True, inline=True)
+def _hypot(x, y):
+    """math.hypot(x, y) inline, to the same bits here: glibc's algorithm (2.35 on, as built
+    without FMA: sysdeps/ieee754/dbl-64/e_hypot.c) where its operands need no scaling, the
+    library call elsewhere (scaled, one operand negligible, zero or not finite). The rotation
+    blocks' sizes (:func:`_sizes`) take about 13 a phase of the eight-ball drop; the call cost
+    three times the arithmetic (docs/performance.md, "Stacks of N balls")."""
+    ax, ay = abs(x), abs(y)
+    if ax < ay:
+        ax, ay = ay, ax
+    if not (ax <= 2.0**511 and ay >= 2.0**-459 and ay > ax * 2.0**-54):
+        return math.hypot(x, y)
+    h = math.sqrt(ax * ax + ay * ay)
+    if h <= 2.0 * ay:
+        delta = h - ay
+        t1 = ax * (2.0 * delta - ax)
+        t2 = (delta - 2.0 * (ax - ay)) * delta
+    else:
+        delta = h - ax
+        t1 = 2.0 * delta * (ax - 2.0 * ay)
+        t2 = (4.0 * delta - ay) * ay + delta * delta
+    return h - (t1 + t2) / (2.0 * h)
+
+
+@njit(borrow=True, inline=True)
 def _sizes(kinds, blocks, companions, rates, cid, k, modes, p, out):
     """The two sizes of each block's state y = modes[p] (cluster cid, k blocks) that
     :func:`_block_weights` weighs, into out[p]: |y| (rotation), |y_0| and |y_1| (diagonal), the
@@ -709,7 +733,7 @@ def _sizes(kinds, blocks, companions, rates, cid, k, modes, p, out):
         kind = kinds[cid, blk]
         y0, y1 = modes[p, 2 * blk], modes[p, 2 * blk + 1]
         if kind == BLOCK_ROTATION:
-            out[p, blk, 0], out[p, blk, 1] = math.hypot(y0, y1), 0.0
+            out[p, blk, 0], out[p, blk, 1] = _hypot(y0, y1), 0.0
         elif kind == BLOCK_DIAGONAL:
             out[p, blk, 0], out[p, blk, 1] = abs(y0), abs(y1)
         else:

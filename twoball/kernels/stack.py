@@ -478,134 +478,150 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
     # the two-ball solver's rest proof, for N = 2 (for more balls a placeholder of the same type)
     pair = prepare(masses[1] if n == 2 else 1.0, zeta[0], zeta[1] if n == 2 else 0.1)
     phase_count = 0
-    for _ in range(MAX_PHASES):
-        phase_count += 1
+    # the store's arrays read at every phase, taken out once: each read of a named tuple's array
+    # counts a reference up and down (atomically)
+    ready, eta_rest, noise = store.ready, store.eta_rest, store.noise
+    running = True
+    while running:
+        # Room for one more phase's rows (a phase records at most one phase, one contact
+        # interval and n apexes), made here, outside the loop over phases: a table that may be
+        # replaced inside a loop has its references counted up and down, atomically, at every
+        # pass (a tenth of the eight-ball drop's time when it was the loop over the balls)
         if record_phases:
             phases = _room_for_one(phases, n_phases)
-            bits = 0
-            for c in range(n):
-                if active[c]:
-                    bits += 1 << c
-            phases[n_phases, 0], phases[n_phases, 1] = t, bits
-            phases[n_phases, 2 : 2 + n] = e
-            phases[n_phases, 2 + n :] = de
-            n_phases += 1
-        height = speed = 0.0
-        for ball in range(n):
-            height += e[ball]
-            speed += de[ball]
-            heights[ball], speeds[ball] = height, speed
-        # The top ball's apex ends a phase (its height is measured there); a lower ball's is
-        # read from its parabola once the phase has passed it, not a phase of its own
-        # (docs/performance.md, "What grows with N").
-        horizon, horizon_ball = t_end - t, -1
-        if not active[n - 1] and 0.0 < speeds[n - 1] < horizon:
-            horizon, horizon_ball = speeds[n - 1], n - 1  # a free ball's apex is v away
-        if not _clusters_ready(active, store.ready):
-            _ensure_clusters(active, store, masses, zeta)
-        if n >= 3 and active.all():
-            work.rest_rounding[:] = _rest_rounding(
-                store, _cluster_id(0, n - 1, True, n), heights, speeds, carried
-            )
-        event, index, tau = advance_phase(
-            t,
-            e,
-            de,
-            e_next,
-            de_next,
-            active,
-            horizon,
-            horizon_ball,
-            store,
-            masses,
-            zeta,
-            entered_by,
-            carried,
-            pair,
-            work,
-        )
-        for c in range(n):  # the phase's end is the next one's start (copied: swapping the
-            e[c], de[c] = e_next[c], de_next[c]  # arrays counted 8 references a phase)
-        phase_apexes = n_apex
-        # room for every lower ball's apex first: an array that may be replaced inside the loop
-        # had its references counted up and down at every ball of every phase (a tenth of the
-        # eight-ball drop's time)
         while n_apex + n > apexes.shape[0]:
             apexes = _room_for_one(apexes, apexes.shape[0])
-        for ball in range(n - 1):
-            free = not active[ball] and not active[ball + 1]
-            rise = speeds[ball]
-            if free and not apex_passed[ball] and 0.0 < rise <= tau:
-                apex_passed[ball] = True
-                row = n_apex  # in order of time among this phase's apexes
-                while row > phase_apexes and apexes[row - 1, 1] > t + rise:
-                    for column in range(3):  # scalars: a row's view would be counted too
-                        apexes[row, column] = apexes[row - 1, column]
-                    row -= 1
-                apexes[row, 0], apexes[row, 1] = ball, t + rise
-                apexes[row, 2] = heights[ball] + 0.5 * rise * rise
-                n_apex += 1
-        # A state that leaves a grounded cluster of several contacts carries the rounding of its
-        # closed form about the static rest (see twoball.kernels.runs.run).
-        grounded_top = 0
-        while active[0] and grounded_top + 1 < n and active[grounded_top + 1]:
-            grounded_top += 1
-        if grounded_top > 0:
-            cid = _cluster_id(0, grounded_top, True, n)
-            offset = 0.0  # summed in a loop: a slice and np.abs allocated and counted
-            for c in range(grounded_top + 1):
-                offset += abs(store.eta_rest[cid, c])
-            carried = max(carried, ROUNDING * store.noise[cid] * offset)
-        entered_by = index if event == EVENT_SWITCH else -1
-        t += tau
-        if event == EVENT_SWITCH:
-            if active[index]:
-                if n_contacts == contacts.shape[0]:
-                    contacts = _room_for_one(contacts, n_contacts)
-                contacts[n_contacts, 0], contacts[n_contacts, 1] = index, opened[index]
-                contacts[n_contacts, 2] = t
-                n_contacts += 1
-            else:
-                # A contact closing as its overlap falls through zero (e' < 0 at the switch;
-                # closing through g = e + 2 zeta e' instead, it touches at e = -2 zeta e' < 0 with
-                # e' > 0) meets it at zero; found as a root it is zero only to the rounding of
-                # its terms (a ball falling from thousands above: ~1e-12). The root is taken as
-                # exact, as in twoball.kernels.runs.run (docs/accuracy.md, "The linear stack").
-                # The overlap must have been a gap, or opening, at the phase's start (e_next,
-                # de_next): a ball resting on another at its static overlap and released within
-                # the rounding closes again at once, still overlapping; lifted to zero it would
-                # be released there again, for ever.
-                opening = e_next[index] > 0.0 or de_next[index] > 0.0
-                if de[index] < 0.0 and opening:
-                    e[index] = 0.0
-                opened[index] = t
-                if top_apexes == 0:
-                    first[index] += 1
-            active[index] = not active[index]
-            apex_passed[index] = False
-            if index >= 1:
-                apex_passed[index - 1] = False
-        elif event == EVENT_APEX:
-            de[index] -= de.sum()  # the top ball stops there: its velocity to zero
-            apexes = _room_for_one(apexes, n_apex)
-            apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, e.sum()
-            n_apex += 1
-            top_apexes += 1
-            if top_apexes == apexes_wanted:
-                status = STATUS_DONE
+        contacts = _room_for_one(contacts, n_contacts)
+        while True:
+            if phase_count == MAX_PHASES:
+                running = False
                 break
-        elif event == EVENT_TIME:
-            status = STATUS_DONE
-            break
-        elif event == EVENT_REST:
-            status = STATUS_REST
-            break
-        elif event == EVENT_STEPS:
-            status = STATUS_PHASES
-            break
-        else:
-            status = STATUS_STUCK
-            break
+            full = n_apex + n > apexes.shape[0] or n_contacts == contacts.shape[0]
+            if full or (record_phases and n_phases == phases.shape[0]):
+                break  # made room for above
+            phase_count += 1
+            if record_phases:
+                bits = 0
+                for c in range(n):
+                    if active[c]:
+                        bits += 1 << c
+                phases[n_phases, 0], phases[n_phases, 1] = t, bits
+                phases[n_phases, 2 : 2 + n] = e
+                phases[n_phases, 2 + n :] = de
+                n_phases += 1
+            height = speed = 0.0
+            for ball in range(n):
+                height += e[ball]
+                speed += de[ball]
+                heights[ball], speeds[ball] = height, speed
+            # The top ball's apex ends a phase (its height is measured there); a lower ball's is
+            # read from its parabola once the phase has passed it, not a phase of its own
+            # (docs/performance.md, "What grows with N").
+            horizon, horizon_ball = t_end - t, -1
+            if not active[n - 1] and 0.0 < speeds[n - 1] < horizon:
+                horizon, horizon_ball = speeds[n - 1], n - 1  # a free ball's apex is v away
+            if not _clusters_ready(active, ready):
+                _ensure_clusters(active, store, masses, zeta)
+            if n >= 3 and active.all():
+                work.rest_rounding[:] = _rest_rounding(
+                    store, _cluster_id(0, n - 1, True, n), heights, speeds, carried
+                )
+            event, index, tau = advance_phase(
+                t,
+                e,
+                de,
+                e_next,
+                de_next,
+                active,
+                horizon,
+                horizon_ball,
+                store,
+                masses,
+                zeta,
+                entered_by,
+                carried,
+                pair,
+                work,
+            )
+            for c in range(n):  # the phase's end is the next one's start (copied: swapping the
+                e[c], de[c] = e_next[c], de_next[c]  # arrays counted 8 references a phase)
+            phase_apexes = n_apex
+            for ball in range(n - 1):
+                free = not active[ball] and not active[ball + 1]
+                rise = speeds[ball]
+                if free and not apex_passed[ball] and 0.0 < rise <= tau:
+                    apex_passed[ball] = True
+                    row = n_apex  # in order of time among this phase's apexes
+                    while row > phase_apexes and apexes[row - 1, 1] > t + rise:
+                        for column in range(3):  # scalars: a row's view would be counted too
+                            apexes[row, column] = apexes[row - 1, column]
+                        row -= 1
+                    apexes[row, 0], apexes[row, 1] = ball, t + rise
+                    apexes[row, 2] = heights[ball] + 0.5 * rise * rise
+                    n_apex += 1
+            # A state that leaves a grounded cluster of several contacts carries the rounding of
+            # its closed form about the static rest (see twoball.kernels.runs.run).
+            grounded_top = 0
+            while active[0] and grounded_top + 1 < n and active[grounded_top + 1]:
+                grounded_top += 1
+            if grounded_top > 0:
+                cid = _cluster_id(0, grounded_top, True, n)
+                offset = 0.0  # summed in a loop: a slice and np.abs allocated and counted
+                for c in range(grounded_top + 1):
+                    offset += abs(eta_rest[cid, c])
+                carried = max(carried, ROUNDING * noise[cid] * offset)
+            entered_by = index if event == EVENT_SWITCH else -1
+            t += tau
+            if event == EVENT_SWITCH:
+                if active[index]:
+                    contacts[n_contacts, 0], contacts[n_contacts, 1] = index, opened[index]
+                    contacts[n_contacts, 2] = t
+                    n_contacts += 1
+                else:
+                    # A contact closing as its overlap falls through zero (e' < 0 at the switch;
+                    # closing through g = e + 2 zeta e' instead, it touches at e = -2 zeta e' <
+                    # 0 with e' > 0) meets it at zero; found as a root it is zero only to the
+                    # rounding of its terms (a ball falling from thousands above: ~1e-12). The
+                    # root is taken as exact, as in twoball.kernels.runs.run (docs/accuracy.md,
+                    # "The linear stack"). The overlap must have been a gap, or opening, at the
+                    # phase's start (e_next, de_next): a ball resting on another at its static
+                    # overlap and released within the rounding closes again at once, still
+                    # overlapping; lifted to zero it would be released there again, for ever.
+                    opening = e_next[index] > 0.0 or de_next[index] > 0.0
+                    if de[index] < 0.0 and opening:
+                        e[index] = 0.0
+                    opened[index] = t
+                    if top_apexes == 0:
+                        first[index] += 1
+                active[index] = not active[index]
+                apex_passed[index] = False
+                if index >= 1:
+                    apex_passed[index - 1] = False
+            elif event == EVENT_APEX:
+                de[index] -= de.sum()  # the top ball stops there: its velocity to zero
+                apexes[n_apex, 0], apexes[n_apex, 1], apexes[n_apex, 2] = index, t, e.sum()
+                n_apex += 1
+                top_apexes += 1
+                if top_apexes == apexes_wanted:
+                    status = STATUS_DONE
+                    running = False
+                    break
+            elif event == EVENT_TIME:
+                status = STATUS_DONE
+                running = False
+                break
+            elif event == EVENT_REST:
+                status = STATUS_REST
+                running = False
+                break
+            elif event == EVENT_STEPS:
+                status = STATUS_PHASES
+                running = False
+                break
+            else:
+                status = STATUS_STUCK
+                running = False
+                break
     for c in range(n):  # contacts still open at the end end there
         if active[c]:
             contacts = _room_for_one(contacts, n_contacts)
