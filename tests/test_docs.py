@@ -108,3 +108,12 @@ def test_the_quoted_silent_failures_still_happen_as_the_docs_say(case, method, r
     ]  # fmt: skip
     assert len(shipped) == 1
     assert float(shipped[0]["rel_err_h2"]) == pytest.approx(row.rel_err_h2, rel=0.05)
+
+
+def test_the_stacks_page_s_example_prints_what_it_says():
+    """docs/stacks.md's first example, with the values it shows (a new user could not check
+    an example that showed expressions without their values)."""
+    failed, tried = doctest.testfile(
+        str(REPO / "docs" / "stacks.md"), module_relative=False, optionflags=doctest.ELLIPSIS
+    )
+    assert tried >= 6 and failed == 0
