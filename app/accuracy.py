@@ -19,7 +19,15 @@ from bokeh.plotting import figure
 from twoball import jit
 from twoball.studies.precision import ERROR_FLOOR, FAILED_ERROR, PrecisionRow, work_precision
 
-from .scene import PROJECTOR_LINE_WIDTH, AnsweringMarkdown, Scene, Text, draw, readable
+from .scene import (
+    MODEL_PARAMETERS,
+    PROJECTOR_LINE_WIDTH,
+    AnsweringMarkdown,
+    Scene,
+    Text,
+    draw,
+    readable,
+)
 from .state import ExplorerState
 from .steps import STEPS
 
@@ -61,9 +69,7 @@ def measure_ahead() -> None:
     compiled (``app_hooks`` calls it then, off the event loop): a teacher found the first
     visit blank for 3.6 s, and the lesson's reveal there took 7 s on a busy server."""
     default = ExplorerState()
-    drops = [
-        {name: getattr(default, name) for name in ("eps", "eps12", "mu", "tau_ratio", "height")}
-    ]
+    drops = [{name: getattr(default, name) for name in MODEL_PARAMETERS}]
     drops += [step.drop for step in STEPS if step.scene == "accuracy"]
     for drop in drops:
         measured(drop["eps"], drop["mu"], drop["tau_ratio"], drop["eps12"], drop["height"], True)
