@@ -101,7 +101,8 @@ class Released:
 
     # The browser sends ``value`` at every step of a drag (and once more before each release);
     # Panel handled each as a change (its event queue, param's watchers: about 1 ms of server
-    # CPU, tests/app/test_app_state.py counts them), for nothing: the explorer reads the release.
+    # CPU, tests/app/test_app_controls.py counts them), for nothing: the explorer reads the
+    # release.
     # So Panel does not follow ``value`` from the browser, and takes the released value as
     # ``value`` too (Panel's own ``config.throttled`` does the same, for every slider of a page,
     # but still handles each ``value``). The value the server sets still goes to the browser.
