@@ -137,15 +137,13 @@ def simulate(
     failure = _failure(outcome.message, outcome.apex_h, drop)
     if failure:
         outcome = outcome._replace(status=Status.IMPOSSIBLE, message=failure)
-    trajectory = None
+    trajectory = plot_times = None
     if times is not None:
         at_rest = outcome.status is Status.REST and method == "exact"
         check_span("t_eval", times, float(outcome.end_time), at_rest)
-    plot_times = None
-    if keep and times is None:  # sampled when first read (Result.trajectory)
-        plot_times = outcome.plot_times
-    elif keep:
         trajectory = trajectory_of(times, outcome.evaluate(times))
+    elif dense_output:  # sampled when first read (Result.trajectory)
+        plot_times = outcome.plot_times
     result = Result(
         drop=drop,
         method=method,
