@@ -27,7 +27,7 @@ from tornado.websocket import WebSocketClosedError
 from twoball import warmup
 
 from .accuracy import measure_ahead
-from .bokeh_defaults import cache_property_defaults
+from .bokeh_defaults import cache_property_defaults, themed_values_read_directly
 from .delayed_map import map_cube
 from .scenes import SCENE_REGISTRY
 
@@ -139,6 +139,7 @@ def bokeh_as_served() -> None:
     # without the suggestions
     bokeh_settings.perform_error_diagnostics.set_value(False)
     cache_property_defaults()
+    themed_values_read_directly()
     design_resolved_for_new_stylesheets_only()
 
 

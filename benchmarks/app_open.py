@@ -19,12 +19,14 @@ page, a second for its onload callbacks and the URL's rewrite).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import cProfile
 import pstats
 import statistics
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
@@ -46,6 +48,17 @@ def first_message_bytes(document: Document) -> int:
     return len(message.content_json) + sum(len(b.to_bytes()) for b in message._buffers)
 
 
+def close(document: Document) -> None:
+    """Close the page as the server closes a session (its destroy callbacks, each failure
+    passed over as Panel's ``_on_session_destroyed`` does): without it,
+    every page measured stayed registered with Panel, and each page cost more than the one
+    before (drop: 130 ms after 20 pages, 150 ms after 80)."""
+    context = SimpleNamespace(id=f"closed-{id(document)}", _document=document)
+    for callback in list(document.session_destroyed_callbacks):
+        with contextlib.suppress(Exception):
+            callback(context)
+
+
 def explorer_page(query: dict[str, str]) -> tuple[dict[str, float], int, int]:
     """Build one page: CPU ms of its parts, its model count, its document's JSON bytes."""
     from app.explorer import Explorer
@@ -64,7 +77,9 @@ def explorer_page(query: dict[str, str]) -> tuple[dict[str, float], int, int]:
     start = time.process_time()
     size = first_message_bytes(document)
     parts["json"] = time.process_time() - start
-    return {k: 1e3 * v for k, v in parts.items()}, len(document.models), size
+    count = len(document.models)
+    close(document)
+    return {k: 1e3 * v for k, v in parts.items()}, count, size
 
 
 def baseline_page(query: dict[str, str]) -> tuple[dict[str, float], int, int]:
@@ -85,7 +100,9 @@ def baseline_page(query: dict[str, str]) -> tuple[dict[str, float], int, int]:
     start = time.process_time()
     size = first_message_bytes(document)
     parts = {"explorer": built, "models": models, "json": time.process_time() - start}
-    return {k: 1e3 * v for k, v in parts.items()}, len(document.models), size
+    count = len(document.models)
+    close(document)
+    return {k: 1e3 * v for k, v in parts.items()}, count, size
 
 
 def measure(build, query: dict[str, str], pages: int) -> tuple[dict[str, float], int, int]:

@@ -232,3 +232,36 @@ def test_panel_works_out_a_design_only_for_new_stylesheets(monkeypatch):
     monkeypatch.setattr(Design, "params", lambda *a, **k: asked.append(1) or params(*a, **k))
     assert [sent(slider._update_properties(change, doc=doc)) for change in changes] == expected
     assert len(asked) == 1
+
+
+def test_theme_values_read_directly_equal_bokehs_own(monkeypatch):
+    """app/bokeh_defaults.themed_values_read_directly: a model with no theme, one a document
+    theme applies to, and one whose theme was taken away again answer what Bokeh's own
+    ``themed_values`` answers, and the themed model's properties take the theme's values."""
+    from bokeh.core.has_props import HasProps
+    from bokeh.document import Document
+    from bokeh.models import Slider
+    from bokeh.themes import Theme
+
+    from app.bokeh_defaults import themed_values_read_directly
+
+    monkeypatch.setattr(HasProps, "themed_values", HasProps.themed_values)  # restored after
+    own = HasProps.themed_values
+    theme = Theme(json={"attrs": {"Slider": {"bar_color": "#123456", "title": "themed"}}})
+    plain = Slider(start=0, end=1, value=0)
+    themed = Slider(start=0, end=1, value=0)
+    unthemed = Slider(start=0, end=1, value=0)
+    document = Document(theme=theme)
+    document.add_root(themed)
+    document.add_root(unthemed)
+    document.remove_root(unthemed)  # (its theme taken away: Bokeh deletes the attribute)
+    models = (plain, themed, unthemed)
+    expected = [own(model) for model in models]
+    assert expected[0] is None and expected[2] is None
+    assert expected[1] == {"bar_color": "#123456", "title": "themed"}
+    themed_values_read_directly()
+    themed_values_read_directly()  # (idempotent)
+    assert HasProps.themed_values.__wrapped__ is own
+    assert [HasProps.themed_values(model) for model in models] == expected
+    assert (themed.bar_color, themed.title) == ("#123456", "themed")
+    assert (plain.bar_color, plain.title) == ("#e6e6e6", "")
