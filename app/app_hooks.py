@@ -20,7 +20,7 @@ import panel
 import panel.io.document
 import tornado.netutil
 from bokeh.settings import settings as bokeh_settings
-from panel.reactive import Reactive
+from panel.reactive import Reactive, Syncable
 from tornado.ioloop import IOLoop
 from tornado.websocket import WebSocketClosedError
 
@@ -141,6 +141,7 @@ def bokeh_as_served() -> None:
     cache_property_defaults()
     themed_values_read_directly()
     design_resolved_for_new_stylesheets_only()
+    synced_parameters_listed_once()
 
 
 def design_resolved_for_new_stylesheets_only() -> None:
@@ -165,6 +166,33 @@ def design_resolved_for_new_stylesheets_only() -> None:
 
     _update_properties.design_when_needed = True
     Reactive._update_properties = _update_properties
+
+
+def synced_parameters_listed_once() -> None:
+    """Panel lists a component's synced parameters once, not once per parameter, when it
+    makes the component's first model.
+
+    Panel 1.9's ``Syncable._init_params`` tests each of a component's parameters (about 40)
+    for membership in ``_synced_params``, a property that builds the list anew at each test:
+    some 30 000 of a page's 650 000 Python calls (benchmarks/app_open.py). The values are the
+    same (tests/app/test_app_hooks.py compares them with Panel's for every component of each
+    scene's page). Subclasses that override ``_init_params`` call this one through
+    ``super()`` or replace it, as before. Idempotent."""
+    if getattr(Syncable._init_params, "listed_once", False):
+        return
+    panels_own = Syncable._init_params
+
+    def _init_params(self) -> dict:
+        synced = set(self._synced_params)
+        return {
+            name: value
+            for name in self.param
+            if name in synced and (value := getattr(self, name)) is not None
+        }
+
+    _init_params.listed_once = True
+    _init_params.__wrapped__ = panels_own
+    Syncable._init_params = _init_params
 
 
 def accept_one_connection_at_a_time() -> None:

@@ -52,6 +52,22 @@ class Lesson(Built):
             margin=(0, 10),
             css_classes=["twoball-step-title"] if projected else [],
         )
+        self.start = pn.widgets.Button(label="Start the lesson", color="primary")
+        self.start.on_click(lambda _: later(self._begin))
+        self.start.js_on_click(code="twoballShowStep();")  # (lesson.js)
+        # The step's widgets are made, and join the page, when the lesson starts: a page
+        # opened without it (most of a class's) pays neither for their Bokeh models nor for
+        # the widgets themselves (8 ms of a page's opening; docs/performance.md)
+        self._steps = pn.Column(sizing_mode="stretch_width")  # in the card
+        self._stage = pn.Column(sizing_mode="stretch_width")  # in the main area
+        self._asking: pn.Column | None = None  # (the question, once made: _make_step_widgets)
+        self._before: dict = {}  # the state when the lesson began (_begin)
+        self._show()
+
+    def _make_step_widgets(self) -> None:
+        """The step's widgets (its question, choices, answer and buttons), made and placed
+        when the lesson first shows a step."""
+        projected = self.state.presentation
         self.choices = pn.widgets.RadioBoxGroup(
             options=[],
             value=None,
@@ -65,7 +81,6 @@ class Lesson(Built):
         )
         self.previous = pn.widgets.Button(label="< Previous", width=110)
         self.next = pn.widgets.Button(label="Next >", color="primary", width=110)
-        self.start = pn.widgets.Button(label="Start the lesson", color="primary")
         # a step changes the drop, and with it the scenes' Bokeh models: on the next tick,
         # as every change made from the browser (see scene.later)
         self.reveal.on_click(lambda _: later(self._reveal))
@@ -73,10 +88,9 @@ class Lesson(Built):
         self.next.on_click(
             lambda _: later(lambda: self._go((self.state.step + 1) % (len(STEPS) + 1)))
         )
-        self.start.on_click(lambda _: later(self._begin))
         # the card scrolled to the new step's title, or to the buttons after an answer, in
         # the page (app/static/lesson.js)
-        for button in (self.start, self.previous, self.next):
+        for button in (self.previous, self.next):
             button.js_on_click(code="twoballShowStep();")
         self.reveal.js_on_click(code="twoballShowAnswer();")
         self.choices.param.watch(self._chosen, "value")
@@ -111,10 +125,6 @@ class Lesson(Built):
         )
         choices_css = PROJECTED_CHOICES if projected else ASKED_CHOICES
         self.choices.stylesheets = [*self.choices.stylesheets, choices_css]
-        # The step's widgets join the page when the lesson starts: a page opened without it
-        # (most of a class's) does not pay for their Bokeh models (docs/performance.md)
-        self._steps = pn.Column(sizing_mode="stretch_width")  # in the card
-        self._stage = pn.Column(sizing_mode="stretch_width")  # in the main area
         self._asking = pn.Column(
             self.look_for,
             self.question,
@@ -123,8 +133,7 @@ class Lesson(Built):
             sizing_mode="stretch_width",
             visible=False,
         )
-        self._before: dict = {}  # the state when the lesson began (_begin)
-        self._show()
+        self._add_step_widgets()
 
     def _begin(self) -> None:
         """The lesson's first step, in metres and seconds: a class thinks in them (the
@@ -186,12 +195,13 @@ class Lesson(Built):
     def _show(self) -> None:
         step = self.state.step
         lesson_on = step > 0
-        for widget in (self.choices, self.reveal, self.previous, self.next):
-            widget.visible = lesson_on
         self.start.visible = not lesson_on
-        self.answer.visible = self.answer_line.visible = self.aside.visible = False
-        if lesson_on and not self._steps.objects:
-            self._add_step_widgets()
+        if lesson_on and self._asking is None:
+            self._make_step_widgets()
+        if self._asking is not None:
+            for widget in (self.choices, self.reveal, self.previous, self.next):
+                widget.visible = lesson_on
+            self.answer.visible = self.answer_line.visible = self.aside.visible = False
         if not lesson_on:
             self.heading.object = (
                 "A guided path through the demonstration in six steps: predict, then see."
@@ -216,7 +226,7 @@ class Lesson(Built):
     def _place_title(self) -> None:
         """The step's title in the card, except while the question shows it (one title on
         screen at a time; a projector's question leaves it to the card)."""
-        if self.state.step:
+        if self.state.step and self._asking is not None:
             asked = self._asking.visible and not self.state.presentation
             self.heading.object = "" if asked else self._title()
 
@@ -244,6 +254,10 @@ class Lesson(Built):
 
     def ask(self, covered: bool) -> None:
         """Show the question while the scene is covered (:meth:`stage`)."""
+        if self._asking is None:
+            if not covered:
+                return
+            self._make_step_widgets()  # (the explorer covers a step's scene before _show)
         self._asking.visible = covered
         self._place_title()
 

@@ -265,3 +265,37 @@ def test_theme_values_read_directly_equal_bokehs_own(monkeypatch):
     assert [HasProps.themed_values(model) for model in models] == expected
     assert (themed.bar_color, themed.title) == ("#123456", "themed")
     assert (plain.bar_color, plain.title) == ("#e6e6e6", "")
+
+
+def test_synced_parameters_listed_once_give_panels_own_values(monkeypatch):
+    """app_hooks.synced_parameters_listed_once: every component of each scene's page (Panel's
+    widgets, panes, layouts and the template's own) starts its model from the same values as
+    with Panel's own ``Syncable._init_params``."""
+    from bokeh.document import Document
+    from panel.io.state import set_curdoc
+    from panel.reactive import Syncable
+
+    from app.app_hooks import synced_parameters_listed_once
+    from app.explorer import Explorer
+    from app.scenes import SCENES
+
+    own = getattr(Syncable._init_params, "__wrapped__", Syncable._init_params)
+    monkeypatch.setattr(Syncable, "_init_params", own)  # restored after the test
+    synced_parameters_listed_once()
+    synced_parameters_listed_once()  # (idempotent)
+    assert Syncable._init_params.__wrapped__ is own
+    compared = set()
+    for scene in SCENES:
+        document = Document()
+        with set_curdoc(document):
+            page = Explorer({"scene": scene, "step": "2" if scene == "drop" else "0"}).page()
+            page.server_doc(document)
+        components = [
+            component
+            for item, _ in page._render_items.values()
+            for component in item.select(Syncable)
+        ]
+        for component in components:
+            assert Syncable._init_params(component) == own(component), component
+            compared.add(type(component).__name__)
+    assert {"ReleasedSlider", "Markdown", "Column", "Tabs", "Button", "Bokeh", "Card"} <= compared
