@@ -17,7 +17,7 @@ from bokeh.models import CustomJS, CustomJSTickFormatter
 
 from twoball import presets
 
-from .scene import PENDING_JS, Built, alert, for_a_room, join, later
+from .scene import PENDING_JS, Built, Folded, alert, for_a_room, join, later
 from .state import ExplorerState, app_range, metres_text, preset_drop, typed_value
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
@@ -348,27 +348,21 @@ class Controls(Built):
         return math.isclose(height, self.state.height, rel_tol=1e-12)
 
     def layout(self) -> pn.viewable.Viewable:
-        # its inputs join the page when it is first opened (a folded card's Bokeh models
-        # cost every page its opening time, docs/performance.md)
-        advanced = pn.Card(title="advanced", collapsed=True, sizing_mode="stretch_width")
-
-        def opened(event: param.parameterized.Event) -> None:
-            if not event.new and not advanced.objects:
-                # the message above the boxes: below them, a laptop showed it under the
-                # window's edge (y = 865 of 768), and a wrong H seemed silently undone
-                advanced.objects = [self.typed_message, self.height, self.eps12]
-
-        advanced.param.watch(opened, "collapsed")
+        # its inputs are made, and join the page, when it is first opened (app/scene.Folded);
+        # the message above the boxes: below them, a laptop showed it under the window's edge
+        # (y = 865 of 768), and a wrong H seemed silently undone
+        self.advanced = Folded("advanced", lambda: [self.typed_message, self.height, self.eps12])
         # the URL's message box joins the page when it first has something to say
         # (show_messages): empty in every page's first document, it cost 0.6 kB
-        return pn.Column(
+        layout = pn.Column(
             *([self.message] if self.message.visible else []),
             self.two_ball,
             self.scene_controls,
-            advanced,
             self.meanings,
             sizing_mode="stretch_width",
         )
+        layout.insert(len(layout) - 1, self.advanced.place(layout))
+        return layout
 
     def show_scene_controls(self, own: pn.viewable.Viewable | None) -> None:
         """Show a scene's own controls (:meth:`Scene.own_controls`) instead of the two-ball

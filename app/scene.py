@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import holoviews as hv
 import numpy as np
 import panel as pn
@@ -62,6 +64,53 @@ def join(layout: pn.layout.ListLike | None, pane: pn.viewable.Viewable, at: int 
     yet): a pane that joins the page when first needed, not in every page's first document."""
     if layout is not None and pane not in layout.objects:
         layout.insert(at, pane)
+
+
+# a fold's button, as a card's title: its words at the left, in bold, on the card's grey
+FOLD_CSS = """
+:host .bk-btn { text-align: left; font-weight: 600; background-color: #f8f9fa; }
+:host .bk-btn.bk-active { background-color: #e2e6ea; }
+"""
+
+
+class Folded:
+    """Inputs folded away under a button, as in a collapsed card: pressed, the button shows
+    them below it (made then, the first time) and, pressed again, hides them.
+
+    A collapsed ``pn.Card`` cost every page about 5 ms of server CPU to open (its header row,
+    title pane and card model: benchmarks/app_open.py), though few pages open it; the button
+    costs about 1 ms. ``contents`` makes the inputs; the button (``button``) goes into a layout
+    of the caller's (:meth:`place`), the inputs after it once opened."""
+
+    def __init__(self, title: str, contents: Callable[[], list[pn.viewable.Viewable]]):
+        self.button = pn.widgets.Toggle(
+            label=title, value=False, sizing_mode="stretch_width", stylesheets=[FOLD_CSS]
+        )
+        self._contents = contents
+        self.body: pn.Column | None = None
+        self._layout: pn.layout.ListLike | None = None
+        self.button.param.watch(self._pressed, "value")
+
+    def place(self, layout: pn.layout.ListLike) -> pn.widgets.Toggle:
+        """The button, for ``layout``, where the inputs will go after it."""
+        self._layout = layout
+        return self.button
+
+    @property
+    def opened(self) -> bool:
+        return self.button.value
+
+    def open(self) -> None:
+        self.button.value = True
+
+    def _pressed(self, event: param.parameterized.Event) -> None:
+        if event.new and self.body is None:
+            self.body = pn.Column(*self._contents(), sizing_mode="stretch_width")
+        if self.body is None:
+            return
+        if self._layout is not None and self.body not in self._layout.objects:
+            self._layout.insert(self._layout.objects.index(self.button) + 1, self.body)
+        self.body.visible = event.new
 
 
 class Built(pn.viewable.Viewer):

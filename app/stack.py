@@ -42,7 +42,16 @@ from .drop import (
     stage,
     underneath,
 )
-from .scene import Scene, Text, answers_pending, draw, on_screen, player_for_a_room, readable
+from .scene import (
+    Folded,
+    Scene,
+    Text,
+    answers_pending,
+    draw,
+    on_screen,
+    player_for_a_room,
+    readable,
+)
 from .state import contact_eps
 
 # Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first (all
@@ -155,14 +164,11 @@ class StackScene(Scene):
             sizing_mode="stretch_width",
         )
         self.eps_message = pn.pane.Alert(alert_type="warning", visible=False, margin=(0, 5))
-        self.advanced = pn.Card(
-            self.eps_contacts,
-            self.eps_message,
-            title="advanced: eps per contact",
-            collapsed=True,
-            sizing_mode="stretch_width",
+        self.advanced = Folded(
+            "advanced: eps per contact", lambda: [self.eps_contacts, self.eps_message]
         )
-        self._controls = pn.Column(self.widgets, self.advanced, sizing_mode="stretch_width")
+        self._controls = pn.Column(self.widgets, sizing_mode="stretch_width")
+        self._controls.append(self.advanced.place(self._controls))
         self.summary = Text(sizing_mode="stretch_width")
         self.curves = ColumnDataSource({"t": []})
         self._lines: list = []  # a line per ball drawn so far (:meth:`_add_lines`)
@@ -264,7 +270,7 @@ class StackScene(Scene):
         )  # fmt: skip
         self.eps_message.visible = message is not None
         if message is not None:  # opened: a wrong entry (from a link too) said where it is seen
-            self.advanced.collapsed = False
+            self.advanced.open()
         return s.stack_eps if values is None else values
 
     def update(self) -> None:

@@ -45,3 +45,29 @@ def test_a_drag_costs_the_server_nothing_until_its_release(monkeypatch, scene, n
     assert slider.value == slider.value_throttled == steps[-1]
     assert [set(events) for events in handled] == [{"value_throttled"}]
     assert shown.computations == computed + 1
+
+
+def test_the_advanced_inputs_are_made_and_shown_below_their_button_when_first_opened():
+    """app/scene.Folded: a page's first document has the button alone (its inputs' models are
+    in no page that never opens it); the first press makes the inputs and shows them right
+    after the button, in the page's document; a second press hides them, a third shows the
+    same inputs again."""
+    document = Document()
+    with set_curdoc(document):
+        explorer = Explorer({})
+        explorer.page().server_doc(document)
+    controls = explorer.controls
+    folded, layout = controls.advanced, controls.__panel__()
+    height_models = lambda: [m for m, _ in controls.height._models.values()]  # noqa: E731
+    assert folded.body is None and height_models() == []
+    with set_curdoc(document):
+        folded.button.value = True  # as the browser's press
+    index = layout.objects.index(folded.button)
+    assert layout.objects[index + 1] is folded.body and folded.body.visible
+    assert list(folded.body) == [controls.typed_message, controls.height, controls.eps12]
+    assert [m.document for m in height_models()] == [document]  # sent to the page
+    body = folded.body
+    folded.button.value = False
+    assert not body.visible and folded.body is body
+    folded.open()
+    assert folded.opened and body.visible and layout.objects.count(body) == 1

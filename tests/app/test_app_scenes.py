@@ -574,7 +574,7 @@ def test_the_stack_scene_takes_eight_balls_and_eps_per_contact_under_advanced():
     scene = explorer.scenes["stack"]
     expected = twoball.simulate_stack([0.3] * 7, 0.9, 0.2)
     assert scene.result.h1 == expected.h1 and "8 balls" in scene.summary.object
-    assert scene.advanced.collapsed and not scene.eps_message.visible
+    assert not scene.advanced.opened and not scene.eps_message.visible
     eps = [0.9, 0.8, 0.7, 0.6, 0.5, 0.9, 0.8, 0.7]
     scene.eps_contacts.value = ",".join(map(str, eps))
     assert explorer.state.stack_eps_contacts == scene.eps_contacts.value
@@ -583,6 +583,7 @@ def test_the_stack_scene_takes_eight_balls_and_eps_per_contact_under_advanced():
     assert url_query(explorer.state)["eps_contacts"] == scene.eps_contacts.value
     scene.eps_contacts.value = "0.9, 0.8"  # two values for eight balls
     assert scene.eps_message.visible and "give 8 values for 8 balls" in scene.eps_message.object
+    assert scene.advanced.opened and scene.eps_message in scene.advanced.body  # (seen at once)
     assert scene.result.h1 == twoball.simulate_stack([0.3] * 7, 0.9, 0.2).h1  # the slider's
     assert "eps_contacts" not in url_query(explorer.state)  # a wrong entry is not shared
     scene.eps_contacts.value = ", ".join(["0.5"] * 8)  # all equal, not the slider's 0.9
