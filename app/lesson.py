@@ -37,6 +37,12 @@ PROJECTED_CHOICES = (
 )
 
 
+# Reveal's label: while it waits for a prediction (disabled), it says what it waits for (a
+# greyed "Reveal the answer" left a student pressing it, not knowing why nothing happened)
+REVEAL = "Reveal the answer"
+CHOOSE_FIRST = "Choose an answer first"
+
+
 class Lesson(Built):
     """The lesson's card: the step's text, its question, reveal, previous and next."""
 
@@ -58,7 +64,7 @@ class Lesson(Built):
             sizing_mode="stretch_width",
             stylesheets=[":host label { white-space: normal; }"],  # long answers wrap, not cut
         )
-        self.reveal = pn.widgets.Button(label="Reveal the answer", color="primary")
+        self.reveal = pn.widgets.Button(label=REVEAL, color="primary")
         # (the page scrolls to it after a reveal: lesson.js)
         self.answer = alert(
             "", visible=False, sizing_mode="stretch_width", css_classes=["twoball-answer"]
@@ -147,7 +153,14 @@ class Lesson(Built):
             self._before = {}
 
     def _chosen(self, event: param.parameterized.Event) -> None:
-        self.reveal.disabled = self._waits_for_a_choice() or self.answer.visible
+        self._offer_reveal()
+
+    def _offer_reveal(self) -> None:
+        """Reveal enabled once it can be pressed; while it waits for a choice, saying so."""
+        waiting = self._waits_for_a_choice()
+        self.reveal.param.update(
+            disabled=waiting or self.answer.visible, label=CHOOSE_FIRST if waiting else REVEAL
+        )
 
     def _waits_for_a_choice(self) -> bool:
         """A student alone predicts first (the answer waits for a choice); in front of a class
@@ -205,7 +218,7 @@ class Lesson(Built):
         self.question.object = f"**{shown.question}**"
         self._place_title()
         self.choices.param.update(options=list(shown.choices), value=None, disabled=False)
-        self.reveal.disabled = self._waits_for_a_choice()
+        self._offer_reveal()
         self.previous.disabled = step == 1
         self.next.label = "Next >" if step < len(STEPS) else "End the lesson"
 

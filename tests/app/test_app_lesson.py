@@ -9,6 +9,7 @@ from appdriver import deep_query, open_page, page_query
 from playwright.sync_api import expect
 
 import twoball
+from app.lesson import CHOOSE_FIRST
 from app.state import ExplorerState, read_query
 from app.steps import STEPS
 from twoball import presets
@@ -96,8 +97,9 @@ def test_the_lesson_asks_before_it_answers_and_walks_the_scenes(browser, app_ser
             query = page_query(page)
             assert query["scene"] == step.scene
             assert float(query["mu"]) == pytest.approx(step.drop["mu"], rel=1e-11)
+            waiting = page.get_by_role("button", name=CHOOSE_FIRST)
+            expect(waiting).to_be_disabled()  # a prediction first, and it says so
             reveal = page.get_by_role("button", name="Reveal the answer")
-            expect(reveal).to_be_disabled()  # a prediction first
             # the question and every choice whole in the main area, larger than the sidebar's
             # text, in place of the covered scene (they sat in the 300 px sidebar beside an
             # empty main area); a long choice wraps, not cut
@@ -108,8 +110,8 @@ def test_the_lesson_asks_before_it_answers_and_walks_the_scenes(browser, app_ser
             assert len(labels) == len(step.choices)
             assert all(c["left"] > 330 and c["right"] <= 1366 for c in labels), labels
             assert all(c["bottom"] <= 768 and c["font"] >= 17 for c in labels), labels
-            expect(reveal).to_be_in_viewport(ratio=1)
-            assert reveal.bounding_box()["x"] > 330
+            expect(waiting).to_be_in_viewport(ratio=1)
+            assert waiting.bounding_box()["x"] > 330
             assert _scene_canvases(page) == []  # the scene is covered
             if number == 1:
                 page.screenshot(path=shots / "step1-laptop-asked.png")
@@ -389,6 +391,67 @@ def test_a_projected_reveal_keeps_the_step_title_and_its_buttons_on_screen(
                 path=artifacts / "lesson" / f"step{number}-{width}x{height}-revealed.png"
             )
             page.keyboard.press("PageDown")  # on to the next step
+        assert errors == []
+    finally:
+        context.close()
+
+
+# Reveal's text, whether it can be pressed, and whether its words fit it (none cut off)
+REVEAL_JS = """() => { const found = []; const walk = (root) => {
+  for (const el of root.querySelectorAll("*")) {
+    if (el.tagName === "BUTTON" && ["Reveal the answer", "Choose an answer first"]
+        .includes(el.textContent.trim()) && el.checkVisibility()) found.push(el);
+    if (el.shadowRoot) walk(el.shadowRoot);
+  } };
+  walk(document);
+  return found.map((el) => ({text: el.textContent.trim(), disabled: el.disabled,
+    fits: el.scrollWidth <= el.clientWidth + 1 && el.scrollHeight <= el.clientHeight + 1})); }"""
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize(
+    ("size", "query"),
+    [((1366, 768), ""), ((390, 844), ""), ((1280, 720), ""), ((1280, 720), "&present=1")],
+    ids=["laptop", "phone", "projector", "projector-present"],
+)
+def test_reveal_says_that_it_waits_for_a_choice(browser, app_server, artifacts, size, query):
+    """Reveal was disabled until a choice was made, greyed, with nothing saying why: while it
+    waits it reads "Choose an answer first" (whole, on the screen), and once a choice is made,
+    "Reveal the answer". In presentation mode it waits for nothing (the room answers aloud, the
+    teacher reveals): "Reveal the answer" at once."""
+    base, _ = app_server
+    width, height = size
+    step = STEPS[0]
+    context, page, errors = open_page(browser, f"{base}/app?step=1{query}", viewport=size)
+    try:
+        page.get_by_text(step.question, exact=True).wait_for()
+        page.wait_for_timeout(500)
+        shots = artifacts / "lesson"
+        shots.mkdir(exist_ok=True)
+        name = f"reveal-waits-{width}x{height}{query.replace('&present=1', '-present')}"
+        if query:  # presentation mode
+            assert page.evaluate(REVEAL_JS) == [
+                {"text": "Reveal the answer", "disabled": False, "fits": True}
+            ]
+            expect(page.get_by_role("button", name=CHOOSE_FIRST)).to_have_count(0)
+            page.screenshot(path=shots / f"{name}.png")
+            assert errors == []
+            return
+        waiting = page.get_by_role("button", name=CHOOSE_FIRST)
+        expect(waiting).to_be_disabled()
+        waiting.scroll_into_view_if_needed()
+        expect(waiting).to_be_in_viewport(ratio=1)
+        assert page.evaluate(REVEAL_JS) == [{"text": CHOOSE_FIRST, "disabled": True, "fits": True}]
+        box = waiting.bounding_box()
+        assert box["x"] >= 0 and box["x"] + box["width"] <= width, box
+        page.screenshot(path=shots / f"{name}.png")
+        page.get_by_text(step.choices[step.answer], exact=True).click()
+        reveal = page.get_by_role("button", name="Reveal the answer")
+        expect(reveal).to_be_enabled()
+        assert page.evaluate(REVEAL_JS) == [
+            {"text": "Reveal the answer", "disabled": False, "fits": True}
+        ]
+        page.screenshot(path=shots / f"{name}-chosen.png")
         assert errors == []
     finally:
         context.close()
