@@ -444,6 +444,52 @@ def test_presentation_mode_shows_each_scene_on_one_screen(
         context.close()
 
 
+PLAYER_BUTTONS = (
+    "button.slower, button.first, button.previous, button.reverse, button.pause, button.play, "
+    "button.next, button.last, button.faster"
+)
+# the Stack scene's explanation ("Each ball is ratio times ..."): each paragraph's box, and the
+# box that holds it (its pane's): whether it shows all of it (nothing clipped or scrolled away)
+STACK_CAPTION_JS = """() => { const out = []; const walk = (root, host) => {
+  for (const el of root.querySelectorAll("*")) {
+    if (el.shadowRoot) walk(el.shadowRoot, el);
+    if (el.tagName === "P" && el.innerText.startsWith("Each ball is")) {
+      const box = el.getBoundingClientRect(), held = host.getBoundingClientRect();
+      out.push({top: box.top, bottom: box.bottom, left: box.left, right: box.right,
+                held_top: held.top,
+                held_bottom: held.bottom, all_shown: host.scrollHeight <= host.clientHeight + 1,
+                visible: el.checkVisibility()});
+    } } };
+  walk(document, document.documentElement); return out; }"""
+
+
+@pytest.mark.parametrize("size", [(1280, 720), (1366, 768)], ids=["1280x720", "1366x768"])
+def test_a_projector_shows_the_stack_s_explanation_whole(browser, app_server, artifacts, size):
+    """Presentation mode: the Stack scene's explanation, under its player, ran off a 1280x720
+    screen (its first line was left). A short one stands beside the player there: whole inside
+    the window, its box showing all of it, the player's buttons whole beside it."""
+    base, _ = app_server
+    width, height = size
+    url = f"{base}/app?present=1&scene=stack"
+    context, page, errors = open_page(browser, url, viewport=size)
+    try:
+        page.wait_for_timeout(800)
+        (caption,) = [c for c in page.evaluate(STACK_CAPTION_JS) if c["visible"]]
+        assert caption["top"] >= 0 and caption["bottom"] <= height, caption
+        assert caption["right"] <= width, caption
+        assert caption["all_shown"], caption  # (its box clips nothing, needs no scrolling)
+        assert caption["held_top"] <= caption["top"] and caption["bottom"] <= caption["held_bottom"]
+        # the player's nine buttons whole, left of the explanation (squeezed by it, they ran
+        # out of the player, over the sidebar's edge and under the text)
+        buttons = [b for b in deep_query(page, PLAYER_BUTTONS) if b["visible"]]
+        assert len(buttons) == 9, buttons
+        assert all(b["left"] >= 330 and b["right"] <= caption["left"] for b in buttons), buttons
+        page.screenshot(path=artifacts / f"presentation_stack_caption_{width}x{height}.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
 @pytest.mark.parametrize("scene", ["drop", "stack"])
 def test_a_laptop_shows_the_plots_the_balls_and_the_player_without_scrolling(
     browser, app_server, artifacts, scene
