@@ -46,6 +46,7 @@ from .scene import (
     player_for_a_room,
     readable,
 )
+from .steps import STEPS
 from .worksheet import drop_csv
 
 FLIGHT_FRAMES = 240  # evenly spread over the drop
@@ -244,8 +245,10 @@ def heights_and_stage(heights, animation, presentation: bool) -> pn.viewable.Vie
 # 193 px of data (the summary and the header took the rest of the screen).
 PROJECTOR_PLOT_HEIGHT = 370
 # ... and under a lesson's revealed answer, which stands for the summary but is taller (a line
-# of 30 px text and the step's aside, above the tabs): the player stays on the screen
-PROJECTOR_PLOT_UNDER_ANSWER = 290
+# of 30 px text, 70 px, and the step's aside if it has one, two lines more, above the tabs): the
+# player stays on the screen
+PROJECTOR_PLOT_UNDER_ANSWER = 340
+PROJECTOR_PLOT_UNDER_ANSWER_AND_ASIDE = 290
 # the drop's stage there, beside the heights and the player, as tall as both: 220 x 290 beside
 # the heights alone, its balls were small for a room (the player's row, beside the trails box,
 # left the width unused)
@@ -317,7 +320,12 @@ class DropScene(Scene):
     def _fit_projector(self) -> None:
         """The heights' and the stage's heights on a projector: under the one-line summary,
         or under a lesson's answer (:data:`PROJECTOR_PLOT_UNDER_ANSWER`)."""
-        height = PROJECTOR_PLOT_HEIGHT if self.summary.visible else PROJECTOR_PLOT_UNDER_ANSWER
+        if self.summary.visible:
+            height = PROJECTOR_PLOT_HEIGHT
+        elif STEPS[self.state.step - 1].aside:  # (the summary is hidden in a lesson's step)
+            height = PROJECTOR_PLOT_UNDER_ANSWER_AND_ASIDE
+        else:
+            height = PROJECTOR_PLOT_UNDER_ANSWER
         if self.heights.height != height:
             self.heights.height = height
             self.animation.height = height + PROJECTED_PLAYER_HEIGHT
