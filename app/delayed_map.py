@@ -41,6 +41,7 @@ from bokeh.models import (
     FixedTicker,
     HoverTool,
 )
+from bokeh.palettes import viridis
 from holoviews.operation import contours
 from scipy import ndimage
 
@@ -68,6 +69,9 @@ MOST_PIXELS = 400  # per axis, of a cube not evenly spaced in log10 (log_grid)
 SMALLEST_OUTLINED = 4  # cells: a delayed-rebound patch smaller than this is not outlined
 PROJECTOR_MAP_HEIGHT = 490  # presentation mode (scene.py): both axes and the colour bar in 720 px
 RATIO_CENTRES = {"h2_over_h1": 1.0, "h1_over_icm": 1.0}
+# whole numbers: coloured one colour each (:func:`count_palette`), not a gradient whose shades
+# between two counts stand for nothing
+COUNTS = ("contacts_first",)
 # the choice's words for a variable where the cube's long name is too long for it (the select
 # showed "number of ball-ball contact intervals bef"); the colour bar keeps the long name
 CHOICE_LABELS = {"contacts_first": "ball contacts before h1"}
@@ -190,9 +194,15 @@ def slice_image(slice_: xr.Dataset, variable: str) -> tuple[tuple, tuple[float, 
     """The slice's ``variable`` on the map's log grid (log10 mu, log10 tau_ratio, the values
     with rows tau_ratio and columns mu: :func:`on_log_grid`), and its colour limits: for a
     ratio, symmetric about 1 on a log scale out to the 98th percentile (so that outliers do
-    not wash it out); for the others the values' own range, as HoloViews would take it."""
+    not wash it out); for a count, half a count beyond its smallest and largest (a band of
+    :func:`count_palette` each); for the others the values' own range, as HoloViews would take
+    it."""
     values = slice_[variable].transpose("tau_ratio", "mu").values
     shown = on_log_grid(slice_, values)
+    if variable in COUNTS:
+        finite = shown[2][np.isfinite(shown[2])]
+        low, high = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+        return shown, (round(low) - 0.5, round(high) + 0.5)  # (count_palette)
     if variable not in RATIO_CENTRES:
         finite = shown[2][np.isfinite(shown[2])]
         return shown, (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
@@ -202,12 +212,49 @@ def slice_image(slice_: xr.Dataset, variable: str) -> tuple[tuple, tuple[float, 
     return shown, (10**-spread, 10**spread)
 
 
-def outline_path(flags: xr.DataArray) -> hv.Contours:
-    """The outline of delayed rebounds (``flags``: h2 > h1 over mu and tau_ratio), as paths
-    on the log grid."""
-    delayed = outlined(flags.transpose("tau_ratio", "mu").values)
-    image = hv.Image(on_log_grid(flags, delayed.astype(float)), ["log_mu", "log_tau_ratio"])
-    return contours(image, levels=[0.5])
+def count_palette(low: float, high: float) -> list[str]:
+    """One colour for each whole number from ``low + 0.5`` to ``high - 0.5`` (a count's colour
+    limits, :func:`slice_image`): each count a band of its own, centred on its tick."""
+    return list(viridis(max(1, round(high - low))))
+
+
+def count_ticker() -> BasicTicker:
+    """A count's colour-bar ticks: whole numbers only, each count's up to a dozen (a new model
+    each time, as :func:`ratio_colorbar`)."""
+    return BasicTicker(min_interval=1, desired_num_ticks=12)
+
+
+# a cell whose delayed-rebound flag disagrees with the sign of log10(h2/h1) (a patch too small
+# to outline, :func:`outlined`, or a ratio missing) counts as this far on the flag's side
+FLAG_SIDE = 0.05
+
+
+def rebound_field(flags: xr.DataArray, ratio: xr.DataArray) -> np.ndarray:
+    """log10(h2/h1) over (tau_ratio, mu), > 0 exactly where :func:`outlined` keeps a delayed
+    rebound: its zero level is the outline, found between cells by interpolation."""
+    kept = outlined(flags.transpose("tau_ratio", "mu").values)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        field = np.log10(ratio.transpose("tau_ratio", "mu").values.astype(float))
+    agrees = np.isfinite(field) & ((field > 0) == kept)
+    return np.where(agrees, field, np.where(kept, FLAG_SIDE, -FLAG_SIDE))
+
+
+def outline_path(flags: xr.DataArray, ratio: xr.DataArray) -> hv.Contours:
+    """The outline of delayed rebounds (``flags``: h2 > h1 over mu and tau_ratio; ``ratio``:
+    h2/h1), as paths on the map's log axes.
+
+    Marching squares on the cube's own points, each at its cell's centre (log10 mu, log10
+    tau_ratio), on log10(h2/h1) (:func:`rebound_field`): each vertex lies where the ratio,
+    interpolated between two neighbouring points, crosses 1. Drawn on the image's pixels, the
+    Hertz cubes' (cells evenly spaced in mu, so several pixels wide on a log axis) outlines
+    followed the cells' edges, staircases of right angles; and the flags alone, 0 or 1, put
+    every vertex half-way between two points."""
+    field = rebound_field(flags, ratio)
+    mesh = hv.QuadMesh(
+        (np.log10(flags["mu"].values), np.log10(flags["tau_ratio"].values), field),
+        ["log_mu", "log_tau_ratio"],
+    )
+    return contours(mesh, levels=[0.0])
 
 
 @functools.lru_cache(maxsize=256)  # shared by every session, as the slices are
@@ -216,10 +263,10 @@ def outline_of(name: str, eps: float, drop: tuple[float, float | None] | None) -
     of the slice computed for that drop. (HoloViews' contour operation is most of an eps move's
     cost: every session moving eps asks for the same few outlines.)"""
     if drop is None:
-        flags = shown_cube(name)["delayed_rebound"].sel(eps=eps)
+        shown = shown_cube(name)[["delayed_rebound", "h2_over_h1"]].sel(eps=eps)
     else:
-        flags = computed_slice(eps, *drop)["delayed_rebound"]
-    return outline_path(flags)
+        shown = computed_slice(eps, *drop)
+    return outline_path(shown["delayed_rebound"], shown["h2_over_h1"])
 
 
 def _decade_ticks(cube: xr.Dataset) -> dict[str, list[tuple[float, str]]]:
@@ -433,7 +480,9 @@ class MapScene(Scene):
         if drawn.shape != shown.shape:
             return False
         source.data = {**source.data, "image": [on_screen(shown)]}
-        mapper.update(low=clim[0], high=clim[1])
+        # (a count's bands, one a count: their number follows the slice's)
+        bands = {"palette": count_palette(*clim)} if self.variable in COUNTS else {}
+        mapper.update(low=clim[0], high=clim[1], **bands)
         path = self._outline_of_slice()
         self._outline_source.data = {
             "xs": [path.dimension_values(0)] if len(path) else [],
@@ -560,10 +609,14 @@ class MapScene(Scene):
             clim = (0.5, 2.0) if ratio else None
         if ratio:
             opts = dict(cmap="RdBu_r", logz=True, clim=clim, colorbar_opts=ratio_colorbar())
+        elif variable in COUNTS and clim is not None:
+            # a colour a count, its tick at the middle of its band: whole numbers only
+            opts = dict(cmap=count_palette(*clim), logz=False, clim=clim)
+            opts["colorbar_opts"] = {"ticker": count_ticker()}
         else:
             opts = dict(cmap="viridis", logz=False, clim=clim or (np.nan, np.nan))
-            if variable == "contacts_first":  # a count: whole numbers on its colour bar
-                opts["colorbar_opts"] = {"ticker": BasicTicker(min_interval=1)}
+            if variable in COUNTS:  # (a blank: its palette comes with the slice, _push_slice)
+                opts["colorbar_opts"] = {"ticker": count_ticker()}
         return image.opts(
             colorbar=True,
             colorbar_position=self._colorbar_position(),

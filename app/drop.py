@@ -46,6 +46,7 @@ from .scene import (
     player_for_a_room,
     readable,
 )
+from .steps import STEPS
 from .worksheet import drop_csv
 
 FLIGHT_FRAMES = 240  # evenly spread over the drop
@@ -237,11 +238,23 @@ def heights_and_stage(heights, animation, presentation: bool) -> pn.viewable.Vie
     return pn.FlexBox(*panes, sizing_mode="stretch_width", flex_wrap="wrap")
 
 
-PROJECTOR_PLOT_HEIGHT = 290  # presentation mode (scene.py): plots and player within 720 px
-# ... and the drop's stage there, beside the heights and the player, as tall as both: 220 x 290
-# beside the heights alone, its balls were small for a room (the player's row, beside the
-# trails box, left the width unused)
-PROJECTOR_STAGE = {"width": 270, "height": PROJECTOR_PLOT_HEIGHT + PROJECTED_PLAYER_HEIGHT}
+# Presentation mode (scene.py), 1280 x 720: under the header (80 px) and the tabs (60) a one-line
+# summary (:meth:`DropScene._projected_text`, 40 px), the heights, the player (112) and the row
+# of the trails box, Pin and Download (50): the heights get 370 px, their data area 270 of them
+# (the legend's row above it, the time axis below). With the three-line summary they had 290,
+# 193 px of data (the summary and the header took the rest of the screen).
+PROJECTOR_PLOT_HEIGHT = 370
+# ... and under a lesson's revealed answer, which stands for the summary but is taller (a line
+# of 30 px text, 70 px, and the step's aside if it has one, two lines more, above the tabs): the
+# player stays on the screen
+PROJECTOR_PLOT_UNDER_ANSWER = 340
+PROJECTOR_PLOT_UNDER_ANSWER_AND_ASIDE = 290
+# the drop's stage there, beside the heights and the player, as tall as both: 220 x 290 beside
+# the heights alone, its balls were small for a room (the player's row, beside the trails box,
+# left the width unused)
+PROJECTOR_STAGE_WIDTH = 270
+# the projected summary: one line, no paragraph margin under it (Panel's 20 px)
+PROJECTED_SUMMARY_CSS = ":host p { margin-bottom: 0; }"
 
 
 class DropScene(Scene):
@@ -290,8 +303,9 @@ class DropScene(Scene):
         for fig in (self.heights, self.animation):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # 1280x720: under the header, tabs and summary, the player
-            self.heights.height = PROJECTOR_PLOT_HEIGHT
-            self.animation.update(**PROJECTOR_STAGE)
+            self.summary.stylesheets = [*self.summary.stylesheets, PROJECTED_SUMMARY_CSS]
+            self.animation.width = PROJECTOR_STAGE_WIDTH
+            self._answer_replaces_summary()  # (and the plots' heights: _fit_projector)
 
     @param.depends("state.revealed", "state.step", watch=True)
     def _answer_replaces_summary(self) -> None:
@@ -300,6 +314,23 @@ class DropScene(Scene):
         was pushed below a 720 px screen."""
         s = self.state
         self.summary.visible = not (s.presentation and s.step > 0 and s.revealed)
+        if s.presentation:
+            self._fit_projector()
+
+    def _fit_projector(self) -> None:
+        """The heights' and the stage's heights on a projector: under the one-line summary,
+        or under a lesson's answer (:data:`PROJECTOR_PLOT_UNDER_ANSWER`)."""
+        if self.summary.visible:
+            height = PROJECTOR_PLOT_HEIGHT
+        elif STEPS[self.state.step - 1].aside:  # (the summary is hidden in a lesson's step)
+            height = PROJECTOR_PLOT_UNDER_ANSWER_AND_ASIDE
+        else:
+            height = PROJECTOR_PLOT_UNDER_ANSWER
+        if self.heights.height != height:
+            self.heights.height = height
+            self.animation.height = height + PROJECTED_PLAYER_HEIGHT
+            if self.active:  # (the apex labels' offsets depend on the plot's height)
+                self.redraw_now()
 
     def _heights_figure(self):
         fig = figure(
@@ -517,11 +548,39 @@ class DropScene(Scene):
         return io.StringIO(drop_csv(self.result, self.plotted, units))
 
     def _summary_text(self) -> str:
+        if self.state.presentation:
+            return self._projected_text()
         text = self._drop_text(self.result)
         if self.pinned is not None:
             pinned = self._drop_text(self.pinned.result).split("  \n")[0]
             text = f"**Now:** {text}  \n**Pinned (dashed),** {self.pinned.label}: {pinned}"
         return text
+
+    def _projected_text(self) -> str:
+        """The summary on a projector: one line, the apexes and the verdict (the drop height
+        and the ICM apex are the plot's dashed and dotted lines, which the teacher names; an
+        apex below 0 is said so, the teacher says why), or with a pinned drop both ratios."""
+        r = self.result
+        if self.pinned is not None:
+            pinned = self.pinned.result
+            ratios = [
+                "no h2" if drop.h2 is None else f"h2/h1 = {drop.h2_over_h1:.3g}"
+                for drop in (r, pinned)
+            ]
+            return f"**Now:** {ratios[0]}; **pinned (dashed):** {ratios[1]}"
+        if not r.success:
+            return "**The solver could not finish this drop:** move a slider a little."
+        units = units_named(self.state.units)
+
+        def apex(name: str, height: float | None) -> str:
+            if height is None:
+                return f"no {name}"
+            return f"{name} = {units.height(height)}" + (" (below 0)" if height < 0 else "")
+
+        if r.h2 is None:
+            return f"{apex('h1', r.h1)}, no second bounce"
+        verdict = "**delayed rebound** (h2 > h1)" if r.delayed_rebound else "no delayed rebound"
+        return f"{apex('h1', r.h1)}, {apex('h2', r.h2)}, h2/h1 = {r.h2_over_h1:.3g}: {verdict}"
 
     def _drop_text(self, r: twoball.Result) -> str:
         units = units_named(self.state.units)
@@ -572,7 +631,7 @@ class DropScene(Scene):
         )
 
     def _projected_layout(self) -> pn.viewable.Viewable:
-        """On a projector: the stage beside the heights and the player (:data:`PROJECTOR_STAGE`),
+        """On a projector: the stage beside the heights and the player (:meth:`_fit_projector`),
         the trails box, Pin and Download in a row below."""
         plots = pn.Column(
             pn.pane.Bokeh(self.heights, sizing_mode="stretch_width"),

@@ -37,6 +37,24 @@ PROJECTED_CHOICES = (
 )
 
 
+# A phone (narrower than 768 px: PAGE_CSS in app/explorer.py) shows the card below the scene
+# and the controls. After a reveal the page scrolled down to the card's answer, past the plot it
+# talks about: the student read "it rises to 8.8 m" with the plot out of sight above. Decided:
+# on a phone the answer stands above the scene, where the question was (as the step's aside
+# already does), the page scrolled to its top, and the scene's plot follows it; the card keeps
+# the step's title and Previous/Next (below, where the student scrolls on to, after the plot).
+# Not the plot at the top with the answer under it: the answer then lay under the whole scene
+# (the animation and the player come between), a screen and more below the plot. A laptop's
+# and a projector's card beside the scene keep the answer. Two alerts of the same text, each
+# shown at its own widths (a Panel pane has one place in a page).
+PHONE = "@media (max-width: 767px) { :host { display: none !important; } }"
+WIDE = "@media (min-width: 768px) { :host { display: none !important; } }"
+# Reveal's label: while it waits for a prediction (disabled), it says what it waits for (a
+# greyed "Reveal the answer" left a student pressing it, not knowing why nothing happened)
+REVEAL = "Reveal the answer"
+CHOOSE_FIRST = "Choose an answer first"
+
+
 class Lesson(Built):
     """The lesson's card: the step's text, its question, reveal, previous and next."""
 
@@ -74,11 +92,13 @@ class Lesson(Built):
             sizing_mode="stretch_width",
             stylesheets=[":host label { white-space: normal; }"],  # long answers wrap, not cut
         )
-        self.reveal = pn.widgets.Button(label="Reveal the answer", color="primary")
+        self.reveal = pn.widgets.Button(label=REVEAL, color="primary")
         # (the page scrolls to it after a reveal: lesson.js)
         self.answer = alert(
             "", visible=False, sizing_mode="stretch_width", css_classes=["twoball-answer"]
         )
+        # ... and on a phone, above the scene (made with the step's widgets)
+        self.answer_above: pn.pane.Alert | None = None
         self.previous = pn.widgets.Button(label="< Previous", width=110)
         self.next = pn.widgets.Button(label="Next >", color="primary", width=110)
         # a step changes the drop, and with it the scenes' Bokeh models: on the next tick,
@@ -156,7 +176,14 @@ class Lesson(Built):
             self._before = {}
 
     def _chosen(self, event: param.parameterized.Event) -> None:
-        self.reveal.disabled = self._waits_for_a_choice() or self.answer.visible
+        self._offer_reveal()
+
+    def _offer_reveal(self) -> None:
+        """Reveal enabled once it can be pressed; while it waits for a choice, saying so."""
+        waiting = self._waits_for_a_choice()
+        self.reveal.param.update(
+            disabled=waiting or self.answer.visible, label=CHOOSE_FIRST if waiting else REVEAL
+        )
 
     def _waits_for_a_choice(self) -> bool:
         """A student alone predicts first (the answer waits for a choice); in front of a class
@@ -178,11 +205,12 @@ class Lesson(Built):
             verdict = "Right."
         else:
             verdict = f"Not quite: {correct.lower()}."
-        self.answer.param.update(
-            object=f"**{verdict}** {shown.explanation}",
-            alert_type="success" if self.choices.value == correct else "warning",
-            visible=True,
-        )
+        for answer in self._answers():
+            answer.param.update(
+                object=f"**{verdict}** {shown.explanation}",
+                alert_type="success" if self.choices.value == correct else "warning",
+                visible=True,
+            )
         self.answer_line.param.update(
             # (one line: a choice's gloss after its colon is left to the card's explanation)
             object=f"**Answer: {correct.split(':')[0]}**",
@@ -201,7 +229,8 @@ class Lesson(Built):
         if self._asking is not None:
             for widget in (self.choices, self.reveal, self.previous, self.next):
                 widget.visible = lesson_on
-            self.answer.visible = self.answer_line.visible = self.aside.visible = False
+            for shown in (*self._answers(), self.answer_line, self.aside):
+                shown.visible = False
         if not lesson_on:
             self.heading.object = (
                 "A guided path through the demonstration in six steps: predict, then see."
@@ -215,7 +244,7 @@ class Lesson(Built):
         self.question.object = f"**{shown.question}**"
         self._place_title()
         self.choices.param.update(options=list(shown.choices), value=None, disabled=False)
-        self.reveal.disabled = self._waits_for_a_choice()
+        self._offer_reveal()
         self.previous.disabled = step == 1
         self.next.label = "Next >" if step < len(STEPS) else "End the lesson"
 
@@ -235,11 +264,30 @@ class Lesson(Built):
         # on a projector the buttons come first, under the step's title: the long answer in
         # the narrow sidebar had pushed Next below a 720 px screen (to y 1303 on step 1), and
         # the class reads the one-line answer in the main area, the teacher the rest
-        self._stage.objects = [self._asking, self.answer_line, self.aside]
+        if not self.state.presentation:  # (whose answer above the scene is one large line)
+            self._place_answer_by_width()
+        above = [] if self.answer_above is None else [self.answer_above]  # (a phone's)
+        self._stage.objects = [self._asking, *above, self.answer_line, self.aside]
         if self.state.presentation:
             self._steps.objects = [self._buttons(), self.answer]
         else:
             self._steps.objects = [self.answer, self._buttons()]
+
+    def _place_answer_by_width(self) -> None:
+        """The answer in the card beside the scene, and on a phone above it (:data:`PHONE`)."""
+        self.answer.stylesheets = [*self.answer.stylesheets, PHONE]
+        self.answer_above = alert(
+            "",
+            visible=False,
+            sizing_mode="stretch_width",
+            css_classes=["twoball-answer", "twoball-answer-above"],
+            margin=(5, 10),
+        )
+        self.answer_above.stylesheets = [*self.answer_above.stylesheets, WIDE]
+
+    def _answers(self) -> list[pn.pane.Alert]:
+        """The answer's alerts: the card's, and a phone's above the scene (:data:`PHONE`)."""
+        return [self.answer] + ([] if self.answer_above is None else [self.answer_above])
 
     def _buttons(self) -> pn.Row:
         """Previous and Next, a row that the page scrolls to after a reveal (lesson.js), but on

@@ -43,6 +43,7 @@ from .drop import (
     underneath,
 )
 from .scene import (
+    PROJECTED_PLAYER_HEIGHT,
     Folded,
     Scene,
     Text,
@@ -76,6 +77,17 @@ CAPTION_HELP = (
     "below it. The stack's sliders are in the side panel, in place of the two-ball ones; it "
     "shares their drop height H (advanced). Heights here are always dimensionless."
 )
+
+# ... and on a projector, beside the player: below it the whole text ran off a 1280x720 screen
+# (under the summary, plots and player only its first line was left). Shorter there (the
+# summary names the dotted green line; the sliders' place and the dimensionless heights are the
+# teacher's to say), in a box as tall as the player that scrolls if a screen draws it longer,
+# never cut.
+PROJECTED_CAPTION = (
+    "Each ball is *ratio* times as heavy as the one below it; the animation slows down "
+    "through each collision."
+)
+PROJECTED_CAPTION_CSS = ":host { overflow-y: auto; } :host p { margin: 0; }"
 
 
 PROJECTOR_PLOT_HEIGHT = 300  # presentation mode (scene.py): plots and player in 720 px, with
@@ -471,5 +483,17 @@ class StackScene(Scene):
         self._plots = plots
         self._draw()
         self._dim()
+        if self.state.presentation:
+            caption = pn.pane.Markdown(
+                PROJECTED_CAPTION,
+                height=PROJECTED_PLAYER_HEIGHT,
+                sizing_mode="stretch_width",
+                stylesheets=[PROJECTED_CAPTION_CSS],
+                styles={"flex": "1 1 0", "min-width": "0"},  # (the player keeps its width)
+                css_classes=["twoball-stack-caption"],
+            )
+            self.player.styles = {"flex": "none"}  # (squeezed, its buttons ran out of it)
+            player = pn.Row(self.player, caption, sizing_mode="stretch_width")
+            return pn.Column(self.summary, plots, player, sizing_mode="stretch_width")
         caption = pn.pane.Markdown(CAPTION_HELP, sizing_mode="stretch_width")
         return pn.Column(self.summary, plots, self.player, caption, sizing_mode="stretch_width")

@@ -3,7 +3,8 @@
 // long answer had pushed the card on, and the next step opened scrolled to its last choice
 // (a phone, a laptop) or with its buttons below the screen (a projector). The card is redrawn
 // by the server, so this waits for it. On a projector the buttons lie above the answer: the
-// card then shows from the step's title.
+// card then shows from the step's title. On a phone the answer stands above the scene: the page
+// shows it from its top, the scene's plot after it.
 (() => {
   const find = (root, selector) => {
     const hit = root.querySelector(selector);
@@ -11,6 +12,18 @@
     for (const el of root.querySelectorAll("*")) {
       if (el.shadowRoot) {
         const inner = find(el.shadowRoot, selector);
+        if (inner) return inner;
+      }
+    }
+    return null;
+  };
+  // The first match shown (a phone shows the answer above the scene, a wider screen the
+  // card's: both are in the page, one hidden by its width, app/lesson.py)
+  const findShown = (root, selector) => {
+    for (const el of root.querySelectorAll("*")) {
+      if (el.matches(selector) && el.checkVisibility()) return el;
+      if (el.shadowRoot) {
+        const inner = findShown(el.shadowRoot, selector);
         if (inner) return inner;
       }
     }
@@ -50,7 +63,7 @@
     const tick = () => {
       if (mine !== showing || userMoved) return stop();
       const now = performance.now();
-      const answer = find(document, ".twoball-answer");
+      const answer = findShown(document, ".twoball-answer");
       const buttons = find(document, ".twoball-step-buttons");
       const drawn = answer && buttons && answer.getBoundingClientRect().height > 0;
       if (!drawn) {
@@ -65,7 +78,12 @@
         // step's title and the buttons below it, the answer's end left below the screen.
         const title = find(document, ".twoball-step-title");
         const above = buttons.getBoundingClientRect().top < top;
-        if (above && title) {
+        // A phone's answer stands above the scene it talks about (app/lesson.py): from its
+        // top, the scene's plot following it; the card's buttons come after the scene.
+        if (answer.classList.contains("twoball-answer-above")) {
+          answer.style.scrollMarginTop = `${margin}px`;
+          answer.scrollIntoView({block: "start", inline: "nearest", behavior: "instant"});
+        } else if (above && title) {
           title.style.scrollMarginTop = `${margin}px`;
           title.scrollIntoView({block: "start", inline: "nearest", behavior: "instant"});
         } else {

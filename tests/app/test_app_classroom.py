@@ -283,6 +283,47 @@ def test_a_projector_gives_the_drop_animation_room(browser, app_server, artifact
         context.close()
 
 
+# each Bokeh figure's data area (its frame, inside the axes, title and legend) in page px
+FRAMES_JS = """() => [...Bokeh.index.all_views()]
+  .filter((v) => v.model.constructor.__name__ === "Figure" && v.el.checkVisibility())
+  .map((v) => { const box = v.el.getBoundingClientRect(), frame = v.frame.bbox;
+    return {width: frame.width, height: frame.height, top: box.top + frame.top,
+            bottom: box.top + frame.bottom, figure: box.height}; })"""
+
+
+@pytest.mark.browser
+def test_a_projector_gives_the_drop_heights_their_data_room(browser, app_server, artifacts):
+    """Presentation mode at 1280x720: the heights' data area was 193 px tall, under a summary
+    of three lines and the 80 px header (the plot 290 px of the 720). The summary is one line
+    there and the plot 370 px: 720 less the header (80), the tabs (60), the summary (40), the
+    player (112) and the row of the trails box, Pin and Download (50) leave the plot 370, less
+    its legend's row (35) and time axis (65): 270 px of data. At least 260 (a third more than
+    it had, 10 px for fonts that draw a little larger), with the player, that row and the stage
+    whole inside the window."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?present=1", viewport=(1280, 720))
+    try:
+        page.wait_for_timeout(800)
+        frames = page.evaluate(FRAMES_JS)
+        heights = max(frames, key=lambda f: f["width"])  # (the stage beside it is 270 wide)
+        assert heights["height"] >= 260, frames
+        assert heights["top"] >= 140 and heights["bottom"] <= 720, heights
+        players = [b for b in deep_query(page, "button.play, button.pause") if b["visible"]]
+        assert len(players) == 2 and all(b["bottom"] <= 720 - 20 for b in players), players
+        row = [b for b in deep_query(page, "button, label") if b["visible"] and b["left"] > 330]
+        row = [b for b in row if b["text"].startswith(("trails", "Pin this", "Download this"))]
+        assert len(row) == 3 and all(b["bottom"] <= 720 for b in row), row
+        stage = max(plots_on(page), key=lambda c: c["left"])
+        assert stage["bottom"] <= 720 and stage["right"] <= 1280, stage
+        # one line of summary (its three lines took 106 px)
+        summary = [p for p in deep_query(page, "p") if p["text"].startswith("h1 = ")]
+        assert len(summary) == 1 and summary[0]["height"] < 40, summary
+        page.screenshot(path=artifacts / "presentation_drop_data_room.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
 # each apex label of the drop's heights as drawn: [text, left, top, right, bottom] in canvas
 # px, from the label's anchor (BokehJS's view), offsets, alignment and the text's measured width
 APEX_LABELS_JS = """() => {
@@ -398,6 +439,52 @@ def test_presentation_mode_shows_each_scene_on_one_screen(
         shots = artifacts / "projector"
         shots.mkdir(exist_ok=True)
         page.screenshot(path=shots / f"{scene}-{width}x{height}.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
+PLAYER_BUTTONS = (
+    "button.slower, button.first, button.previous, button.reverse, button.pause, button.play, "
+    "button.next, button.last, button.faster"
+)
+# the Stack scene's explanation ("Each ball is ratio times ..."): each paragraph's box, and the
+# box that holds it (its pane's): whether it shows all of it (nothing clipped or scrolled away)
+STACK_CAPTION_JS = """() => { const out = []; const walk = (root, host) => {
+  for (const el of root.querySelectorAll("*")) {
+    if (el.shadowRoot) walk(el.shadowRoot, el);
+    if (el.tagName === "P" && el.innerText.startsWith("Each ball is")) {
+      const box = el.getBoundingClientRect(), held = host.getBoundingClientRect();
+      out.push({top: box.top, bottom: box.bottom, left: box.left, right: box.right,
+                held_top: held.top,
+                held_bottom: held.bottom, all_shown: host.scrollHeight <= host.clientHeight + 1,
+                visible: el.checkVisibility()});
+    } } };
+  walk(document, document.documentElement); return out; }"""
+
+
+@pytest.mark.parametrize("size", [(1280, 720), (1366, 768)], ids=["1280x720", "1366x768"])
+def test_a_projector_shows_the_stack_s_explanation_whole(browser, app_server, artifacts, size):
+    """Presentation mode: the Stack scene's explanation, under its player, ran off a 1280x720
+    screen (its first line was left). A short one stands beside the player there: whole inside
+    the window, its box showing all of it, the player's buttons whole beside it."""
+    base, _ = app_server
+    width, height = size
+    url = f"{base}/app?present=1&scene=stack"
+    context, page, errors = open_page(browser, url, viewport=size)
+    try:
+        page.wait_for_timeout(800)
+        (caption,) = [c for c in page.evaluate(STACK_CAPTION_JS) if c["visible"]]
+        assert caption["top"] >= 0 and caption["bottom"] <= height, caption
+        assert caption["right"] <= width, caption
+        assert caption["all_shown"], caption  # (its box clips nothing, needs no scrolling)
+        assert caption["held_top"] <= caption["top"] and caption["bottom"] <= caption["held_bottom"]
+        # the player's nine buttons whole, left of the explanation (squeezed by it, they ran
+        # out of the player, over the sidebar's edge and under the text)
+        buttons = [b for b in deep_query(page, PLAYER_BUTTONS) if b["visible"]]
+        assert len(buttons) == 9, buttons
+        assert all(b["left"] >= 330 and b["right"] <= caption["left"] for b in buttons), buttons
+        page.screenshot(path=artifacts / f"presentation_stack_caption_{width}x{height}.png")
         assert errors == []
     finally:
         context.close()

@@ -9,6 +9,7 @@ from appdriver import deep_query, open_page, page_query
 from playwright.sync_api import expect
 
 import twoball
+from app.lesson import CHOOSE_FIRST
 from app.state import ExplorerState, read_query
 from app.steps import STEPS
 from twoball import presets
@@ -96,8 +97,9 @@ def test_the_lesson_asks_before_it_answers_and_walks_the_scenes(browser, app_ser
             query = page_query(page)
             assert query["scene"] == step.scene
             assert float(query["mu"]) == pytest.approx(step.drop["mu"], rel=1e-11)
+            waiting = page.get_by_role("button", name=CHOOSE_FIRST)
+            expect(waiting).to_be_disabled()  # a prediction first, and it says so
             reveal = page.get_by_role("button", name="Reveal the answer")
-            expect(reveal).to_be_disabled()  # a prediction first
             # the question and every choice whole in the main area, larger than the sidebar's
             # text, in place of the covered scene (they sat in the 300 px sidebar beside an
             # empty main area); a long choice wraps, not cut
@@ -108,15 +110,15 @@ def test_the_lesson_asks_before_it_answers_and_walks_the_scenes(browser, app_ser
             assert len(labels) == len(step.choices)
             assert all(c["left"] > 330 and c["right"] <= 1366 for c in labels), labels
             assert all(c["bottom"] <= 768 and c["font"] >= 17 for c in labels), labels
-            expect(reveal).to_be_in_viewport(ratio=1)
-            assert reveal.bounding_box()["x"] > 330
+            expect(waiting).to_be_in_viewport(ratio=1)
+            assert waiting.bounding_box()["x"] > 330
             assert _scene_canvases(page) == []  # the scene is covered
             if number == 1:
                 page.screenshot(path=shots / "step1-laptop-asked.png")
             page.get_by_text(step.choices[step.answer], exact=True).click()
             expect(reveal).to_be_enabled()
             reveal.click()
-            page.get_by_text("Right.").wait_for()
+            _answer(page).wait_for()
             expect(question).to_be_hidden()
             page.wait_for_timeout(1500)  # the scene's plots follow the step's drop
             if step.scene != "accuracy":  # (computed in the background, drawn when done)
@@ -150,7 +152,7 @@ def test_every_step_opens_from_its_url(browser, app_server, artifacts, size):
             expect(page.get_by_text(step.question, exact=True)).to_be_visible()
             page.get_by_text(step.choices[step.answer], exact=True).click()
             page.get_by_role("button", name="Reveal the answer").click()
-            page.get_by_text("Right.").wait_for()
+            _answer(page).wait_for()
             page.wait_for_timeout(1000)
             if size == "phone":  # nothing scrolls sideways
                 width = page.evaluate("() => document.documentElement.scrollWidth")
@@ -176,7 +178,7 @@ def test_a_presentation_clicker_drives_the_lesson(browser, app_server, artifacts
         page.get_by_text(STEPS[0].choices[STEPS[0].answer], exact=True).click()
         expect(page.get_by_role("button", name="Reveal the answer")).to_be_enabled()
         page.keyboard.press("PageDown")
-        page.get_by_text("Right.").wait_for()  # revealed
+        _answer(page).wait_for()  # revealed
         page.keyboard.press("PageDown")
         page.get_by_text(title.format(2)).wait_for()
         page.keyboard.press("PageUp")
@@ -201,6 +203,12 @@ def test_a_presentation_clicker_drives_the_lesson(browser, app_server, artifacts
         assert errors == []
     finally:
         context.close()
+
+
+def _answer(page):
+    """The revealed answer shown (a phone's above the scene, else the card's: both are in the
+    page, each hidden at the other's widths)."""
+    return page.get_by_text("Right.").filter(visible=True)
 
 
 def _font_px(page, text: str) -> float:
@@ -273,8 +281,9 @@ def test_a_projected_step_asks_large_and_answers_in_one_large_line(
 @pytest.mark.browser
 @pytest.mark.parametrize("size", [(1366, 768), (390, 844)], ids=["laptop", "phone"])
 def test_each_new_step_shows_from_its_title(browser, app_server, artifacts, size):
-    """After a reveal the page shows the buttons below the answer, and after Next the new
-    step's title is on screen (a long answer had pushed the card on, and the next step opened
+    """After a reveal a laptop shows the buttons below the answer (a phone, the answer above the
+    scene: test_a_phone_shows_the_answer_above_the_plot), and after Next the new step's title
+    is on screen (a long answer had pushed the card on, and the next step opened
     scrolled to its last choice: a new user saw only 'About 9 times as high')."""
     base, _ = app_server
     width, height = size
@@ -292,9 +301,10 @@ def test_each_new_step_shows_from_its_title(browser, app_server, artifacts, size
             assert title.bounding_box()["y"] >= header["y"] + header["height"], number
             page.get_by_text(step.choices[step.answer], exact=True).click()
             page.get_by_role("button", name="Reveal the answer").click()
-            page.get_by_text("Right.").wait_for()
+            _answer(page).wait_for()
             following = page.get_by_role("button", name="Next >")
-            expect(following).to_be_in_viewport(ratio=1, timeout=10_000)
+            if width >= 768:  # (a phone shows the answer and the plot: phone test below)
+                expect(following).to_be_in_viewport(ratio=1, timeout=10_000)
             following.click()
         page.screenshot(path=artifacts / "lesson" / f"step4-{width}x{height}.png")
         assert errors == []
@@ -337,7 +347,7 @@ def test_a_phone_shows_the_answer_after_a_reveal_from_a_slow_server(
         while link["held"]:  # in order, with any that come meanwhile
             link["ws"].send(link["held"].pop(0))
         link["held"] = None
-        answer = page.get_by_text("Right.")
+        answer = _answer(page)
         answer.wait_for()
         page.wait_for_timeout(2500)  # the scene drawn, the page scrolled
         header = page.locator("#header").bounding_box()
@@ -389,6 +399,104 @@ def test_a_projected_reveal_keeps_the_step_title_and_its_buttons_on_screen(
                 path=artifacts / "lesson" / f"step{number}-{width}x{height}-revealed.png"
             )
             page.keyboard.press("PageDown")  # on to the next step
+        assert errors == []
+    finally:
+        context.close()
+
+
+# Reveal's text, whether it can be pressed, and whether its words fit it (none cut off)
+REVEAL_JS = """() => { const found = []; const walk = (root) => {
+  for (const el of root.querySelectorAll("*")) {
+    if (el.tagName === "BUTTON" && ["Reveal the answer", "Choose an answer first"]
+        .includes(el.textContent.trim()) && el.checkVisibility()) found.push(el);
+    if (el.shadowRoot) walk(el.shadowRoot);
+  } };
+  walk(document);
+  return found.map((el) => ({text: el.textContent.trim(), disabled: el.disabled,
+    fits: el.scrollWidth <= el.clientWidth + 1 && el.scrollHeight <= el.clientHeight + 1})); }"""
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize(
+    ("size", "query"),
+    [((1366, 768), ""), ((390, 844), ""), ((1280, 720), ""), ((1280, 720), "&present=1")],
+    ids=["laptop", "phone", "projector", "projector-present"],
+)
+def test_reveal_says_that_it_waits_for_a_choice(browser, app_server, artifacts, size, query):
+    """Reveal was disabled until a choice was made, greyed, with nothing saying why: while it
+    waits it reads "Choose an answer first" (whole, on the screen), and once a choice is made,
+    "Reveal the answer". In presentation mode it waits for nothing (the room answers aloud, the
+    teacher reveals): "Reveal the answer" at once."""
+    base, _ = app_server
+    width, height = size
+    step = STEPS[0]
+    context, page, errors = open_page(browser, f"{base}/app?step=1{query}", viewport=size)
+    try:
+        page.get_by_text(step.question, exact=True).wait_for()
+        page.wait_for_timeout(500)
+        shots = artifacts / "lesson"
+        shots.mkdir(exist_ok=True)
+        name = f"reveal-waits-{width}x{height}{query.replace('&present=1', '-present')}"
+        if query:  # presentation mode
+            assert page.evaluate(REVEAL_JS) == [
+                {"text": "Reveal the answer", "disabled": False, "fits": True}
+            ]
+            expect(page.get_by_role("button", name=CHOOSE_FIRST)).to_have_count(0)
+            page.screenshot(path=shots / f"{name}.png")
+            assert errors == []
+            return
+        waiting = page.get_by_role("button", name=CHOOSE_FIRST)
+        expect(waiting).to_be_disabled()
+        waiting.scroll_into_view_if_needed()
+        expect(waiting).to_be_in_viewport(ratio=1)
+        assert page.evaluate(REVEAL_JS) == [{"text": CHOOSE_FIRST, "disabled": True, "fits": True}]
+        box = waiting.bounding_box()
+        assert box["x"] >= 0 and box["x"] + box["width"] <= width, box
+        page.screenshot(path=shots / f"{name}.png")
+        page.get_by_text(step.choices[step.answer], exact=True).click()
+        reveal = page.get_by_role("button", name="Reveal the answer")
+        expect(reveal).to_be_enabled()
+        assert page.evaluate(REVEAL_JS) == [
+            {"text": "Reveal the answer", "disabled": False, "fits": True}
+        ]
+        page.screenshot(path=shots / f"{name}-chosen.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize("number", [1, 4])
+def test_a_phone_shows_the_answer_above_the_plot(browser, app_server, artifacts, number):
+    """At 390x844 the card lies below the scene, and after a reveal the page scrolled down to
+    the card's answer, the plot it talks about out of sight above it. The answer now stands
+    above the scene (app/lesson.py says why), the page scrolled to its top, and the scene's
+    first plot follows it, with only the step's aside and the scene's tabs, caption and
+    summary between; the card keeps Previous and Next, no second copy of the answer shown."""
+    base, _ = app_server
+    step = STEPS[number - 1]
+    context, page, errors = open_page(browser, f"{base}/app?step={number}", viewport=(390, 844))
+    try:
+        page.get_by_text(step.choices[step.answer], exact=True).click()
+        page.get_by_role("button", name="Reveal the answer").click()
+        answer = _answer(page)
+        answer.wait_for()
+        expect(answer).to_have_count(1)
+        page.wait_for_timeout(2500)  # the scene drawn, the page placed
+        header = page.locator("#header").bounding_box()
+        below_header = header["y"] + header["height"]
+        # the alert holding the answer: from its top, just under the header
+        (shown,) = [a for a in deep_query(page, ".twoball-answer") if a["visible"]]
+        assert below_header - 1 <= shown["top"] <= below_header + 40, (shown, below_header)
+        assert shown["bottom"] <= 844, shown  # whole on screen
+        plots = [c for c in _scene_canvases(page) if c["width"] > 300 and c["height"] > 100]
+        first = min(plots, key=lambda c: c["top"])
+        assert first["top"] >= shown["bottom"], (first, shown)  # the plot follows the answer
+        assert first["top"] - shown["bottom"] < 500, (first, shown)  # ... close after it
+        page.screenshot(path=artifacts / "lesson" / f"step{number}-phone-answer-above.png")
+        # Next, further down in the card, leads on
+        page.get_by_role("button", name="Next >").click()
+        page.get_by_text(f"Step {number + 1} of {len(STEPS)}").first.wait_for()
         assert errors == []
     finally:
         context.close()

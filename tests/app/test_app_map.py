@@ -176,6 +176,79 @@ def test_the_map_of_contact_counts_ticks_whole_numbers():
     assert colorbar.ticker.min_interval == 1
 
 
+def _one_band_a_count(scene: MapScene) -> None:
+    """The figure on screen colours each whole number of the slice with a colour of its own:
+    a palette of one colour per count from the smallest to the largest, its limits half a
+    count beyond them (each count's band centred on it, where its tick is)."""
+    counts = scene.slice["contacts_first"].values
+    low, high = int(np.nanmin(counts)), int(np.nanmax(counts))
+    mapper = scene._colour_mapper
+    assert type(mapper).__name__ == "LinearColorMapper"
+    assert (mapper.low, mapper.high) == (low - 0.5, high + 0.5)
+    assert len(mapper.palette) == high - low + 1 == len(set(mapper.palette))
+    # each count's band: the colour the mapper gives it is its own, one a count
+    bands = [int((count - mapper.low) / (mapper.high - mapper.low) * len(mapper.palette))
+             for count in range(low, high + 1)]  # fmt: skip
+    assert bands == list(range(high - low + 1))
+
+
+@pytest.mark.parametrize("force", ["linear", "hertz"])
+def test_the_map_of_contact_counts_is_one_colour_a_count(force):
+    """A count's colours were a smooth gradient (256 shades between 1 and 12 contacts, shades
+    that stand for no count): a band per whole number, also after an eps move (its range of
+    counts changes)."""
+    explorer, scene = map_on_screen({"map_colour": "contacts_first", "map_force": force})
+    scene.current()
+    _one_band_a_count(scene)
+    explorer.state.eps = 0.3 if force == "linear" else 0.55
+    _one_band_a_count(scene)
+    assert_same(sent(scene), drawn_by_holoviews(scene))
+
+
+def _turns(path: hv.Contours) -> np.ndarray:
+    """The angles (degrees) by which an outline turns at each of its vertices (those where it
+    turns at all), over every piece of it (pieces separated by NaN)."""
+    xs, ys = path.dimension_values(0), path.dimension_values(1)
+    cuts = np.flatnonzero(np.isnan(xs))
+    turns = []
+    for x, y in zip(np.split(xs, cuts), np.split(ys, cuts), strict=True):
+        steps = np.diff(np.c_[x, y][np.isfinite(x)], axis=0)
+        steps = steps[np.hypot(*steps.T) > 1e-12]
+        headings = np.arctan2(steps[:, 1], steps[:, 0])
+        turn = np.degrees(np.abs((np.diff(headings) + np.pi) % (2 * np.pi) - np.pi))
+        turns.extend(turn[turn > 1e-6])
+    return np.array(turns)
+
+
+@pytest.mark.parametrize("cube", ["hertz-h1e4", "hertz-h1e2", "map"])
+def test_the_delayed_rebound_outline_is_smooth(cube):
+    """Drawn on the image's pixels, the Hertz maps' outlines followed their cells' edges (the
+    cubes are evenly spaced in mu, their cells several pixels wide on the log axes): right-angle
+    steps, each drawn by marching squares as two 45 degree turns, the median turn 45 degrees.
+    Contoured on the cube's own points through log10(h2/h1), an outline bends a little at
+    each vertex (a median under 10 degrees), and its vertices lie where the ratio crosses 1
+    between two points, not half-way between them."""
+    from app.delayed_map import nearest_eps, outline_of, shown_cube
+
+    eps = nearest_eps(0.9, cube)
+    path = outline_of(cube, eps, None)
+    turns = _turns(path)
+    assert turns.size > 100 and np.median(turns) < 10, np.median(turns)
+    # each vertex on the segment between two neighbouring points, most not at its middle
+    shown = shown_cube(cube).sel(eps=eps)
+    axes = [np.log10(shown[name].values) for name in ("mu", "tau_ratio")]
+    middles = [(axis[1:] + axis[:-1]) / 2 for axis in axes]
+    at_middle = np.zeros(0, dtype=bool)
+    for values, axis, middle in zip(path.columns().values(), axes, middles, strict=False):
+        values = values[np.isfinite(values)]
+        gap = np.diff(axis).min()
+        on_point = np.abs(np.subtract.outer(values, axis)).min(axis=1) < 1e-6 * gap
+        halfway = np.abs(np.subtract.outer(values, middle)).min(axis=1) < 1e-6 * gap
+        at_middle = halfway if at_middle.size == 0 else at_middle | halfway
+        assert on_point.any()
+    assert at_middle.mean() < 0.5, at_middle.mean()
+
+
 def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
     """The map's Hertz force: a slice of hertz-h1e4 (or h1e2, whichever H is nearer the drop's)
     at the eps nearest the drop's, each cell the library's Hertz two-ball drop; the note says
