@@ -128,7 +128,7 @@ def _add_height(parser: argparse.ArgumentParser) -> None:
         type=_number,
         default=DEFAULT_HEIGHT,
         help=f"dimensionless drop height H in {allowed_range('height')}, within the domain "
-        "double precision carries (docs/model.md)",
+        f"double precision carries (docs/model.md); default {DEFAULT_HEIGHT:g}",
     )
 
 
@@ -333,7 +333,12 @@ def _bench(args: argparse.Namespace) -> int:
 
 
 def _add_sweep(subparsers: argparse._SubParsersAction) -> None:
-    axis_help = "VALUE or START:STOP:COUNT[:linear|log], end points included; {}"
+    from twoball.stacks.model import HERTZ_LARGEST_MASS, HERTZ_SMALLEST_RESTITUTION
+
+    hertz_limits = {
+        "eps": f" (hertz: from {HERTZ_SMALLEST_RESTITUTION:g})",
+        "mu": f" (hertz: up to {HERTZ_LARGEST_MASS:g})",
+    }
     parser = subparsers.add_parser(
         "sweep",
         help="compute h1, h2, contacts and ratios over a grid into a resumable Zarr store",
@@ -342,15 +347,18 @@ def _add_sweep(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("store", type=_store, help="output Zarr directory (e.g. cube.zarr)")
     for name in SWEEP_AXES:
-        doc = Parameters.param[name].doc
         parser.add_argument(
-            f"--{name.replace('_', '-')}", required=True, help=axis_help.format(doc)
+            f"--{name.replace('_', '-')}",
+            required=True,
+            help="VALUE or START:STOP:COUNT[:linear|log], end points included, in "
+            f"{allowed_range(name)}{hertz_limits.get(name, '')}; {Parameters.param[name].doc}",
         )
+    _add_height(parser)
     parser.add_argument(
-        "--height", type=_number, default=DEFAULT_HEIGHT, help="drop height H (1e4)"
-    )
-    parser.add_argument(
-        "--eps12", type=_number, default=None, help="ball-ball restitution (default: eps)"
+        "--eps12",
+        type=_number,
+        default=None,
+        help=f"ball-ball restitution in {allowed_range('eps12')} (default: eps)",
     )
     parser.add_argument(
         "--chunks",
