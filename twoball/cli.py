@@ -373,14 +373,11 @@ def _add_sweep(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.add_argument(
         "--force",
-        nargs="?",
-        const="",
         default="linear",
         type=_sweep_force,
         metavar="linear|hertz",
         help="the contact force: linear (default, the exact solver) or hertz (two balls, the "
-        "compiled Hertz path; --height is then in Hertz units, docs/model.md). Given with no "
-        "value, as before: the same as --large",
+        "compiled Hertz path; --height is then in Hertz units, docs/model.md)",
     )
     parser.add_argument(
         "--large",
@@ -410,15 +407,18 @@ def _sweep(args: argparse.Namespace) -> int:
             raise ParameterError(
                 f"chunks must be three integers E,M,T; got {args.chunks!r}"
             ) from None
-    force = args.force or "linear"  # "": --force given bare, the old --large
     grid = Grid(
-        *axes, height=args.height, eps12=args.eps12, chunks=chunks, dtype=args.dtype, force=force
+        *axes,
+        height=args.height,
+        eps12=args.eps12,
+        chunks=chunks,
+        dtype=args.dtype,
+        force=args.force,
     )
     undertaking = plan(grid, args.workers or os.cpu_count() or 1)
-    if grid.size > max_drops(grid) and not (args.large or args.force == ""):
+    if grid.size > max_drops(grid) and not args.large:
         raise ParameterError(
-            f"refusing {undertaking}: more than {max_drops(grid):,} drops needs --large "
-            "(or --force with no value)"
+            f"refusing {undertaking}: more than {max_drops(grid):,} drops needs --large"
         )
     print(f"sweep {args.store}: {undertaking}", flush=True)  # on stdout: --quiet keeps it
     try:
