@@ -103,11 +103,18 @@ def test_stack_json_matches_the_library():
 
 
 def test_stack_bad_input_exits_2_naming_it():
+    from twoball.stacks import simulate_stack
+
     completed = _run("stack", "--mass-ratios", "0.3,0.1", "--eps", "0.8,0.7")
     assert completed.returncode == 2
     assert completed.stderr.strip() == (
-        "twoball: error: eps must hold one value or 3 (the floor's, then each pair's); got 2"
+        "twoball: error: eps must be one number or a flat sequence of exactly 3 (the floor's, "
+        "then each pair's: 3 balls); got a sequence of 2"
     )
+    # one value on the command line stands for every contact, as the help says
+    completed = _run("stack", "--mass-ratios", "0.3,0.1", "--eps", "0.8", "--json")
+    assert completed.returncode == 0, completed.stderr
+    assert json.loads(completed.stdout)["h2"] == simulate_stack([0.3, 0.1], [0.8] * 3, 0.2).h2
 
 
 def _one_line_error(completed, status=2):

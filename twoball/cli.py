@@ -212,6 +212,12 @@ def _numbers(text: str) -> list[float]:
     return [_number(part.strip()) for part in text.split(",")]
 
 
+def _one_or_all(values: list[float]) -> float | list[float]:
+    """A list option of ``stack``: one value given stands for every ball or pair (the library
+    takes a number so, and refuses a list of the wrong length)."""
+    return values[0] if len(values) == 1 else values
+
+
 def _add_stack(subparsers: argparse._SubParsersAction) -> None:
     from twoball.stacks.model import HERTZ_LARGEST_MASS, HERTZ_SMALLEST_RESTITUTION
 
@@ -256,8 +262,8 @@ def _stack(args: argparse.Namespace) -> int:
 
     result = simulate_stack(
         args.mass_ratios,
-        args.eps,
-        args.tau_ratios,
+        _one_or_all(args.eps),
+        _one_or_all(args.tau_ratios),
         height=args.height,
         force=args.force,
         until=args.until,
