@@ -2,6 +2,7 @@
 
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -102,11 +103,18 @@ def test_stack_json_matches_the_library():
 
 
 def test_stack_bad_input_exits_2_naming_it():
+    from twoball.stacks import simulate_stack
+
     completed = _run("stack", "--mass-ratios", "0.3,0.1", "--eps", "0.8,0.7")
     assert completed.returncode == 2
     assert completed.stderr.strip() == (
-        "twoball: error: eps must hold one value or 3 (the floor's, then each pair's); got 2"
+        "twoball: error: eps must be one number or a flat sequence of exactly 3 (the floor's, "
+        "then each pair's: 3 balls); got a sequence of 2"
     )
+    # one value on the command line stands for every contact, as the help says
+    completed = _run("stack", "--mass-ratios", "0.3,0.1", "--eps", "0.8", "--json")
+    assert completed.returncode == 0, completed.stderr
+    assert json.loads(completed.stdout)["h2"] == simulate_stack([0.3, 0.1], [0.8] * 3, 0.2).h2
 
 
 def _one_line_error(completed, status=2):
@@ -138,6 +146,26 @@ def test_help_states_the_enforced_ranges():
     assert "one restitution in [0.01, 1]" in stack and "products in [1e-09, 1e+06]" in stack
     doc = " ".join(twoball.simulate.__doc__.split())
     assert "in [0.01, 1]" in doc and "in [1e-09, 1e+06]" in doc and "(0, 1]" not in doc
+
+
+def _option_help(command: str, option: str) -> str:
+    """The help of one option of a command, on one line."""
+    options = " ".join(_run(command, "--help").stdout.split()).split(" options: ", 1)[1]
+    return options.split(f" {option} ", 1)[1].split(" --", 1)[0]
+
+
+@pytest.mark.parametrize("command", ["simulate", "sweep"])
+@pytest.mark.parametrize(
+    ("option", "parameter", "refused"),
+    [("--eps", "eps", 2.0), ("--mu", "mu", 0.0), ("--tau-ratio", "tau_ratio", -1.0)],
+)
+def test_each_parameters_help_gives_the_range_its_error_gives(command, option, parameter, refused):
+    """sweep --tau-ratio (and --eps, --mu) said nothing of the range the library enforces."""
+    drop = {"eps": 0.9, "mu": 0.1, "tau_ratio": 0.3, parameter: refused}
+    with pytest.raises(ValueError, match=parameter) as refusal:
+        twoball.simulate(**drop)
+    allowed = re.search(r" in ([\[(][^;]*); got", str(refusal.value)).group(1)
+    assert f" in {allowed}" in _option_help(command, option)
 
 
 def test_until_names_what_it_takes():

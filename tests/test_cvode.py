@@ -1,10 +1,14 @@
 """CVODE, the optional peer (twoball.cvode): docs/model.md's check values to its tolerance, its
-error falling with the tolerance, and a clear refusal where it has nothing to give."""
+error falling with the tolerance, a clear refusal where it has nothing to give, and a failure
+said in the result, not printed."""
+
+import ctypes
 
 import pytest
 from cases import BENIGN, CLOSE_UP, CLOSE_UP_CONTACTS
 
 import twoball
+from twoball import Status
 from twoball.observables import BALLS
 
 pytest.importorskip("sksundae", reason="the cvode extra (scikit-sundae) is not installed")
@@ -33,3 +37,27 @@ def test_cvode_error_falls_with_its_tolerance():
 def test_cvode_refuses_dense_output_in_words():
     with pytest.raises(ValueError, match="CVODE gives no dense output"):
         twoball.simulate(*CLOSE_UP.drop, method="CVODE", dense_output=True)
+
+
+def _printed_at_fd_level(capfd) -> tuple[str, str]:
+    """What reached file descriptors 1 and 2, C's buffered stdio included."""
+    ctypes.CDLL(None).fflush(None)
+    return capfd.readouterr()
+
+
+def test_a_failing_cvode_run_says_why_in_its_result_and_prints_nothing(capfd):
+    # rtol = atol = 1e-17 is below what double precision can give: CVODE gives up at t = 0
+    result = twoball.simulate(*CLOSE_UP.drop, method="CVODE", rtol=1e-17, atol=1e-17, throw=False)
+    assert not result.success and result.status == Status.FAILED
+    assert "too much accuracy requested" in result.reason
+    assert _printed_at_fd_level(capfd) == ("", "")
+
+
+def test_sundials_warnings_stay_off_the_terminal(capfd):
+    # At H = 1e8 the first impact comes at t ~ 14142, where steps of ~1e-13 are below the
+    # time's resolution: SUNDIALS warns "t + h = t on the next step" on C's stdout
+    result = twoball.simulate(
+        0.816, 1e-6, 0.1, height=1e8, method="CVODE", rtol=1e-13, atol=1e-13, until=14143.5
+    )
+    assert result.contacts_first[0] == 1  # the run went through the impact
+    assert _printed_at_fd_level(capfd) == ("", "")

@@ -146,12 +146,26 @@ def test_the_command_line_runs_a_hertz_sweep_and_says_what_it_undertakes(tmp_pat
     grid = Grid(Axis("eps", 0.5, 1, 50), Axis("mu", 0.01, 1 / 3, 50),
                 Axis("tau_ratio", 0.01, 1, 50), force="hertz")  # fmt: skip
     assert "about 2.6 min on 2 workers" in plan(grid, 2)
-    # a bare --force is still the old override of the size limit
+    # the Hertz size limit: 4e6 drops need --large
     huge = ["sweep", str(tmp_path / "x.zarr"), "--eps", "0.5:1:2001", "--mu", "0.01:0.3:2000",
             "--tau-ratio", "0.3", "--force", "hertz", "--quiet"]  # fmt: skip
     assert main(huge) == 2
     err = capsys.readouterr().err
     assert "4,000,000 drops needs --large" in err and not (tmp_path / "x.zarr").exists()
+
+
+@pytest.mark.parametrize("where", ["last", "before another option"])
+def test_sweep_force_needs_its_value_and_says_so_in_one_line(tmp_path, capsys, where):
+    """``sweep --force`` names the contact force and needs it. Given bare it was meant to be
+    the old --large (so said the help), but argparse passed its empty constant through the
+    type check: "must be linear or hertz; got ''", a value the user never typed."""
+    argv = ["sweep", str(tmp_path / "c.zarr"), "--eps", "0.9", "--mu", "0.1", "--tau-ratio", "0.3"]
+    argv += ["--force", "--quiet"] if where == "before another option" else ["--quiet", "--force"]
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "Traceback" not in err
+    assert "argument --force: expected one argument" in err
+    assert not (tmp_path / "c.zarr").exists()
 
 
 def test_stack_method_with_the_linear_force_is_refused(capsys):

@@ -9,6 +9,7 @@ import json
 import os
 import subprocess
 import sys
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -36,9 +37,24 @@ def _run(command: list[str], cwd: Path, **options) -> subprocess.CompletedProces
 @pytest.mark.slow
 def test_plain_wheel_works_from_another_directory(tmp_path):
     wheels = tmp_path / "wheels"
-    built = _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-w", str(wheels), "."], REPO)
+    built = _run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-v", "-w", str(wheels), "."], REPO
+    )
     assert built.returncode == 0, built.stderr
+    # setuptools warned of twoball.precomputed and twoball_app.static, data directories left
+    # out of `packages` (its -v output)
+    assert "absent from the `packages` configuration" not in built.stdout + built.stderr
     (wheel,) = wheels.glob("twoball-*.whl")
+    # every shipped cube's file and every script of the app's static/ is in the wheel
+    data = {"twoball/precomputed": REPO / "twoball" / "precomputed",
+            "twoball_app/static": REPO / "app" / "static"}  # fmt: skip
+    shipped = {
+        f"{package}/{path.relative_to(folder).as_posix()}"
+        for package, folder in data.items()
+        for path in folder.rglob("*")
+        if path.is_file()
+    }
+    assert len(shipped) > 2000 and shipped <= set(zipfile.ZipFile(wheel).namelist())
     venv = tmp_path / "venv"
     _run([sys.executable, "-m", "venv", str(venv)], tmp_path, check=True)
     python, pins = str(venv / "bin" / "python"), str(REPO / "requirements" / "test.txt")

@@ -10,12 +10,25 @@ import pytest
 
 import twoball
 from twoball import ParameterError, SolverError, Status
+from twoball.kernels.codes import STATUS_DONE, STATUS_REST
 from twoball.observables import BALLS, RunStats
 
 
 def test_the_errors_and_the_status_are_exported():
     assert twoball.SolverError is SolverError and twoball.Status is Status
     assert twoball.ParameterError is ParameterError
+
+
+def test_a_status_prints_its_name_and_meaning_and_stays_the_kernels_integer():
+    # eps = 0.02: nearly all the energy goes at the first impact, the upper ball never leaves
+    answered = twoball.simulate(0.9, 0.01, 0.01)
+    at_rest = twoball.simulate(0.02, 0.3, 0.0, height=100.0)
+    assert str(answered.status) == f"{answered.status}" == "DONE"
+    assert str(at_rest.status) == "REST: the upper ball came to rest on the lower one"
+    assert answered.status == STATUS_DONE == 0 and at_rest.status == STATUS_REST == 1
+    assert f"{at_rest.status:d}" == "1" and json.dumps(at_rest.status) == "1"
+    for status in (answered.status, at_rest.status):
+        assert pickle.loads(pickle.dumps(status)) is status
 
 
 @pytest.mark.parametrize("method", ["exact", "LSODA", "odeint"])

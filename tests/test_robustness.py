@@ -259,7 +259,7 @@ AXES = ("--eps", "0.5:1:3", "--mu", "0.01:1:3", "--tau-ratio", "0.01:1:3", "--qu
 def test_a_sweep_states_what_it_undertakes_and_refuses_absurd_grids(tmp_path):
     huge = ("--eps", "0.5:1:100000", "--mu", "0.01:1:100000", "--tau-ratio", "0.01:1:100000")
     status, _, err = run_cli("sweep", str(tmp_path / "huge.zarr"), *huge, "--quiet")
-    assert status == 2 and "1,000,000,000,000,000 drops" in err and "--force" in err
+    assert status == 2 and "1,000,000,000,000,000 drops" in err and "needs --large" in err
     assert not (tmp_path / "huge.zarr").exists()
     status, out, err = run_cli("sweep", str(tmp_path / "small.zarr"), *AXES)
     assert status == 0 and "27 drops (3 x 3 x 3)" in out and "MB stored" in out

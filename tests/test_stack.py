@@ -167,14 +167,21 @@ def test_until_a_time_and_rest():
     assert resting.status is Status.REST and resting.end_time < 1e5
 
 
+TWO_GAPS = "tau_ratios must be one number or a flat sequence of exactly 2 (one per pair: 3 balls)"
+
+
 @pytest.mark.parametrize(
     ("arguments", "words"),
     [
         (([], 0.9, 0.2), "mass_ratios must hold 1 to"),
         (([0.2, -1.0], 0.9, 0.2), "mass_ratios[1] must be a finite number in [1e-09, 1e+06]"),
-        (([0.2, 0.2], [0.9, 0.8], 0.2), "eps must hold one value or 3"),
+        (([0.2, 0.2], [0.9, 0.8], 0.2), "eps must be one number or a flat sequence of exactly 3"),
+        (([0.2, 0.2], [0.9], 0.2), "eps must be one number or a flat sequence of exactly 3"),
         (([0.2, 0.2], 1.5, 0.2), "eps must be a finite number in [0.01, 1]"),
-        (([0.2, 0.2], 0.9, [0.1, 0.2, 0.3]), "tau_ratios must hold one value or 2"),
+        (([0.2, 0.2], 0.9, [0.1, 0.2, 0.3]), f"{TWO_GAPS}; got a sequence of 3"),
+        (([0.2, 0.2], 0.9, [0.1]), f"{TWO_GAPS}; got a sequence of 1"),
+        (([0.2, 0.2], 0.9, [[0.1, 0.2]]), f"{TWO_GAPS}; got a nested sequence"),
+        (([0.2, 0.2], 0.9, np.array([0.1])), "exactly 2"),
         (([0.2, 0.2], [0.9, 0.9, 0.0], 0.2), "eps[2] must be a finite number in [0.01, 1]"),
         (([0.2, 0.2], 0.9, float("nan")), "tau_ratios must be a finite number"),
         (([1e-5, 1e-5], 0.9, 0.2), "masses relative to ball 0"),
@@ -186,6 +193,19 @@ def test_bad_input_names_the_parameter(arguments, words):
     with pytest.raises(ParameterError) as caught:
         simulate_stack(*arguments)
     assert words in str(caught.value)
+
+
+def test_one_number_stands_for_every_contact_as_the_full_sequence_does():
+    """A number is every pair's gap and every contact's eps; a sequence must name each (a list
+    of one for three balls was shared out silently, as if entries had not been lost)."""
+    shared = simulate_stack([0.2, 0.3], 0.9, 0.2)
+    spelled = simulate_stack([0.2, 0.3], [0.9, 0.9, 0.9], [0.2, 0.2])
+    assert (shared.h1, shared.h2, shared.contacts_first) == (
+        spelled.h1,
+        spelled.h2,
+        spelled.contacts_first,
+    )
+    assert simulate_stack([0.2, 0.3], np.float64(0.9), np.array(0.2)).h2 == spelled.h2
 
 
 def test_bad_options():
@@ -396,10 +416,10 @@ def test_sample_times_past_the_end_are_nan_when_asked():
         (("0.2", 0.9, 0.2), "mass_ratios[0] must be a real number"),
         (([0.2], "0.9", 0.2), "eps must be a real number"),
         (([0.2], True, 0.2), "eps must be a real number"),
-        (([0.2], 0.9, [True]), "tau_ratios must be a real number"),
+        (([0.2], 0.9, [True]), "tau_ratios[0] must be a real number"),
         (
             ([0.2], 0.9, [0.2, 0.2]),
-            "tau_ratios must hold one value (one per pair, and there is one)",
+            "tau_ratios must be one number or a flat sequence of exactly 1 (one per pair: 2 balls)",
         ),
     ],
 )

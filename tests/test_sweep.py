@@ -154,6 +154,37 @@ def test_shipped_cube_regenerates(name):
         np.testing.assert_array_max_ulp(stored[finite], again[finite], maxulp=1)
 
 
+@pytest.mark.parametrize("name", ["paper", "map", "contacts", "hertz-h1e2", "hertz-h1e4"])
+def test_cube_contacts_first_says_it_counts_the_ball_contacts_only(name):
+    """A Result's contacts_first is [floor, ball]; the cube's holds the ball count alone, as
+    floats (NaN: no first apex), and its attributes must say so to a reader of both."""
+    variable = twoball.load_cube(name).contacts_first
+    assert variable.dtype.kind == "f" and variable.attrs["units"] == "1"
+    assert "ball-ball" in variable.attrs["long_name"]
+    assert "contacts_first[1]" in variable.attrs["long_name"]
+    description = variable.attrs["description"]
+    assert "floor's contacts" in description and "not stored" in description
+    assert "NaN" in description and "first apex" in description
+
+
+def test_swept_contacts_first_is_the_results_ball_count_and_nan_without_a_first_apex(tmp_path):
+    # eps = 0.02: the upper ball comes to rest on the lower one, with no first apex (NaN);
+    # eps = 0.9: a first apex after one floor contact and one to four ball contacts
+    store = tmp_path / "c.zarr"
+    grid = Grid(Axis("eps", 0.02, 0.9, 2), Axis("mu", 0.01, 0.3, 2), Axis("tau_ratio", 0, 0.01, 2),
+                height=100.0)  # fmt: skip
+    sweep(grid, store, workers=1, progress=False)
+    cube = twoball.load_cube(store).load()
+    for eps, mu, tau_ratio in np.ndindex(grid.shape):
+        cell = cube.isel(eps=eps, mu=mu, tau_ratio=tau_ratio)
+        drop = (float(cell.eps), float(cell.mu), float(cell.tau_ratio))
+        result = twoball.simulate(*drop, height=100.0, throw=False)
+        if result.h1 is None:
+            assert np.isnan(cell.contacts_first), drop
+        else:
+            assert cell.contacts_first == result.contacts_first[BALLS], drop
+
+
 def test_map_cube_contract():
     cube = twoball.load_cube("map")
     assert set(VARIABLES) - {"status"} <= set(cube.data_vars)

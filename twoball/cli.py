@@ -128,7 +128,7 @@ def _add_height(parser: argparse.ArgumentParser) -> None:
         type=_number,
         default=DEFAULT_HEIGHT,
         help=f"dimensionless drop height H in {allowed_range('height')}, within the domain "
-        "double precision carries (docs/model.md)",
+        f"double precision carries (docs/model.md); default {DEFAULT_HEIGHT:g}",
     )
 
 
@@ -212,6 +212,12 @@ def _numbers(text: str) -> list[float]:
     return [_number(part.strip()) for part in text.split(",")]
 
 
+def _one_or_all(values: list[float]) -> float | list[float]:
+    """A list option of ``stack``: one value given stands for every ball or pair (the library
+    takes a number so, and refuses a list of the wrong length)."""
+    return values[0] if len(values) == 1 else values
+
+
 def _add_stack(subparsers: argparse._SubParsersAction) -> None:
     from twoball.stacks.model import HERTZ_LARGEST_MASS, HERTZ_SMALLEST_RESTITUTION
 
@@ -256,8 +262,8 @@ def _stack(args: argparse.Namespace) -> int:
 
     result = simulate_stack(
         args.mass_ratios,
-        args.eps,
-        args.tau_ratios,
+        _one_or_all(args.eps),
+        _one_or_all(args.tau_ratios),
         height=args.height,
         force=args.force,
         until=args.until,
@@ -333,7 +339,12 @@ def _bench(args: argparse.Namespace) -> int:
 
 
 def _add_sweep(subparsers: argparse._SubParsersAction) -> None:
-    axis_help = "VALUE or START:STOP:COUNT[:linear|log], end points included; {}"
+    from twoball.stacks.model import HERTZ_LARGEST_MASS, HERTZ_SMALLEST_RESTITUTION
+
+    hertz_limits = {
+        "eps": f" (hertz: from {HERTZ_SMALLEST_RESTITUTION:g})",
+        "mu": f" (hertz: up to {HERTZ_LARGEST_MASS:g})",
+    }
     parser = subparsers.add_parser(
         "sweep",
         help="compute h1, h2, contacts and ratios over a grid into a resumable Zarr store",
@@ -342,15 +353,18 @@ def _add_sweep(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("store", type=_store, help="output Zarr directory (e.g. cube.zarr)")
     for name in SWEEP_AXES:
-        doc = Parameters.param[name].doc
         parser.add_argument(
-            f"--{name.replace('_', '-')}", required=True, help=axis_help.format(doc)
+            f"--{name.replace('_', '-')}",
+            required=True,
+            help="VALUE or START:STOP:COUNT[:linear|log], end points included, in "
+            f"{allowed_range(name)}{hertz_limits.get(name, '')}; {Parameters.param[name].doc}",
         )
+    _add_height(parser)
     parser.add_argument(
-        "--height", type=_number, default=DEFAULT_HEIGHT, help="drop height H (1e4)"
-    )
-    parser.add_argument(
-        "--eps12", type=_number, default=None, help="ball-ball restitution (default: eps)"
+        "--eps12",
+        type=_number,
+        default=None,
+        help=f"ball-ball restitution in {allowed_range('eps12')} (default: eps)",
     )
     parser.add_argument(
         "--chunks",
@@ -365,14 +379,11 @@ def _add_sweep(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.add_argument(
         "--force",
-        nargs="?",
-        const="",
         default="linear",
         type=_sweep_force,
         metavar="linear|hertz",
         help="the contact force: linear (default, the exact solver) or hertz (two balls, the "
-        "compiled Hertz path; --height is then in Hertz units, docs/model.md). Given with no "
-        "value, as before: the same as --large",
+        "compiled Hertz path; --height is then in Hertz units, docs/model.md)",
     )
     parser.add_argument(
         "--large",
@@ -402,15 +413,18 @@ def _sweep(args: argparse.Namespace) -> int:
             raise ParameterError(
                 f"chunks must be three integers E,M,T; got {args.chunks!r}"
             ) from None
-    force = args.force or "linear"  # "": --force given bare, the old --large
     grid = Grid(
-        *axes, height=args.height, eps12=args.eps12, chunks=chunks, dtype=args.dtype, force=force
+        *axes,
+        height=args.height,
+        eps12=args.eps12,
+        chunks=chunks,
+        dtype=args.dtype,
+        force=args.force,
     )
     undertaking = plan(grid, args.workers or os.cpu_count() or 1)
-    if grid.size > max_drops(grid) and not (args.large or args.force == ""):
+    if grid.size > max_drops(grid) and not args.large:
         raise ParameterError(
-            f"refusing {undertaking}: more than {max_drops(grid):,} drops needs --large "
-            "(or --force with no value)"
+            f"refusing {undertaking}: more than {max_drops(grid):,} drops needs --large"
         )
     print(f"sweep {args.store}: {undertaking}", flush=True)  # on stdout: --quiet keeps it
     try:

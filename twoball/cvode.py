@@ -15,6 +15,11 @@ raises ModuleNotFoundError naming scikit-sundae (the command line names the extr
 
 from __future__ import annotations
 
+import contextlib
+import io
+import os
+from collections.abc import Iterator
+
 import numpy as np
 
 from twoball.errors import ParameterError
@@ -24,6 +29,10 @@ from twoball.reference import _right_hand_side, forces, outcome_from_events, tim
 
 MAX_STEPS = 1_000_000
 MAX_RESTARTS = 100_000
+# SUNDIALS' logger writes its errors to C's stderr and its warnings (such as "t + h = t on the
+# next step") to C's stdout, or to the files these variables name, read as each run begins
+# (SUNDIALS' documentation, "Status and Error Logging").
+SUNDIALS_LOG_VARIABLES = ("SUNLOGGER_ERROR_FILENAME", "SUNLOGGER_WARNING_FILENAME")
 
 
 def solve(
@@ -59,37 +68,58 @@ def solve(
     apex_h: list[float] = []
     events: tuple[list, list] = ([], [])
     failure = None
-    for _ in range(MAX_RESTARTS):
-        if len(apex_t) >= apexes or t0 >= horizon:
-            break
-        solver = CVODE(
-            rhs,
-            method="BDF",
-            rtol=rtol,
-            atol=atol,
-            jacfn=jac,
-            eventsfn=roots,
-            num_events=3,
-            max_num_steps=MAX_STEPS,
-        )
-        sol = solver.solve(np.array([t0, horizon]), y0)
-        if not sol.success:
-            failure = f"CVODE failed: {sol.message}"
-            break
-        if sol.t_events is None or sol.t_events.size == 0:
-            t0 = horizon
-            break
-        t0, y0 = float(sol.t_events[-1]), sol.y_events[-1].copy()
-        which = sol.i_events[-1]
-        for contact in (0, 1):
-            if which[contact] != 0:
-                events[contact].append((t0, y0.copy()))
-        if which[2] != 0:
-            _, f12 = forces(y0, z01, z12)
-            if f12 == 0.0:
-                apex_t.append(t0)
-                apex_h.append(float(y0[1]))
-            y0[3] = min(y0[3], 0.0)  # below the root's zero, so it does not fire again at once
-    else:
-        failure = "CVODE: restart limit reached"
+    with _quiet_sundials() as printed:
+        for _ in range(MAX_RESTARTS):
+            if len(apex_t) >= apexes or t0 >= horizon:
+                break
+            solver = CVODE(
+                rhs,
+                method="BDF",
+                rtol=rtol,
+                atol=atol,
+                jacfn=jac,
+                eventsfn=roots,
+                num_events=3,
+                max_num_steps=MAX_STEPS,
+            )
+            sol = solver.solve(np.array([t0, horizon]), y0)
+            if not sol.success:
+                # what scikit-sundae's error handler printed, such as "At t = 0, too much
+                # accuracy requested.", completes its message
+                said = " ".join(printed.getvalue().split())
+                failure = f"CVODE failed: {sol.message}" + (f" ({said})" if said else "")
+                break
+            if sol.t_events is None or sol.t_events.size == 0:
+                t0 = horizon
+                break
+            t0, y0 = float(sol.t_events[-1]), sol.y_events[-1].copy()
+            which = sol.i_events[-1]
+            for contact in (0, 1):
+                if which[contact] != 0:
+                    events[contact].append((t0, y0.copy()))
+            if which[2] != 0:
+                _, f12 = forces(y0, z01, z12)
+                if f12 == 0.0:
+                    apex_t.append(t0)
+                    apex_h.append(float(y0[1]))
+                y0[3] = min(y0[3], 0.0)  # below the root's zero, so it does not fire again at once
+        else:
+            failure = "CVODE: restart limit reached"
     return outcome_from_events(drop, apex_t, apex_h, events, t0, apexes, t_end, horizon, failure)
+
+
+@contextlib.contextmanager
+def _quiet_sundials() -> Iterator[io.StringIO]:
+    """Keep CVODE's own printing off the terminal (a failure is the Outcome's reason): SUNDIALS'
+    logger writes to the null device (unless the user named its files) and scikit-sundae's
+    error handler, which prints with Python's print, into the StringIO yielded. Both settings
+    are the process's, undone when the run ends."""
+    unset = [name for name in SUNDIALS_LOG_VARIABLES if name not in os.environ]
+    for name in unset:
+        os.environ[name] = os.devnull
+    try:
+        with contextlib.redirect_stdout(io.StringIO()) as printed:
+            yield printed
+    finally:
+        for name in unset:
+            os.environ.pop(name, None)

@@ -21,7 +21,9 @@ class Status(IntEnum):
     ``STUCK`` and ``PHASE_LIMIT`` come from the exact solver (a bug or an input outside what
     double precision carries); ``FAILED`` and ``NO_APEX`` from the scipy references (an
     integrator error; no apex before the horizon, e.g. a ball at rest that the integrator cannot
-    tell). The integer values are those the exact kernel returns and the sweep stores.
+    tell). The integer values are those the exact kernel returns and the sweep stores; printed,
+    a status gives its name and message (``REST: the upper ball came to rest ...``), not its
+    integer (``int(status)`` or ``f"{status:d}"`` give that).
     """
 
     DONE = 0
@@ -31,6 +33,12 @@ class Status(IntEnum):
     FAILED = 4
     NO_APEX = 5
     IMPOSSIBLE = 6
+
+    def __str__(self) -> str:
+        return f"{self.name}: {self.message}" if self.message else self.name
+
+    def __format__(self, spec: str) -> str:
+        return str(self) if not spec else int.__format__(self, spec)
 
     @property
     def message(self) -> str:

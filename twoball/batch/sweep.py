@@ -64,13 +64,16 @@ DROPS_PER_WORKER_SECOND = 11_000
 HEIGHT_UNITS = "m1 g / k (dimensionless height X = z k / (m1 g))"
 TIME_UNITS = "sqrt(m1 / k) (dimensionless time tau)"
 
-# name: (units, long_name); every data variable of a cube, in this order.
+# name: (units, long_name); every data variable of a cube, in this order. contacts_first is the
+# ball-ball count only (a Result's contacts_first[1]), whole numbers kept in the floating type of
+# the other variables so that NaN marks a drop without a first apex, as in h1 and t1:
+# CONTACTS_DESCRIPTION says so in the variable's attributes.
 VARIABLES = {
     "h1": (HEIGHT_UNITS, "first apex height X2 of the upper ball in free flight"),
     "h2": (HEIGHT_UNITS, "second apex height X2 of the upper ball (NaN: no second apex)"),
     "t1": (TIME_UNITS, "time of the first apex"),
     "t2": (TIME_UNITS, "time of the second apex (NaN: no second apex)"),
-    "contacts_first": ("1", "number of ball-ball contact intervals before the first apex"),
+    "contacts_first": ("1", "ball-ball contacts before the first apex (Result.contacts_first[1])"),
     "h_icm": (HEIGHT_UNITS, "first apex in the independent contact model (h_ICM)"),
     "x2_0": (HEIGHT_UNITS, "initial height X2(0) of the upper ball"),
     "h1_over_icm": ("1", "h1 / h_ICM"),
@@ -80,6 +83,12 @@ VARIABLES = {
     "delayed_rebound": ("1", "delayed rebound: h2 > h1 (False where h2 does not exist)"),
     "status": ("1", "how the run ended"),
 }
+CONTACTS_DESCRIPTION = (
+    "Number of separate contact intervals of the two balls (contact 1) before the upper "
+    "ball's first apex: the paper's count, a Result's contacts_first[1]. The floor's contacts "
+    "(Result.contacts_first[0]) are not stored. Whole numbers, stored as floating point so "
+    "that NaN can mark a drop without a first apex (status says how it ended)."
+)
 STATUS_FLAGS = {
     STATUS_DONE: "second_apex_reached",
     STATUS_REST: "upper_ball_came_to_rest",
@@ -388,6 +397,8 @@ def _template(grid: Grid, command: str):
         dtype = _stored_type(grid, name)
         fill = np.nan if dtype.startswith("float") else 0
         attrs = {"units": units, "long_name": long_name}
+        if name == "contacts_first":
+            attrs["description"] = CONTACTS_DESCRIPTION
         if name == "status":
             attrs["flag_values"] = list(STATUS_FLAGS)
             attrs["flag_meanings"] = " ".join(STATUS_FLAGS.values())

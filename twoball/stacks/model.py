@@ -84,19 +84,20 @@ def _checked(declared: str, shown: str, value: object) -> float:
 
 
 def _values(name: str, declared: str, values: object, count: int, what: str) -> list[float]:
-    """One value or ``count`` values of a declared parameter, checked."""
+    """A declared parameter given as one number (every one alike) or as a flat sequence of
+    exactly ``count`` values, checked. A sequence of another length is refused, one of one
+    value too when ``count`` is more: it is not taken for every one (a list that lost entries)."""
     try:
-        items = list(np.ravel(np.asarray(values, dtype=object)))
-    except (TypeError, ValueError):
-        items = [values]
-    if len(items) == 1:
-        return [_checked(declared, name, items[0])] * count
-    if len(items) != count:
-        if count == 1:
-            raise ParameterError(
-                f"{name} must hold one value ({what}, and there is one); got {len(items)}"
-            )
-        raise ParameterError(f"{name} must hold one value or {count} ({what}); got {len(items)}")
+        items = np.asarray(values, dtype=object)
+    except (TypeError, ValueError):  # not array-like: checked (and refused) as one number
+        return [_checked(declared, name, values)] * count
+    if items.ndim == 0:
+        return [_checked(declared, name, values)] * count
+    if items.ndim > 1 or len(items) != count:
+        raise ParameterError(
+            f"{name} must be one number or a flat sequence of exactly {count} ({what}); got "
+            f"{'a nested sequence' if items.ndim > 1 else f'a sequence of {len(items)}'}"
+        )
     return [_checked(declared, f"{name}[{i}]", item) for i, item in enumerate(items)]
 
 
@@ -111,8 +112,9 @@ def check_stack(
     """Validate a stack's inputs with the two-ball model's ranges and derive the rest.
 
     ``mass_ratios`` holds the N - 1 ratios m_i / m_(i-1) (each a ``mu``); ``eps`` one restitution
-    or N (the floor's, then each pair's); ``tau_ratios`` one gap or N - 1 (each a ``tau_ratio``,
-    the delay td_i over the floor contact time); ``force`` the contact law, which sets the
+    or a sequence of N (the floor's, then each pair's); ``tau_ratios`` one gap or a sequence of
+    N - 1 (each a ``tau_ratio``, the delay td_i over the floor contact time): a sequence of
+    another length is refused, not shared out. ``force`` the contact law, which sets the
     smallest gap (:data:`TOUCHING_LIMIT_BALLS`) and, for Hertz, the smallest eps. Raises
     ``ParameterError`` (a ``ValueError``) naming the parameter and its allowed range.
     """
@@ -129,8 +131,10 @@ def check_stack(
         )
     ratios = [_checked("mu", f"mass_ratios[{i}]", value) for i, value in enumerate(ratios)]
     balls = len(ratios) + 1
-    restitutions = _values("eps", "eps", eps, balls, "the floor's, then each pair's")
-    gaps = _values("tau_ratios", "tau_ratio", tau_ratios, balls - 1, "one per pair")
+    restitutions = _values(
+        "eps", "eps", eps, balls, f"the floor's, then each pair's: {balls} balls"
+    )
+    gaps = _values("tau_ratios", "tau_ratio", tau_ratios, balls - 1, f"one per pair: {balls} balls")
     height = check_value("height", height, text=False)
     masses = np.cumprod([1.0, *ratios])
     low, high = MASS_RATIO_RANGE

@@ -51,10 +51,11 @@ def simulate_stack(
     mass_ratios : sequence of float
         The N - 1 ratios m_i / m_(i-1), bottom up (for N = 2, ``[mu]``).
     eps : float or sequence of float
-        One restitution for every contact, or N of them: the floor's, then each pair's.
+        One number for every contact, or a sequence of exactly N: the floor's, then each pair's
+        (a sequence of another length, one value included, is refused).
     tau_ratios : float or sequence of float
-        One gap or N - 1: ball i + 1 reaches its touching height td_i = tau_ratio_i * tau_f
-        after ball i would, in free fall.
+        One number for every pair, or a sequence of exactly N - 1: ball i + 1 reaches its
+        touching height td_i = tau_ratio_i * tau_f after ball i would, in free fall.
     height : float
         Dimensionless drop height H of ball 0.
     force : "linear" or "hertz"
