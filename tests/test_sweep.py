@@ -433,3 +433,19 @@ def test_a_one_drop_plan_reads_as_one_drop():
     text = plan(grid, 2)
     assert text.startswith("1 drop (1 x 1 x 1), about 1 s on 2 workers (once the solver is")
     assert "at most 1 MB stored" in text and "0 s" not in text and "0 MB" not in text
+
+
+def test_hertz_swept_contacts_first_is_nan_without_a_first_apex_as_the_linear_one():
+    """The Hertz sweep stored a count of contacts for a drop with no first apex (eps = 0.05:
+    the upper ball comes to rest), where the linear sweep and the cube's description say NaN;
+    with a first apex it is the two-ball Hertz stack's ball-ball count."""
+    from twoball.batch.hertz_sweep import compute_block
+    from twoball.stacks import simulate_stack
+
+    eps, mu, tau_ratio = np.array([0.05, 0.9]), np.array([0.3]), np.array([0.01])
+    block = compute_block(eps, mu, tau_ratio, height=100.0)
+    h1, contacts = block["h1"][:, 0, 0], block["contacts_first"][:, 0, 0]
+    assert np.isnan(h1[0]) and np.isnan(contacts[0])
+    stack = simulate_stack([0.3], 0.9, 0.01, height=100.0, force="hertz", until="second")
+    assert h1[1] == pytest.approx(stack.h1, rel=1e-9)
+    assert contacts[1] == stack.contacts_first[BALLS]

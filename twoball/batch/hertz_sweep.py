@@ -109,7 +109,8 @@ def run_cells(masses, lam, x_start, apex_h, apex_t, contacts, status):
                 apex_t[found, c] = apexes[row, 1]
                 apex_h[found, c] = apexes[row, 2]
                 found += 1
-        contacts[c] = first[1]
+        # (as the linear sweep: no first apex, no count of the contacts before it)
+        contacts[c] = first[1] if found else np.nan
         status[c] = code
 
 
