@@ -340,9 +340,12 @@ def test_a_phone_shows_the_answer_after_a_reveal_from_a_slow_server(
         page.route_web_socket("**/ws*", route)
         page.goto(f"{base}/app?step={number}")
         page.get_by_text(step.choices[step.answer], exact=True).click()
-        page.wait_for_timeout(1000)
+        # (the choice's answer from the server, Reveal enabled and so named, before the hold:
+        # held, it never came, and the click waited for a button that never had that name)
+        reveal = page.get_by_role("button", name="Reveal the answer")
+        expect(reveal).to_be_enabled(timeout=30_000)
         link["held"] = []
-        page.get_by_role("button", name="Reveal the answer").click()
+        reveal.click()
         page.wait_for_timeout(1500)
         while link["held"]:  # in order, with any that come meanwhile
             link["ws"].send(link["held"].pop(0))
