@@ -26,8 +26,7 @@ ALERT_CSS = ":host, :host * { color: #1b1e21 !important; }"
 
 
 def later(callback) -> None:
-    """Run ``callback`` on the session's next tick (at once without a server, or while the
-    session's page is being built).
+    """Run ``callback`` on the session's next tick (at once without a server).
 
     Bokeh models changed inside the callback of a change made in the browser (a typed value, a
     tab chosen) either raised "_pending_writes should be non-None when we have a document lock"
@@ -35,11 +34,7 @@ def later(callback) -> None:
     with its pending writes set, and every change is sent.
     """
     document = pn.state.curdoc
-    if document is None or document.session_context is None or not document.roots:
-        # (no page in the document yet: a session's first scene is drawn while its page is
-        # built, not on the tick after its models are in the document, where each model a
-        # draw adds, a stack's lines, had the document walk its whole graph again: a sixth
-        # of a served stack page's opening)
+    if document is None or document.session_context is None:
         callback()
     else:
         document.add_next_tick_callback(callback)

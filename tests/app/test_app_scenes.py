@@ -938,36 +938,6 @@ def test_a_drop_height_in_metres_out_of_range_names_its_limits_rounded(typed):
     assert number_text(low_m) not in message and number_text(high_m) not in message
 
 
-@pytest.mark.parametrize("scene", SCENES)
-def test_a_served_sessions_first_scene_is_drawn_while_its_page_is_built(scene):
-    """Under a server, ``later`` defers to the next tick a change made from the browser; the
-    first scene of a session was deferred too, and drawn once its models were in the document
-    (a stack's lines, added then, had the document walk its model graph again for each:
-    a sixth of a served stack page). Built as a served session is (a session context, no
-    roots yet), the scene is drawn before the document has its models; once the page is in
-    the document, ``later`` defers again."""
-    from types import SimpleNamespace
-
-    from panel.io.state import set_curdoc
-
-    from app.scene import later
-
-    document = Document()
-    request = SimpleNamespace(arguments={}, headers={}, cookies={})
-    context = SimpleNamespace(id="served", _document=document, request=request)
-    document._session_context = lambda: context
-    with set_curdoc(document):
-        explorer = Explorer({"scene": scene})
-        shown = explorer.scenes[scene]
-        if scene != "accuracy":  # (measured in a thread, whose answer comes on a tick)
-            assert not document.session_callbacks  # nothing left for the next tick
-            assert shown.computations == 1
-        explorer.page().server_doc(document)
-        ran, waiting = [], len(document.session_callbacks)
-        later(lambda: ran.append(1))
-        assert ran == [] and len(document.session_callbacks) == waiting + 1
-
-
 def test_a_stack_grown_to_eight_balls_has_its_model_graph_worked_out_once(monkeypatch):
     """Each line and legend entry added for a new ball had the document walk its whole model
     graph again (12 walks, 3 -> 8 balls, most of that move's 190 ms); the lines are added under
