@@ -194,6 +194,13 @@ class Lesson(Built):
     def _reveal(self) -> None:
         shown = STEPS[self.state.step - 1]
         correct = shown.choices[shown.answer]
+        # the answer's numbers are the step's drop's: a slider moved while the question
+        # covered the scene is moved back (a teacher's trial: the answer read "rises to
+        # 8.8 m" over a plot of eps 0.67, whose h1 was 3.1 m)
+        moved = {name: value for name, value in shown.drop.items()
+                 if getattr(self.state, name) != value}  # fmt: skip
+        if moved:
+            self.state.param.update(**moved)
         # disabled before the answer shows: a clicker's next press, once the answer is on
         # screen, must find Next, not Reveal still enabled (its change sent after the answer's:
         # the press revealed again and the lesson stayed, test_a_presentation_clicker_...)

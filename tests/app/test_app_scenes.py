@@ -962,3 +962,23 @@ def test_a_stack_grown_to_eight_balls_has_its_model_graph_worked_out_once(monkey
     assert all(line.document is document for line in scene._lines)
     assert [line.glyph.y for line in scene._lines] == [f"x{ball}" for ball in range(8)]
     assert all(f"x{ball}" in scene.curves.data for ball in range(8))
+
+
+def test_a_reveal_shows_the_steps_own_drop_after_a_slider_moved_under_the_question():
+    """The answer quotes the step's drop: a slider moved while the question covered the scene
+    is moved back at the reveal, and the scene and the URL show the step's drop (a teacher's
+    trial: "it rises to 8.8 m" over a plot of eps = 0.67, whose h1 was 3.1 m)."""
+    from app.steps import STEPS
+
+    explorer = rendered({"step": "1"})
+    state, lesson = explorer.state, explorer.lesson
+    state.eps = 0.67
+    assert explorer.scenes["drop"].result.drop.eps == 0.67  # (computed underneath)
+    lesson.choices.value = lesson.choices.options[STEPS[0].answer]
+    lesson._reveal()
+    drop = STEPS[0].drop
+    assert {name: getattr(state, name) for name in drop} == drop
+    expected = twoball.simulate(drop["eps"], drop["mu"], drop["tau_ratio"], height=drop["height"])
+    assert explorer.scenes["drop"].result.h1 == expected.h1
+    assert float(url_query(state)["eps"]) == drop["eps"]
+    assert "Right." in lesson.answer.object
