@@ -78,8 +78,11 @@ class Animation:
             code=DRAW_FRAME_JS,
         )
         self.frames.js_on_change("data", self.on_frame)
+        # (a redraw asked for without new frames: :meth:`redraw`)
+        self.frames.js_on_change("tags", self.on_frame)
         self._unsent: tuple | None = None  # (the drop's frames, sent when asked: send_frames)
         self._trail_lines: list = []
+        self._redraws = 0
 
     def draw_trails_with(self, lines: list) -> None:
         """Draw the trail (into its renderers ``lines``) as the animation plays, and at once
@@ -135,6 +138,13 @@ class Animation:
         for ball, centre in enumerate(frames()):
             data[f"y{ball}"] = np.asarray(centre, dtype=np.float32)
         self.frames.data = data
+
+    def redraw(self) -> None:
+        """Draw the frame the player is at again, in the page, from the frames it has (a
+        change of the frames' tags, a few bytes): trails asked for while paused after a play,
+        with the frames already in the page, were drawn only when it moved again."""
+        self._redraws += 1
+        self.frames.tags = [self._redraws]
 
     def clear(self) -> None:
         """No frames and no balls (a refused drop)."""

@@ -540,6 +540,7 @@ class DropScene(Scene):
             line.visible = shown
         if shown:  # drawn from the frames, at once (a new user saw them only on play)
             self.animated.send_frames()
+            self.animated.redraw()  # (frames already in the page after a play: drawn now)
 
     def _csv(self) -> io.StringIO:
         """The drop on screen for a worksheet (app/worksheet.py)."""

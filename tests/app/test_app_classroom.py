@@ -787,3 +787,34 @@ def test_the_accuracy_legend_leaves_the_plot_its_width(browser, app_server, arti
         assert errors == []
     finally:
         context.close()
+
+
+# The trail's source (columns t, top0, ...): how many points of it are drawn
+TRAIL_POINTS_JS = """() => [...Bokeh.documents[0].all_models]
+  .filter((m) => m.constructor.__name__ === "ColumnDataSource"
+    && (m.data instanceof Map ? m.data.has("top0") : "top0" in m.data))
+  .map((m) => (m.data instanceof Map ? m.data.get("t") : m.data.t).length)"""
+
+
+def test_trails_asked_for_while_paused_after_a_play_are_drawn_at_once(
+    browser, app_server, artifacts
+):
+    """Played, then paused: the frames are in the page. Trails asked for then were drawn only
+    when the player moved again (a teacher's trial, paused at t = 400.9 tau); they are drawn
+    at once, up to the frame shown."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app", viewport=(1366, 768))
+    try:
+        page.locator("button.play").click()
+        page.wait_for_timeout(1500)
+        page.locator("button.pause").click()
+        page.wait_for_timeout(500)
+        frame = int(page.locator("input[type=range]").last.input_value())
+        assert frame > 5
+        page.get_by_text("trails (the path of each ball's top)", exact=True).click()
+        page.wait_for_function(f"() => ({TRAIL_POINTS_JS})().some((n) => n > 5)", timeout=10_000)
+        assert max(page.evaluate(TRAIL_POINTS_JS)) == frame + 1  # up to the frame shown
+        page.screenshot(path=artifacts / "trails_after_a_pause.png")
+        assert errors == []
+    finally:
+        context.close()
