@@ -299,3 +299,60 @@ def test_synced_parameters_listed_once_give_panels_own_values(monkeypatch):
             assert Syncable._init_params(component) == own(component), component
             compared.add(type(component).__name__)
     assert {"ReleasedSlider", "Markdown", "Column", "Tabs", "Button", "Bokeh", "Card"} <= compared
+
+
+def test_the_loading_style_is_sent_once_per_page_with_panels_own_text(monkeypatch):
+    """app_hooks.loading_style_sent_once_per_page: each model of each scene's page has the same
+    style sheets, in the same order, as with Panel's own ``loading_css``, the spinner's text now
+    one style sheet model shared by the page's components; and the first document is smaller."""
+    import panel.reactive
+    from bokeh.document import Document
+    from bokeh.models import ImportedStyleSheet, InlineStyleSheet
+    from panel.io.state import set_curdoc
+
+    from app.app_hooks import loading_style_sent_once_per_page
+    from app.explorer import Explorer
+    from app.scenes import SCENES
+    from benchmarks.app_open import first_message_bytes
+
+    own = getattr(panel.reactive.loading_css, "__wrapped__", panel.reactive.loading_css)
+
+    def page(scene: str) -> Document:
+        document = Document()
+        with set_curdoc(document):
+            Explorer({"scene": scene}).page().server_doc(document)
+        return document
+
+    def style_sheets(document: Document) -> list:
+        """Each model's style sheets as texts (a model's by its css or address), in order."""
+
+        def text(sheet):
+            if isinstance(sheet, InlineStyleSheet):
+                return sheet.css
+            return sheet.url if isinstance(sheet, ImportedStyleSheet) else sheet
+
+        return sorted(
+            (type(model).__name__, tuple(text(sheet) for sheet in model.stylesheets))
+            for model in document.models
+            if not isinstance(model, (InlineStyleSheet, ImportedStyleSheet))
+            and hasattr(model, "stylesheets")
+        )
+
+    monkeypatch.setattr(panel.reactive, "loading_css", own)  # restored after the test
+    before = {scene: page(scene) for scene in SCENES}
+    loading_style_sent_once_per_page()
+    loading_style_sent_once_per_page()  # (idempotent)
+    assert panel.reactive.loading_css.__wrapped__ is own
+    config = panel.config
+    settings = (config.loading_spinner, config.loading_color, config.loading_max_height)
+    spinner = own(*settings).strip()
+    for scene in SCENES:
+        after = page(scene)
+        assert style_sheets(after) == style_sheets(before[scene]), scene
+        inline = [m for m in after.models if isinstance(m, InlineStyleSheet)]
+        shared = [m for m in inline if m.css.strip() == spinner]
+        assert len(shared) == 1, scene
+        users = [m for m in after.models if shared[0] in getattr(m, "stylesheets", ())]
+        assert len(users) > 20, scene
+        assert first_message_bytes(after) < first_message_bytes(before[scene]) - 5000, scene
+    assert panel.reactive.loading_css(*settings) == own(*settings)  # (outside a page: the text)
