@@ -12,7 +12,7 @@ from __future__ import annotations
 import panel as pn
 import param
 
-from .scene import Built, alert, later
+from .scene import Built, ScriptedButton, alert, later
 from .state import ExplorerState
 from .steps import STEPS
 
@@ -52,6 +52,10 @@ WIDE = "@media (min-width: 768px) { :host { display: none !important; } }"
 # Reveal's label: while it waits for a prediction (disabled), it says what it waits for (a
 # greyed "Reveal the answer" left a student pressing it, not knowing why nothing happened)
 REVEAL = "Reveal the answer"
+# run in the browser at a click (app/static/lesson.js): the page scrolled to the new step's
+# title, or to the buttons after an answer
+SHOW_STEP = "twoballShowStep();"
+SHOW_ANSWER = "twoballShowAnswer();"
 CHOOSE_FIRST = "Choose an answer first"
 
 
@@ -70,9 +74,12 @@ class Lesson(Built):
             margin=(0, 10),
             css_classes=["twoball-step-title"] if projected else [],
         )
-        self.start = pn.widgets.Button(label="Start the lesson", color="primary")
+        self.start = ScriptedButton(
+            label="Start the lesson",
+            color="primary",
+            script=SHOW_STEP,  # (lesson.js)
+        )
         self.start.on_click(lambda _: later(self._begin))
-        self.start.js_on_click(code="twoballShowStep();")  # (lesson.js)
         # The step's widgets are made, and join the page, when the lesson starts: a page
         # opened without it (most of a class's) pays neither for their Bokeh models nor for
         # the widgets themselves (8 ms of a page's opening; docs/performance.md)
@@ -92,15 +99,15 @@ class Lesson(Built):
             sizing_mode="stretch_width",
             stylesheets=[":host label { white-space: normal; }"],  # long answers wrap, not cut
         )
-        self.reveal = pn.widgets.Button(label=REVEAL, color="primary")
+        self.reveal = ScriptedButton(label=REVEAL, color="primary", script=SHOW_ANSWER)
         # (the page scrolls to it after a reveal: lesson.js)
         self.answer = alert(
             "", visible=False, sizing_mode="stretch_width", css_classes=["twoball-answer"]
         )
         # ... and on a phone, above the scene (made with the step's widgets)
         self.answer_above: pn.pane.Alert | None = None
-        self.previous = pn.widgets.Button(label="< Previous", width=110)
-        self.next = pn.widgets.Button(label="Next >", color="primary", width=110)
+        self.previous = ScriptedButton(label="< Previous", width=110, script=SHOW_STEP)
+        self.next = ScriptedButton(label="Next >", color="primary", width=110, script=SHOW_STEP)
         # a step changes the drop, and with it the scenes' Bokeh models: on the next tick,
         # as every change made from the browser (see scene.later)
         self.reveal.on_click(lambda _: later(self._reveal))
@@ -108,11 +115,6 @@ class Lesson(Built):
         self.next.on_click(
             lambda _: later(lambda: self._go((self.state.step + 1) % (len(STEPS) + 1)))
         )
-        # the card scrolled to the new step's title, or to the buttons after an answer, in
-        # the page (app/static/lesson.js)
-        for button in (self.previous, self.next):
-            button.js_on_click(code="twoballShowStep();")
-        self.reveal.js_on_click(code="twoballShowAnswer();")
         self.choices.param.watch(self._chosen, "value")
         # the question and its choices fill the main area while the class predicts
         # (:meth:`stage`; in the 300 px sidebar, beside an empty main area, they were small);

@@ -245,6 +245,25 @@ class AnsweringMarkdown(Text):
         return model
 
 
+class ScriptedButton(pn.widgets.Button):
+    """A button that also runs ``script`` in the browser when clicked (app/static), set on its
+    Bokeh model.
+
+    Panel's ``js_on_click`` registers a link, and from the first one in a server process Panel
+    looks for links through every model of every page it builds, each time one of the page's
+    roots is made: 3 ms of a page's opening (benchmarks/app_open.py), for the lesson's Start
+    button alone."""
+
+    script = param.String(doc="JavaScript run in the browser at each click.")
+
+    _rename = {**pn.widgets.Button._rename, "script": None}  # (not a property of the model)
+
+    def _get_model(self, doc, root=None, parent=None, comm=None):
+        model = super()._get_model(doc, root, parent, comm)
+        model.js_on_event("button_click", CustomJS(code=self.script))
+        return model
+
+
 def on_screen(values) -> np.ndarray:
     """Plotted numbers as the browser gets them: float32, 7 digits (a thousandth of a pixel on
     any screen) in half the bytes of float64; the apexes and labels keep their own precision."""

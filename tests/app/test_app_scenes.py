@@ -982,3 +982,61 @@ def test_a_reveal_shows_the_steps_own_drop_after_a_slider_moved_under_the_questi
     assert explorer.scenes["drop"].result.h1 == expected.h1
     assert float(url_query(state)["eps"]) == drop["eps"]
     assert "Right." in lesson.answer.object
+
+
+def test_the_lessons_buttons_run_their_scripts_without_panels_links():
+    """The lesson's Start, Reveal, Previous and Next run their script in the browser from their
+    Bokeh model's click (app/scene.ScriptedButton): each model carries it, and no component of
+    the page is in Panel's registry of links (whose first entry makes Panel look through every
+    model of every page it builds)."""
+    from bokeh.models import CustomJS
+    from panel.io.state import set_curdoc
+    from panel.links import Callback
+    from panel.reactive import Reactive
+
+    from app.lesson import SHOW_ANSWER, SHOW_STEP
+
+    document = Document()
+    with set_curdoc(document):
+        explorer = Explorer({"scene": "drop"})
+        page = explorer.page()
+        page.server_doc(document)
+        explorer.lesson._begin()  # (the step's buttons are made at the first step)
+    lesson = explorer.lesson
+    scripts = {
+        lesson.start: SHOW_STEP,
+        lesson.reveal: SHOW_ANSWER,
+        lesson.previous: SHOW_STEP,
+        lesson.next: SHOW_STEP,
+    }
+    for button, script in scripts.items():
+        models = list(button._models.values())
+        assert models, button.label
+        for model, _ in models:
+            (click,) = model.js_event_callbacks["button_click"]
+            assert isinstance(click, CustomJS) and click.code == script, button.label
+    components = [c for item, _ in page._render_items.values() for c in item.select(Reactive)]
+    assert len(components) > 20
+    assert not [c for c in components if c in Callback.registry]
+
+
+def test_a_page_makes_no_busy_spinner_and_no_notebook_view(monkeypatch):
+    """app/explorer.ClassroomTemplate: a page's template copies no busy spinner (Panel's default
+    one, copied for each template before ``busy_indicator=None`` replaced it) and makes no
+    notebook view (Panel's: the template's text and a "Launch server" button)."""
+    import panel as pn
+
+    made = []
+    own = pn.widgets.Button.__init__
+
+    def counted(self, *args, **params):
+        made.append(params.get("label"))
+        own(self, *args, **params)
+
+    page = Explorer({}).page()
+    assert page.busy_indicator is None and type(page).param.busy_indicator.default is None
+    monkeypatch.setattr(pn.widgets.Button, "__init__", counted)
+    page = Explorer({}).page()
+    assert "Launch server" not in made and page._layout.objects == []
+    pn.template.BootstrapTemplate()  # (Panel's own makes both: the count sees it)
+    assert "Launch server" in made
