@@ -7,6 +7,7 @@ from urllib.parse import urlencode
 
 import panel as pn
 import param
+from panel.widgets.indicators import BooleanIndicator
 
 from twoball import jit
 
@@ -196,25 +197,45 @@ class Explorer(Built):
         parts = [self.stage] if self.state.step else []
         return pn.Column(*parts, self.tabs, sizing_mode="stretch_width")
 
-    def page(self) -> pn.template.BootstrapTemplate:
+    def page(self) -> ClassroomTemplate:
         """The served page: a template gives the viewport meta tag, a sidebar that folds away
         (the button top left), and a header; on a narrow screen the controls stack below the
         scenes (PAGE_CSS). BootstrapTemplate, not FastListTemplate: the latter loads a font
         from Google, and the app must not reach the network."""
-        template = pn.template.BootstrapTemplate(
+        template = ClassroomTemplate(
             title="Two-ball bounce explorer",
             sidebar=[self.sidebar()],
             main=[self],
             sidebar_width=330,
             header_background="#0072B2",
             meta_viewport="width=device-width, initial-scale=1",
-            # Panel's busy spinner reflects the whole server process: every slider move in any
-            # session turned it on and off in every open page, two patches to each of N pages a
-            # move (60 pages moving: 3600 patches a second, the server saturated). A page says
-            # itself that its own change is pending (scene.PENDING_JS).
-            busy_indicator=None,
         )
         template.config.raw_css.extend([PAGE_CSS, PENDING_CSS])
         if self.state.presentation:
             template.config.raw_css.append(PRESENTATION_CSS)
         return template
+
+
+class ClassroomTemplate(pn.template.BootstrapTemplate):
+    """Panel's BootstrapTemplate without what a served page never shows, made anew for every
+    page: 3-5 ms of a page's opening (benchmarks/app_open.py).
+
+    - No busy spinner. Panel's reflects the whole server process: every slider move in any
+      session turned it on and off in every open page, two patches to each of N pages a move
+      (60 pages moving: 3600 patches a second, the server saturated). A page says itself that
+      its own change is pending (scene.PENDING_JS). Panel's default, a spinner, was copied for
+      every page before being replaced by none.
+    - No notebook view: Panel makes one for every template (its text, a "Launch server" button),
+      shown only when a notebook displays the template.
+    """
+
+    busy_indicator = param.ClassSelector(
+        default=None,
+        class_=BooleanIndicator,
+        constant=True,
+        allow_None=True,
+        doc="None: a page says itself that its change is pending.",
+    )
+
+    def _build_layout(self) -> pn.Column:
+        return pn.Column()
