@@ -14,7 +14,7 @@ import param
 
 from .scene import Built, alert, later
 from .state import ExplorerState
-from .steps import STEPS
+from .steps import STEPS, gist
 
 # what the lesson sets and gives back at its end: the drop, the scene and the units
 BEFORE_THE_LESSON = ("eps", "eps12", "mu", "tau_ratio", "height", "scene", "units")
@@ -25,6 +25,11 @@ PROJECTED = {"font-size": "30px", "line-height": "1.3"}
 # what to look for, on a projector: smaller than the question (at 30 px step 1's five lines had
 # pushed Reveal below a 1280x720 screen); still read from the back of a room
 PROJECTED_LOOK_FOR = {"font-size": "24px", "line-height": "1.3"}
+# Under a projected answer, the step's aside (step 1's two lines) at the page's own 20 px, and
+# both with little margin: at 24 px, with a paragraph's margins, they put the plot 196 px
+# under the answer line's top (a teacher's trial; the row under the plot, off the screen)
+PROJECTED_ASIDE = {"font-size": "20px", "line-height": "1.3"}
+TIGHT = ":host p { margin-top: 0.2em; margin-bottom: 0.2em; }"
 # each circle centred on its words: Bokeh lifts a radio's words by 0.4 em, made for its own
 # 13 px circle and text; larger, the circle sat below them (a third of a line on a projector)
 CENTRED = (
@@ -49,6 +54,17 @@ PROJECTED_CHOICES = (
 # shown at its own widths (a Panel pane has one place in a page).
 PHONE = "@media (max-width: 767px) { :host { display: none !important; } }"
 WIDE = "@media (min-width: 768px) { :host { display: none !important; } }"
+# The answer in a projector's card (the 330 px sidebar, at the room's 20 px). The whole
+# explanation ran past a 1280x720 screen on four steps (to y 1343 on step 1, step 6's cut
+# mid-sentence). Decided: the room reads the one-line answer above the scene, and the teacher
+# tells the why; the card shows the explanation's first sentence (the answer with its numbers,
+# steps.gist) at 18 px, the teacher's prompt, and folds the rest under FULL_EXPLANATION, which
+# the teacher opens when the class asks (the sidebar then scrolls). Not smaller text (under
+# 16 px it is not read from a lectern either), not a second column (the main area's width is
+# the plots'). A laptop's and a phone's card, read by the student alone, keep it whole.
+FULL_EXPLANATION = "The full explanation"
+PROJECTED_ANSWER = {"font-size": "18px"}
+FOLD_CSS = ":host summary { cursor: pointer; text-decoration: underline; margin-top: 0.5em; }"
 # Reveal's label: while it waits for a prediction (disabled), it says what it waits for (a
 # greyed "Reveal the answer" left a student pressing it, not knowing why nothing happened)
 REVEAL = "Reveal the answer"
@@ -95,8 +111,14 @@ class Lesson(Built):
         self.reveal = pn.widgets.Button(label=REVEAL, color="primary")
         # (the page scrolls to it after a reveal: lesson.js)
         self.answer = alert(
-            "", visible=False, sizing_mode="stretch_width", css_classes=["twoball-answer"]
+            "",
+            visible=False,
+            sizing_mode="stretch_width",
+            css_classes=["twoball-answer"],
+            styles=PROJECTED_ANSWER if projected else {},
         )
+        if projected:
+            self.answer.stylesheets = [*self.answer.stylesheets, FOLD_CSS]
         # ... and on a phone, above the scene (made with the step's widgets)
         self.answer_above: pn.pane.Alert | None = None
         self.previous = pn.widgets.Button(label="< Previous", width=110)
@@ -132,16 +154,21 @@ class Lesson(Built):
             stylesheets=[":host p { margin-top: 0.6em; }"],
         )
         self.answer_line = pn.pane.Markdown(
-            visible=False, sizing_mode="stretch_width", styles=PROJECTED
+            visible=False,
+            sizing_mode="stretch_width",
+            styles=PROJECTED,
+            stylesheets=[TIGHT],
         )
         # the step's aside (steps.Step.aside), under it, on every screen: what the scene shows
-        # beyond the question, where the class looks
+        # beyond the question, where the class looks (on a projector at the page's 20 px, close
+        # to the answer: PROJECTED_ASIDE)
         self.aside = pn.pane.Markdown(
             visible=False,
             sizing_mode="stretch_width",
-            styles=PROJECTED_LOOK_FOR if projected else ASKED,
+            styles=PROJECTED_ASIDE if projected else ASKED,
             margin=(0, 10),
             css_classes=["twoball-aside"],
+            stylesheets=[TIGHT] if projected else [],
         )
         choices_css = PROJECTED_CHOICES if projected else ASKED_CHOICES
         self.choices.stylesheets = [*self.choices.stylesheets, choices_css]
@@ -214,7 +241,7 @@ class Lesson(Built):
             verdict = f"Not quite: {correct.lower()}."
         for answer in self._answers():
             answer.param.update(
-                object=f"**{verdict}** {shown.explanation}",
+                object=f"**{verdict}** {self._explained(shown.explanation)}",
                 alert_type="success" if self.choices.value == correct else "warning",
                 visible=True,
             )
@@ -225,6 +252,14 @@ class Lesson(Built):
         )
         self.aside.param.update(object=shown.aside, visible=bool(shown.aside))
         self.state.revealed = True  # the scene comes out from under its cover
+
+    def _explained(self, explanation: str) -> str:
+        """The explanation as the card shows it: whole, or on a projector its first sentence,
+        the rest folded (:data:`FULL_EXPLANATION`)."""
+        first, rest = gist(explanation)
+        if not self.state.presentation or not rest:
+            return explanation
+        return f"{first}\n\n<details><summary>{FULL_EXPLANATION}</summary>\n\n{rest}\n\n</details>"
 
     @param.depends("state.step", watch=True)
     def _show(self) -> None:

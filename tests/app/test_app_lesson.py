@@ -9,9 +9,9 @@ from appdriver import deep_query, open_page, page_query
 from playwright.sync_api import expect
 
 import twoball
-from app.lesson import CHOOSE_FIRST
+from app.lesson import CHOOSE_FIRST, FULL_EXPLANATION
 from app.state import ExplorerState, read_query
-from app.steps import STEPS
+from app.steps import STEPS, gist
 from twoball import presets
 from twoball.observables import BALLS
 
@@ -272,10 +272,47 @@ def test_a_projected_step_asks_large_and_answers_in_one_large_line(
         players = [b for b in deep_query(page, "button.play") if b["visible"]]
         assert len(players) == (step.scene == "drop"), players  # the drop's player on screen
         assert all(b["bottom"] <= 700 for b in players), players  # (with room to spare)
+        # the plot close under the answer line (step 1's, with the aside between, was 196 px
+        # under its top)
+        line = page.get_by_text(answer, exact=True).bounding_box()
+        assert min(c["top"] for c in plots) - line["y"] <= 170, (line, plots)
+        # what the scene says of the answer, on screen under its plots: the first collision's
+        # count of contacts (it ended at y 745), the accuracy's rows at the asked tolerance
+        # (the table of every row began at y 788)
+        if step.scene == "closeup":
+            count = page.get_by_text("before the first apex", exact=False).bounding_box()
+            assert count["y"] + count["height"] <= 720, count
+        if step.scene == "accuracy":
+            asked = page.get_by_text("Asked for 6 digits", exact=False).bounding_box()
+            tables = [t for t in deep_query(page, "table") if t["visible"]]
+            rows = min(tables, key=lambda t: t["top"])
+            assert asked["x"] > 330 and rows["bottom"] <= 720 and rows["right"] <= 1280, rows
+            assert "RK45" in rows["text"] and "error" in rows["text"], rows
+        _check_projected_card(page, step)
         page.screenshot(path=shots / f"step{number}-projected-revealed.png")
         assert errors == []
     finally:
         context.close()
+
+
+def _check_projected_card(page, step) -> None:
+    """The card's answer whole inside a 1280x720 window: the explanation's first sentence, the
+    rest folded (the whole explanation ran to y 1343 on step 1, and step 6's was cut off
+    mid-sentence at the screen's edge); the fold opens on a click."""
+    first, rest = gist(step.explanation)
+    page.get_by_text(first, exact=False).first.wait_for()
+    (card,) = [a for a in deep_query(page, ".twoball-answer") if a["visible"]]
+    assert card["left"] >= 0 and card["right"] <= 330 and card["bottom"] <= 720, card
+    if not rest:
+        return
+    fold = page.get_by_text(FULL_EXPLANATION, exact=True)
+    expect(fold).to_be_in_viewport(ratio=1)
+    more = page.get_by_text(rest[:40], exact=False)
+    expect(more).to_be_hidden()
+    fold.click()
+    expect(more).to_be_visible()
+    fold.click()  # (folded again for the screenshot)
+    expect(more).to_be_hidden()
 
 
 @pytest.mark.browser
