@@ -65,6 +65,13 @@ WIDE = "@media (min-width: 768px) { :host { display: none !important; } }"
 FULL_EXPLANATION = "The full explanation"
 PROJECTED_ANSWER = {"font-size": "18px"}
 FOLD_CSS = ":host summary { cursor: pointer; text-decoration: underline; margin-top: 0.5em; }"
+# After a reveal on a phone, Previous and Next stand under the answer above the scene: in the
+# card, below the scene and the controls, Next lay 1600 px under the answer (a teacher's
+# trial). The card's pair is hidden meanwhile (one Next on screen; a second pair of buttons,
+# made with the step's widgets, costs a page opened without the lesson nothing).
+ANSWERED_ON_A_PHONE = (
+    "@media (max-width: 767px) { :host(.twoball-answered) { display: none !important; } }"
+)
 # Reveal's label: while it waits for a prediction (disabled), it says what it waits for (a
 # greyed "Reveal the answer" left a student pressing it, not knowing why nothing happened)
 REVEAL = "Reveal the answer"
@@ -121,19 +128,13 @@ class Lesson(Built):
             self.answer.stylesheets = [*self.answer.stylesheets, FOLD_CSS]
         # ... and on a phone, above the scene (made with the step's widgets)
         self.answer_above: pn.pane.Alert | None = None
-        self.previous = pn.widgets.Button(label="< Previous", width=110)
-        self.next = pn.widgets.Button(label="Next >", color="primary", width=110)
+        self.previous, self.next = self._step_buttons()
+        # ... and on a phone, under the answer above the scene (:meth:`_place_answer_by_width`)
+        self.phone_buttons: pn.Row | None = None
         # a step changes the drop, and with it the scenes' Bokeh models: on the next tick,
         # as every change made from the browser (see scene.later)
         self.reveal.on_click(lambda _: later(self._reveal))
-        self.previous.on_click(lambda _: later(lambda: self._go(self.state.step - 1)))
-        self.next.on_click(
-            lambda _: later(lambda: self._go((self.state.step + 1) % (len(STEPS) + 1)))
-        )
-        # the card scrolled to the new step's title, or to the buttons after an answer, in
-        # the page (app/static/lesson.js)
-        for button in (self.previous, self.next):
-            button.js_on_click(code="twoballShowStep();")
+        # the page scrolled to the buttons after an answer (app/static/lesson.js)
         self.reveal.js_on_click(code="twoballShowAnswer();")
         self.choices.param.watch(self._chosen, "value")
         # the question and its choices fill the main area while the class predicts
@@ -181,6 +182,19 @@ class Lesson(Built):
             visible=False,
         )
         self._add_step_widgets()
+
+    def _step_buttons(self) -> tuple[pn.widgets.Button, pn.widgets.Button]:
+        """Previous and Next, which go to their step (the page then shows its title:
+        app/static/lesson.js)."""
+        previous = pn.widgets.Button(label="< Previous", width=110)
+        following = pn.widgets.Button(label="Next >", color="primary", width=110)
+        previous.on_click(lambda _: later(lambda: self._go(self.state.step - 1)))
+        following.on_click(
+            lambda _: later(lambda: self._go((self.state.step + 1) % (len(STEPS) + 1)))
+        )
+        for button in (previous, following):
+            button.js_on_click(code="twoballShowStep();")
+        return previous, following
 
     def _begin(self) -> None:
         """The lesson's first step, in metres and seconds: a class thinks in them (the
@@ -251,6 +265,7 @@ class Lesson(Built):
             visible=self.state.presentation,
         )
         self.aside.param.update(object=shown.aside, visible=bool(shown.aside))
+        self._answered(True)
         self.state.revealed = True  # the scene comes out from under its cover
 
     def _explained(self, explanation: str) -> str:
@@ -273,6 +288,7 @@ class Lesson(Built):
                 widget.visible = lesson_on
             for shown in (*self._answers(), self.answer_line, self.aside):
                 shown.visible = False
+            self._answered(False)
         if not lesson_on:
             self.heading.object = (
                 "A guided path through the demonstration in six steps: predict, then see."
@@ -287,8 +303,10 @@ class Lesson(Built):
         self._place_title()
         self.choices.param.update(options=list(shown.choices), value=None, disabled=False)
         self._offer_reveal()
-        self.previous.disabled = step == 1
-        self.next.label = "Next >" if step < len(STEPS) else "End the lesson"
+        phone = [] if self.phone_buttons is None else [self.phone_buttons.objects]
+        for previous, following in [(self.previous, self.next), *phone]:
+            previous.disabled = step == 1
+            following.label = "Next >" if step < len(STEPS) else "End the lesson"
 
     def _title(self) -> str:
         step = self.state.step
@@ -309,11 +327,13 @@ class Lesson(Built):
         if not self.state.presentation:  # (whose answer above the scene is one large line)
             self._place_answer_by_width()
         above = [] if self.answer_above is None else [self.answer_above]  # (a phone's)
-        self._stage.objects = [self._asking, *above, self.answer_line, self.aside]
+        buttons = [] if self.phone_buttons is None else [self.phone_buttons]  # (a phone's)
+        self._stage.objects = [self._asking, *above, self.answer_line, self.aside, *buttons]
+        self._card_buttons = self._buttons()
         if self.state.presentation:
-            self._steps.objects = [self._buttons(), self.answer]
+            self._steps.objects = [self._card_buttons, self.answer]
         else:
-            self._steps.objects = [self.answer, self._buttons()]
+            self._steps.objects = [self.answer, self._card_buttons]
 
     def _place_answer_by_width(self) -> None:
         """The answer in the card beside the scene, and on a phone above it (:data:`PHONE`)."""
@@ -326,6 +346,24 @@ class Lesson(Built):
             margin=(5, 10),
         )
         self.answer_above.stylesheets = [*self.answer_above.stylesheets, WIDE]
+        # Previous and Next under it, after a reveal (:data:`ANSWERED_ON_A_PHONE`)
+        self.phone_buttons = pn.Row(
+            *self._step_buttons(),
+            visible=False,
+            margin=(0, 5),
+            stylesheets=[WIDE],
+            css_classes=["twoball-step-buttons-above"],
+        )
+
+    def _answered(self, answered: bool) -> None:
+        """A phone's Previous and Next under the answer once it is revealed, the card's hidden
+        meanwhile (:data:`ANSWERED_ON_A_PHONE`)."""
+        if self.phone_buttons is None:
+            return
+        self.phone_buttons.visible = answered and self.state.step > 0
+        self._card_buttons.css_classes = ["twoball-step-buttons"] + (
+            ["twoball-answered"] if answered else []
+        )
 
     def _answers(self) -> list[pn.pane.Alert]:
         """The answer's alerts: the card's, and a phone's above the scene (:data:`PHONE`)."""
@@ -334,7 +372,12 @@ class Lesson(Built):
     def _buttons(self) -> pn.Row:
         """Previous and Next, a row that the page scrolls to after a reveal (lesson.js), but on
         a projector, where it lies above the answer."""
-        return pn.Row(self.previous, self.next, css_classes=["twoball-step-buttons"])
+        return pn.Row(
+            self.previous,
+            self.next,
+            css_classes=["twoball-step-buttons"],
+            stylesheets=[ANSWERED_ON_A_PHONE],
+        )
 
     def stage(self) -> pn.Column:
         """The step's question and choices, large, for the main area (the card then keeps the
