@@ -818,3 +818,37 @@ def test_trails_asked_for_while_paused_after_a_play_are_drawn_at_once(
         assert errors == []
     finally:
         context.close()
+
+
+@pytest.mark.parametrize("scene", ["drop", "stack"])
+@pytest.mark.parametrize("size", [(390, 844), (1366, 768)], ids=["phone", "laptop"])
+def test_a_phone_s_player_buttons_are_touch_targets(browser, app_server, artifacts, scene, size):
+    """The player's buttons were 31 x 21 px on a phone: each is at least 44 x 44 CSS px there
+    (WCAG's touch target), all nine whole inside the width and the player over nothing that
+    follows it; a laptop keeps its smaller buttons."""
+    base, _ = app_server
+    width, height = size
+    context, page, errors = open_page(browser, f"{base}/app?scene={scene}", viewport=size)
+    try:
+        page.wait_for_timeout(800)
+        buttons = [b for b in deep_query(page, PLAYER_BUTTONS) if b["visible"]]
+        assert len(buttons) == 9, buttons
+        if width < 768:
+            assert all(b["width"] >= 44 and b["height"] >= 44 for b in buttons), buttons
+            assert all(b["left"] >= 0 and b["right"] <= width for b in buttons), buttons
+            # nothing under the buttons' second row (the Stack's player kept its 80 px:
+            # the row lay over the explanation's text)
+            others = [
+                b
+                for b in deep_query(page, "button, label, input, p")
+                if b["visible"] and b not in buttons
+            ]
+            over = [b for b in others if any(_overlap(b, x) for x in buttons)]
+            assert over == [], over
+            page.locator("button.play").scroll_into_view_if_needed()
+            page.screenshot(path=artifacts / f"phone-player-{scene}.png")
+        else:  # (not larger where a mouse points)
+            assert all(b["height"] < 44 for b in buttons), buttons
+        assert errors == []
+    finally:
+        context.close()
