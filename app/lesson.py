@@ -76,6 +76,8 @@ ANSWERED_ON_A_PHONE = (
 # greyed "Reveal the answer" left a student pressing it, not knowing why nothing happened)
 REVEAL = "Reveal the answer"
 CHOOSE_FIRST = "Choose an answer first"
+ROOM_PREDICTS = "The room predicts aloud: Reveal needs no choice."
+ROOM_PREDICTS_STYLES = {"font-size": "20px", "font-style": "italic", "color": "#495057"}
 
 
 class Lesson(Built):
@@ -173,11 +175,26 @@ class Lesson(Built):
         )
         choices_css = PROJECTED_CHOICES if projected else ASKED_CHOICES
         self.choices.stylesheets = [*self.choices.stylesheets, choices_css]
+        # on a projector Reveal waits for no choice (_waits_for_a_choice), and says so beside it:
+        # a teacher's trial found it enabled with nothing chosen and nothing on screen saying why
+        reveal = (
+            pn.Row(
+                self.reveal,
+                pn.pane.Markdown(
+                    ROOM_PREDICTS,
+                    styles=ROOM_PREDICTS_STYLES,
+                    margin=(11, 10, 0, 10),  # (its line's middle level with the button's)
+                    stylesheets=[":host p { margin: 0; }"],
+                ),
+            )
+            if projected
+            else self.reveal
+        )
         self._asking = pn.Column(
             self.look_for,
             self.question,
             self.choices,
-            self.reveal,
+            reveal,
             sizing_mode="stretch_width",
             visible=False,
         )

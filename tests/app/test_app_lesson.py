@@ -9,7 +9,7 @@ from appdriver import deep_query, open_page, page_query
 from playwright.sync_api import expect
 
 import twoball
-from app.lesson import CHOOSE_FIRST, FULL_EXPLANATION
+from app.lesson import CHOOSE_FIRST, FULL_EXPLANATION, ROOM_PREDICTS
 from app.state import ExplorerState, read_query
 from app.steps import STEPS, gist
 from twoball import presets
@@ -482,11 +482,20 @@ def test_reveal_says_that_it_waits_for_a_choice(browser, app_server, artifacts, 
                 {"text": "Reveal the answer", "disabled": False, "fits": True}
             ]
             expect(page.get_by_role("button", name=CHOOSE_FIRST)).to_have_count(0)
+            # ... and says so beside it (nothing on screen said why it needed no choice)
+            hint = page.get_by_text(ROOM_PREDICTS, exact=True)
+            expect(hint).to_be_in_viewport(ratio=1)
+            box = hint.bounding_box()
+            button = page.get_by_role("button", name="Reveal the answer").bounding_box()
+            assert box["x"] >= button["x"] + button["width"], (box, button)  # beside it
+            middle = box["y"] + box["height"] / 2
+            assert button["y"] <= middle <= button["y"] + button["height"], (box, button)
             page.screenshot(path=shots / f"{name}.png")
             assert errors == []
             return
         waiting = page.get_by_role("button", name=CHOOSE_FIRST)
         expect(waiting).to_be_disabled()
+        expect(page.get_by_text(ROOM_PREDICTS)).to_have_count(0)  # (a student chooses)
         waiting.scroll_into_view_if_needed()
         expect(waiting).to_be_in_viewport(ratio=1)
         assert page.evaluate(REVEAL_JS) == [{"text": CHOOSE_FIRST, "disabled": True, "fits": True}]
