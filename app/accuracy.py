@@ -36,6 +36,11 @@ from .steps import STEPS
 OKABE_ITO = ("#000000", "#E69F00", "#56B4E9", "#009E73", "#0072B2", "#D55E00", "#CC79A7", "#F0E442")
 STALE = {"opacity": "0.35"}  # the results of the drop before, while this one is measured
 PROJECTOR_PLOT_HEIGHT = 400  # presentation mode (scene.py): first under the tabs, in 720 px
+# On a projector the plot's neighbour: the rows at one tolerance, the lesson's question's (6
+# digits asked for). The whole table (21 rows, 770 px at a room's 20 px) lay under the plot,
+# off a 1280x720 screen (the lesson's step 6: a teacher's trial); it still follows, below.
+ASKED_TOLERANCE = 1e-6
+PROJECTOR_ASKED_WIDTH = 360
 
 
 def log_range(values: list[float], empty: tuple[float, float]) -> Range1d:
@@ -101,8 +106,15 @@ class AccuracyScene(Scene):
             f"{ERROR_FLOOR:.0e}. An error of {FAILED_ERROR:g}: the method failed or missed a "
             "bounce."
         )
-        # on a projector the plot comes first, under the tabs (the teacher says what it shows)
-        parts = [self.plot, about] if self.state.presentation else [about, self.plot]
+        # on a projector the plot comes first, under the tabs (the teacher says what it shows),
+        # with the rows at the asked tolerance beside it (ASKED_TOLERANCE)
+        if self.state.presentation:
+            asked = Text(
+                pn.bind(self._asked_table, self.param.revision), width=PROJECTOR_ASKED_WIDTH
+            )
+            parts = [pn.Row(self.plot, asked, sizing_mode="stretch_width"), about]
+        else:
+            parts = [about, self.plot]
         # the last drop's plot and table, dimmed while the next is measured (at full strength
         # they were read as the new drop's for the few seconds of the measurement)
         self.results = pn.Column(*parts, self.table, sizing_mode="stretch_width")
@@ -224,6 +236,30 @@ class AccuracyScene(Scene):
                 f"| {r.method} | {tol} | {r.rel_err_h1:.2e} | {r.rel_err_h2:.2e} "
                 f"| {r.seconds:.3g} |"
             )
+        return "\n".join(lines)
+
+    def _asked_table(self, revision: bool) -> str:
+        """The exact solver's row and each method's at :data:`ASKED_TOLERANCE`: its error (the
+        larger of h1's and h2's) and run time."""
+        rows = [
+            r
+            for r in self.rows or []
+            if r.tolerance is None or math.isclose(r.tolerance, ASKED_TOLERANCE)
+        ]
+        if not rows or math.isnan(rows[0].rel_err_h1):
+            return ""  # (the table below says why: no bounce to measure)
+        digits = round(-math.log10(ASKED_TOLERANCE))
+        lines = [
+            f"**Asked for {digits} digits (tolerance 1e-{digits}):**",
+            "",
+            "| method | error | seconds |",
+            "|---|---|---|",
+        ]
+        for r in rows:
+            error = "failed" if r.failed else f"{r.error:.1e}"
+            if r.tolerance is None:
+                error = "(reference)"
+            lines.append(f"| {r.method} | {error} | {r.seconds:.2g} |")
         return "\n".join(lines)
 
     def layout(self) -> pn.viewable.Viewable:

@@ -166,6 +166,20 @@ PLAYER_DEFAULTS = dict(
 )
 
 
+# On a phone (narrower than 768 px, as PAGE_CSS in app/explorer.py) the player's buttons are
+# touch targets of at least 44 x 44 CSS px (WCAG 2.5.5; Panel draws them 31 x 21): nine of
+# them wrap onto a second row, the player as tall as they need (in a column too, which gave
+# it a basis of its 80 px: the Stack's second row lay over the text under it). A wider
+# screen keeps them.
+PHONE_PLAYER = """
+@media (max-width: 767px) {
+  :host { height: auto !important; flex-basis: auto !important; }
+  :host div:has(> button.play) { flex-wrap: wrap; }
+  :host button { min-width: 44px; min-height: 44px; }
+}
+"""
+
+
 class FramePlayer(pn.widgets.Player):
     """Panel's player, each of whose frames is drawn in the browser by an
     :class:`Animation`, given its model when the model is made; its first move after a new
@@ -173,7 +187,9 @@ class FramePlayer(pn.widgets.Player):
     (a playing page does not send each frame: app/static/animation.js)."""
 
     def __init__(self, animation: Animation, **params):
-        super().__init__(**{**PLAYER_DEFAULTS, **params})
+        params = {**PLAYER_DEFAULTS, **params}
+        params["stylesheets"] = [*params.get("stylesheets", []), PHONE_PLAYER]
+        super().__init__(**params)
         self._on_frame = animation.on_frame
         self.param.watch(lambda _: animation.send_frames(), "value")
 

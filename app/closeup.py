@@ -43,7 +43,7 @@ def collision_window(contacts: list[twoball.ContactInterval], end: float) -> tup
     return max(start - pad, 0.0), min(stop + pad, end)
 
 
-PROJECTOR_PLOT_HEIGHT = 470  # presentation mode (scene.py): positions; each force half of it
+PROJECTOR_PLOT_HEIGHT = 400  # presentation mode (scene.py): positions; each force half of it
 # beside the forces, each at least 380 px wide (a phone wraps them one above the other)
 BESIDE_STYLES = {"flex": "1 1 380px", "min-width": "0"}
 

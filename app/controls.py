@@ -124,6 +124,102 @@ class ReleasedIntSlider(Released, pn.widgets.IntSlider):
     """:class:`Released` for whole numbers."""
 
 
+def two_ball_sliders(state: ExplorerState, short: bool = False) -> dict[str, pn.widgets.Widget]:
+    """eps, mu and tau_ratio: eps a slider made from the state's parameter (its bounds, linked
+    both ways, the state set on release only); mu and tau_ratio sliders of log10 of the value,
+    which Panel's from_param cannot make (it has no transform), for the caller to link
+    (:func:`follow_log_sliders`). ``short``: titles short enough for a projector's 20 px."""
+    return {
+        "eps": ReleasedSlider.from_param(
+            state.param.eps,
+            name="eps" if short else "eps (restitution)",
+            step=0.001,
+            format="0.000",
+            throttled=True,
+        ),
+        "mu": _log_slider("mu = m2/m1" if short else "mu = m2/m1 (log scale)", "mu"),
+        "tau_ratio": _log_slider(
+            "tau_d/tau_f" if short else "tau_d/tau_f (log scale)", "tau_ratio"
+        ),
+    }
+
+
+def _log_slider(label: str, name: str) -> pn.widgets.FloatSlider:
+    low, high = app_range(name)
+    return ReleasedSlider(
+        label=label,
+        start=math.log10(low),
+        end=math.log10(high),
+        step=0.01,
+        format=CustomJSTickFormatter(code=POWER_OF_TEN),
+    )
+
+
+def follow_log_sliders(sliders: dict[str, pn.widgets.Widget], state: ExplorerState) -> None:
+    """Move the log sliders to the state (eps follows it by its link)."""
+    for name in LOG_SLIDERS:
+        slider = sliders[name]
+        value = getattr(state, name)
+        shown = min(max(math.log10(value), slider.start), slider.end)
+        if abs(shown - slider.value) < 1e-9:
+            continue  # already there (a round trip through log10 is not exact)
+        with param.edit_constant(slider):
+            slider.param.update(value=shown, value_throttled=shown)
+
+
+def on_a_phone() -> bool:
+    """Whether this session's browser says it is a phone's ("Mobi" in its User-Agent, as
+    Mozilla advises; a tablet's says it not, and has the width for the sidebar)."""
+    headers = pn.state.headers or {}
+    agent = next((v for k, v in headers.items() if k.lower() == "user-agent"), "")
+    return "Mobi" in agent
+
+
+# Shown under 768 px only (PAGE_CSS in app/explorer.py): a phone turned sideways has the
+# sidebar beside the scene, with its own sliders
+PHONE_ONLY = "@media (min-width: 768px) { :host { display: none !important; } }"
+
+
+class PhoneSliders(Built):
+    """The three two-ball sliders again, for a phone's Drop scene, right under its plot: the
+    sidebar's, below the scene, the player, the lesson and the preset, lay 1100 px under it,
+    and a student could not watch the plot while dragging (a teacher's trial). Made only for
+    a phone's page (:func:`on_a_phone`: no other page pays for them), shown under 768 px; both
+    sets follow the state."""
+
+    state = param.ClassSelector(class_=ExplorerState)
+
+    def __init__(self, **params):
+        super().__init__(**params)
+        self.sliders = two_ball_sliders(self.state)
+        self._syncing = False
+        for name in LOG_SLIDERS:
+            self.sliders[name].param.watch(
+                lambda event, name=name: self._moved(name, event.new), "value_throttled"
+            )
+        self.state.param.watch(self._follow, list(LOG_SLIDERS))
+        self._follow()
+
+    def _moved(self, name: str, value: float | None) -> None:
+        if not self._syncing and value is not None:
+            self.state.param.update(**{name: 10.0**value})
+
+    def _follow(self, *events: param.parameterized.Event) -> None:
+        self._syncing = True
+        try:
+            follow_log_sliders(self.sliders, self.state)
+        finally:
+            self._syncing = False
+
+    def layout(self) -> pn.viewable.Viewable:
+        return pn.Column(
+            *self.sliders.values(),
+            sizing_mode="stretch_width",
+            stylesheets=[PHONE_ONLY],
+            css_classes=["twoball-phone-sliders"],
+        )
+
+
 class Controls(Built):
     """Widgets bound to one :class:`ExplorerState`, and the message box for bad input."""
 
@@ -145,23 +241,7 @@ class Controls(Built):
         )
         # on a projector the titles are short: at 20 px a long one pushed its value out of
         # the sidebar ("mu = m2/m1 (log scale): 0.09...")
-        short = self.state.presentation
-        # eps: a slider made from the state's parameter (its bounds, linked both ways, the
-        # state set on release only); mu and tau_ratio: sliders of log10 of the value, which
-        # Panel's from_param cannot make (it has no transform), linked here
-        self.sliders = {
-            "eps": ReleasedSlider.from_param(
-                self.state.param.eps,
-                name="eps" if short else "eps (restitution)",
-                step=0.001,
-                format="0.000",
-                throttled=True,
-            ),
-            "mu": self._log_slider("mu = m2/m1" if short else "mu = m2/m1 (log scale)", "mu"),
-            "tau_ratio": self._log_slider(
-                "tau_d/tau_f" if short else "tau_d/tau_f (log scale)", "tau_ratio"
-            ),
-        }
+        self.sliders = two_ball_sliders(self.state, short=self.state.presentation)
         for name, slider in self.sliders.items():
             slider.param.watch(
                 lambda event, name=name: self._slider_moved(name, event.new), "value_throttled"
@@ -200,17 +280,6 @@ class Controls(Built):
         finally:
             self._syncing = False
         self.scene_controls = pn.Column(sizing_mode="stretch_width")
-
-    @staticmethod
-    def _log_slider(label: str, name: str) -> pn.widgets.FloatSlider:
-        low, high = app_range(name)
-        return ReleasedSlider(
-            label=label,
-            start=math.log10(low),
-            end=math.log10(high),
-            step=0.01,
-            format=CustomJSTickFormatter(code=POWER_OF_TEN),
-        )
 
     def show_messages(self, messages: list[str], typed: bool = False) -> None:
         """Show the messages, literally: a typed value's under the inputs (``typed``), others at
@@ -312,14 +381,7 @@ class Controls(Built):
 
     def _follow_state(self) -> None:
         s = self.state
-        for name in LOG_SLIDERS:  # (eps follows the state by its link)
-            slider = self.sliders[name]
-            value = getattr(s, name)
-            shown = min(max(math.log10(value), slider.start), slider.end)
-            if abs(shown - slider.value) < 1e-9:
-                continue  # already there (a round trip through log10 is not exact)
-            with param.edit_constant(slider):
-                slider.param.update(value=shown, value_throttled=shown)
+        follow_log_sliders(self.sliders, s)
         si = s.units == "SI"
         self.height.label = "drop height [m]" if si else "H (dimensionless drop height)"
         if self.meanings.object != self._meanings():

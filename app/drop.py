@@ -35,6 +35,7 @@ from twoball.units import units_named
 
 from .animation import Animation, FramePlayer
 from .collisions import collisions
+from .controls import PhoneSliders, on_a_phone
 from .scene import (
     PROJECTED_PLAYER_HEIGHT,
     Scene,
@@ -610,9 +611,17 @@ class DropScene(Scene):
         self._draw()
         if self.state.presentation:
             return self._projected_layout()
+        if on_a_phone():  # the sliders right under the plot (controls.PhoneSliders)
+            plots = [
+                pn.pane.Bokeh(self.heights, sizing_mode="stretch_width"),
+                PhoneSliders(state=self.state),
+                pn.pane.Bokeh(self.animation),
+            ]
+        else:
+            plots = [heights_and_stage(self.heights, self.animation, self.state.presentation)]
         return pn.Column(
             self.summary,
-            heights_and_stage(self.heights, self.animation, self.state.presentation),
+            *plots,
             # wraps: on a phone a row squeezed the player until its first buttons left the screen
             pn.FlexBox(
                 self.player,

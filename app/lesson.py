@@ -14,7 +14,7 @@ import param
 
 from .scene import Built, ScriptedButton, alert, later
 from .state import ExplorerState
-from .steps import STEPS
+from .steps import STEPS, gist
 
 # what the lesson sets and gives back at its end: the drop, the scene and the units
 BEFORE_THE_LESSON = ("eps", "eps12", "mu", "tau_ratio", "height", "scene", "units")
@@ -25,6 +25,11 @@ PROJECTED = {"font-size": "30px", "line-height": "1.3"}
 # what to look for, on a projector: smaller than the question (at 30 px step 1's five lines had
 # pushed Reveal below a 1280x720 screen); still read from the back of a room
 PROJECTED_LOOK_FOR = {"font-size": "24px", "line-height": "1.3"}
+# Under a projected answer, the step's aside (step 1's two lines) at the page's own 20 px, and
+# both with little margin: at 24 px, with a paragraph's margins, they put the plot 196 px
+# under the answer line's top (a teacher's trial; the row under the plot, off the screen)
+PROJECTED_ASIDE = {"font-size": "20px", "line-height": "1.3"}
+TIGHT = ":host p { margin-top: 0.2em; margin-bottom: 0.2em; }"
 # each circle centred on its words: Bokeh lifts a radio's words by 0.4 em, made for its own
 # 13 px circle and text; larger, the circle sat below them (a third of a line on a projector)
 CENTRED = (
@@ -49,6 +54,24 @@ PROJECTED_CHOICES = (
 # shown at its own widths (a Panel pane has one place in a page).
 PHONE = "@media (max-width: 767px) { :host { display: none !important; } }"
 WIDE = "@media (min-width: 768px) { :host { display: none !important; } }"
+# The answer in a projector's card (the 330 px sidebar, at the room's 20 px). The whole
+# explanation ran past a 1280x720 screen on four steps (to y 1343 on step 1, step 6's cut
+# mid-sentence). Decided: the room reads the one-line answer above the scene, and the teacher
+# tells the why; the card shows the explanation's first sentence (the answer with its numbers,
+# steps.gist) at 18 px, the teacher's prompt, and folds the rest under FULL_EXPLANATION, which
+# the teacher opens when the class asks (the sidebar then scrolls). Not smaller text (under
+# 16 px it is not read from a lectern either), not a second column (the main area's width is
+# the plots'). A laptop's and a phone's card, read by the student alone, keep it whole.
+FULL_EXPLANATION = "The full explanation"
+PROJECTED_ANSWER = {"font-size": "18px"}
+FOLD_CSS = ":host summary { cursor: pointer; text-decoration: underline; margin-top: 0.5em; }"
+# After a reveal on a phone, Previous and Next stand under the answer above the scene: in the
+# card, below the scene and the controls, Next lay 1600 px under the answer (a teacher's
+# trial). The card's pair is hidden meanwhile (one Next on screen; a second pair of buttons,
+# made with the step's widgets, costs a page opened without the lesson nothing).
+ANSWERED_ON_A_PHONE = (
+    "@media (max-width: 767px) { :host(.twoball-answered) { display: none !important; } }"
+)
 # Reveal's label: while it waits for a prediction (disabled), it says what it waits for (a
 # greyed "Reveal the answer" left a student pressing it, not knowing why nothing happened)
 REVEAL = "Reveal the answer"
@@ -57,6 +80,8 @@ REVEAL = "Reveal the answer"
 SHOW_STEP = "twoballShowStep();"
 SHOW_ANSWER = "twoballShowAnswer();"
 CHOOSE_FIRST = "Choose an answer first"
+ROOM_PREDICTS = "The room predicts aloud: Reveal needs no choice."
+ROOM_PREDICTS_STYLES = {"font-size": "20px", "font-style": "italic", "color": "#495057"}
 
 
 class Lesson(Built):
@@ -102,19 +127,22 @@ class Lesson(Built):
         self.reveal = ScriptedButton(label=REVEAL, color="primary", script=SHOW_ANSWER)
         # (the page scrolls to it after a reveal: lesson.js)
         self.answer = alert(
-            "", visible=False, sizing_mode="stretch_width", css_classes=["twoball-answer"]
+            "",
+            visible=False,
+            sizing_mode="stretch_width",
+            css_classes=["twoball-answer"],
+            styles=PROJECTED_ANSWER if projected else {},
         )
+        if projected:
+            self.answer.stylesheets = [*self.answer.stylesheets, FOLD_CSS]
         # ... and on a phone, above the scene (made with the step's widgets)
         self.answer_above: pn.pane.Alert | None = None
-        self.previous = ScriptedButton(label="< Previous", width=110, script=SHOW_STEP)
-        self.next = ScriptedButton(label="Next >", color="primary", width=110, script=SHOW_STEP)
+        self.previous, self.next = self._step_buttons()
+        # ... and on a phone, under the answer above the scene (:meth:`_place_answer_by_width`)
+        self.phone_buttons: pn.Row | None = None
         # a step changes the drop, and with it the scenes' Bokeh models: on the next tick,
         # as every change made from the browser (see scene.later)
         self.reveal.on_click(lambda _: later(self._reveal))
-        self.previous.on_click(lambda _: later(lambda: self._go(self.state.step - 1)))
-        self.next.on_click(
-            lambda _: later(lambda: self._go((self.state.step + 1) % (len(STEPS) + 1)))
-        )
         self.choices.param.watch(self._chosen, "value")
         # the question and its choices fill the main area while the class predicts
         # (:meth:`stage`; in the 300 px sidebar, beside an empty main area, they were small);
@@ -134,28 +162,59 @@ class Lesson(Built):
             stylesheets=[":host p { margin-top: 0.6em; }"],
         )
         self.answer_line = pn.pane.Markdown(
-            visible=False, sizing_mode="stretch_width", styles=PROJECTED
+            visible=False,
+            sizing_mode="stretch_width",
+            styles=PROJECTED,
+            stylesheets=[TIGHT],
         )
         # the step's aside (steps.Step.aside), under it, on every screen: what the scene shows
-        # beyond the question, where the class looks
+        # beyond the question, where the class looks (on a projector at the page's 20 px, close
+        # to the answer: PROJECTED_ASIDE)
         self.aside = pn.pane.Markdown(
             visible=False,
             sizing_mode="stretch_width",
-            styles=PROJECTED_LOOK_FOR if projected else ASKED,
+            styles=PROJECTED_ASIDE if projected else ASKED,
             margin=(0, 10),
             css_classes=["twoball-aside"],
+            stylesheets=[TIGHT] if projected else [],
         )
         choices_css = PROJECTED_CHOICES if projected else ASKED_CHOICES
         self.choices.stylesheets = [*self.choices.stylesheets, choices_css]
+        # on a projector Reveal waits for no choice (_waits_for_a_choice), and says so beside it:
+        # a teacher's trial found it enabled with nothing chosen and nothing on screen saying why
+        reveal = (
+            pn.Row(
+                self.reveal,
+                pn.pane.Markdown(
+                    ROOM_PREDICTS,
+                    styles=ROOM_PREDICTS_STYLES,
+                    margin=(11, 10, 0, 10),  # (its line's middle level with the button's)
+                    stylesheets=[":host p { margin: 0; }"],
+                ),
+            )
+            if projected
+            else self.reveal
+        )
         self._asking = pn.Column(
             self.look_for,
             self.question,
             self.choices,
-            self.reveal,
+            reveal,
             sizing_mode="stretch_width",
             visible=False,
         )
         self._add_step_widgets()
+
+    def _step_buttons(self) -> tuple[pn.widgets.Button, pn.widgets.Button]:
+        """Previous and Next, which go to their step (the page then shows its title:
+        app/static/lesson.js)."""
+        previous = ScriptedButton(label="< Previous", width=110, script=SHOW_STEP)
+        following = ScriptedButton(label="Next >", color="primary", width=110, script=SHOW_STEP)
+        previous.on_click(lambda _: later(lambda: self._go(self.state.step - 1)))
+        following.on_click(
+            lambda _: later(lambda: self._go((self.state.step + 1) % (len(STEPS) + 1)))
+        )
+        return previous, following
 
     def _begin(self) -> None:
         """The lesson's first step, in metres and seconds: a class thinks in them (the
@@ -216,7 +275,7 @@ class Lesson(Built):
             verdict = f"Not quite: {correct.lower()}."
         for answer in self._answers():
             answer.param.update(
-                object=f"**{verdict}** {shown.explanation}",
+                object=f"**{verdict}** {self._explained(shown.explanation)}",
                 alert_type="success" if self.choices.value == correct else "warning",
                 visible=True,
             )
@@ -226,7 +285,16 @@ class Lesson(Built):
             visible=self.state.presentation,
         )
         self.aside.param.update(object=shown.aside, visible=bool(shown.aside))
+        self._answered(True)
         self.state.revealed = True  # the scene comes out from under its cover
+
+    def _explained(self, explanation: str) -> str:
+        """The explanation as the card shows it: whole, or on a projector its first sentence,
+        the rest folded (:data:`FULL_EXPLANATION`)."""
+        first, rest = gist(explanation)
+        if not self.state.presentation or not rest:
+            return explanation
+        return f"{first}\n\n<details><summary>{FULL_EXPLANATION}</summary>\n\n{rest}\n\n</details>"
 
     @param.depends("state.step", watch=True)
     def _show(self) -> None:
@@ -240,6 +308,7 @@ class Lesson(Built):
                 widget.visible = lesson_on
             for shown in (*self._answers(), self.answer_line, self.aside):
                 shown.visible = False
+            self._answered(False)
         if not lesson_on:
             self.heading.object = (
                 "A guided path through the demonstration in six steps: predict, then see."
@@ -254,8 +323,10 @@ class Lesson(Built):
         self._place_title()
         self.choices.param.update(options=list(shown.choices), value=None, disabled=False)
         self._offer_reveal()
-        self.previous.disabled = step == 1
-        self.next.label = "Next >" if step < len(STEPS) else "End the lesson"
+        phone = [] if self.phone_buttons is None else [self.phone_buttons.objects]
+        for previous, following in [(self.previous, self.next), *phone]:
+            previous.disabled = step == 1
+            following.label = "Next >" if step < len(STEPS) else "End the lesson"
 
     def _title(self) -> str:
         step = self.state.step
@@ -276,11 +347,13 @@ class Lesson(Built):
         if not self.state.presentation:  # (whose answer above the scene is one large line)
             self._place_answer_by_width()
         above = [] if self.answer_above is None else [self.answer_above]  # (a phone's)
-        self._stage.objects = [self._asking, *above, self.answer_line, self.aside]
+        buttons = [] if self.phone_buttons is None else [self.phone_buttons]  # (a phone's)
+        self._stage.objects = [self._asking, *above, self.answer_line, self.aside, *buttons]
+        self._card_buttons = self._buttons()
         if self.state.presentation:
-            self._steps.objects = [self._buttons(), self.answer]
+            self._steps.objects = [self._card_buttons, self.answer]
         else:
-            self._steps.objects = [self.answer, self._buttons()]
+            self._steps.objects = [self.answer, self._card_buttons]
 
     def _place_answer_by_width(self) -> None:
         """The answer in the card beside the scene, and on a phone above it (:data:`PHONE`)."""
@@ -293,6 +366,24 @@ class Lesson(Built):
             margin=(5, 10),
         )
         self.answer_above.stylesheets = [*self.answer_above.stylesheets, WIDE]
+        # Previous and Next under it, after a reveal (:data:`ANSWERED_ON_A_PHONE`)
+        self.phone_buttons = pn.Row(
+            *self._step_buttons(),
+            visible=False,
+            margin=(0, 5),
+            stylesheets=[WIDE],
+            css_classes=["twoball-step-buttons-above"],
+        )
+
+    def _answered(self, answered: bool) -> None:
+        """A phone's Previous and Next under the answer once it is revealed, the card's hidden
+        meanwhile (:data:`ANSWERED_ON_A_PHONE`)."""
+        if self.phone_buttons is None:
+            return
+        self.phone_buttons.visible = answered and self.state.step > 0
+        self._card_buttons.css_classes = ["twoball-step-buttons"] + (
+            ["twoball-answered"] if answered else []
+        )
 
     def _answers(self) -> list[pn.pane.Alert]:
         """The answer's alerts: the card's, and a phone's above the scene (:data:`PHONE`)."""
@@ -301,7 +392,12 @@ class Lesson(Built):
     def _buttons(self) -> pn.Row:
         """Previous and Next, a row that the page scrolls to after a reveal (lesson.js), but on
         a projector, where it lies above the answer."""
-        return pn.Row(self.previous, self.next, css_classes=["twoball-step-buttons"])
+        return pn.Row(
+            self.previous,
+            self.next,
+            css_classes=["twoball-step-buttons"],
+            stylesheets=[ANSWERED_ON_A_PHONE],
+        )
 
     def stage(self) -> pn.Column:
         """The step's question and choices, large, for the main area (the card then keeps the

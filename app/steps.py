@@ -8,6 +8,7 @@ them for a URL's ``?step=N`` (app/state.py), the lesson's card shows them (app/l
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 from twoball import presets
@@ -34,6 +35,14 @@ class Step:
     # screen). Said, not cut: the drop scene ends at the second apex for every drop, and the
     # steps that follow compare the two bounces
     aside: str = ""
+
+
+def gist(explanation: str) -> tuple[str, str]:
+    """An explanation's first sentence (the answer and its numbers) and the rest ("" if none).
+    A projector's card shows the first and folds the rest away (app/lesson.py), so each
+    explanation's first sentence says the answer with its numbers, on its own."""
+    parts = re.split(r"(?<=\.)\s+(?=[A-Z(])", explanation, maxsplit=1)
+    return parts[0], parts[1] if len(parts) > 1 else ""
 
 
 STEPS = (
@@ -107,7 +116,7 @@ STEPS = (
         question="How many times do the balls touch while the big ball is on the floor?",
         choices=("Once", "Twice", "4 times", "Hundreds of times"),
         answer=2,
-        explanation="4 times. The small ball is hit while the big one is still being squashed, "
+        explanation="4 times: the small ball is hit while the big one is still being squashed, "
         "bounces off, falls back and is hit again, each time before the big ball has given "
         "back its energy. It leaves with little of it: the small first bounce. The energy left "
         "in the big ball comes back at the next collision: the high second bounce. (A tennis "

@@ -17,6 +17,7 @@ from appdriver import (
     press_slider,
     sources_with,
     wait_for_change,
+    wait_for_plots,
 )
 from playwright.sync_api import expect
 
@@ -815,6 +816,99 @@ def test_trails_asked_for_while_paused_after_a_play_are_drawn_at_once(
         page.wait_for_function(f"() => ({TRAIL_POINTS_JS})().some((n) => n > 5)", timeout=10_000)
         assert max(page.evaluate(TRAIL_POINTS_JS)) == frame + 1  # up to the frame shown
         page.screenshot(path=artifacts / "trails_after_a_pause.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
+@pytest.mark.parametrize("scene", ["drop", "stack"])
+@pytest.mark.parametrize("size", [(390, 844), (1366, 768)], ids=["phone", "laptop"])
+def test_a_phone_s_player_buttons_are_touch_targets(browser, app_server, artifacts, scene, size):
+    """The player's buttons were 31 x 21 px on a phone: each is at least 44 x 44 CSS px there
+    (WCAG's touch target), all nine whole inside the width and the player over nothing that
+    follows it; a laptop keeps its smaller buttons."""
+    base, _ = app_server
+    width, height = size
+    context, page, errors = open_page(browser, f"{base}/app?scene={scene}", viewport=size)
+    try:
+        page.wait_for_timeout(800)
+        buttons = [b for b in deep_query(page, PLAYER_BUTTONS) if b["visible"]]
+        assert len(buttons) == 9, buttons
+        if width < 768:
+            assert all(b["width"] >= 44 and b["height"] >= 44 for b in buttons), buttons
+            assert all(b["left"] >= 0 and b["right"] <= width for b in buttons), buttons
+            # nothing under the buttons' second row (the Stack's player kept its 80 px:
+            # the row lay over the explanation's text)
+            others = [
+                b
+                for b in deep_query(page, "button, label, input, p")
+                if b["visible"] and b not in buttons
+            ]
+            over = [b for b in others if any(_overlap(b, x) for x in buttons)]
+            assert over == [], over
+            page.locator("button.play").scroll_into_view_if_needed()
+            page.screenshot(path=artifacts / f"phone-player-{scene}.png")
+        else:  # (not larger where a mouse points)
+            assert all(b["height"] < 44 for b in buttons), buttons
+        assert errors == []
+    finally:
+        context.close()
+
+
+# a phone's browser (Chromium on Android): its page gets the sliders under the Drop's plot
+PHONE_AGENT = (
+    "Mozilla/5.0 (Linux; Android 14; Pixel 8) AppleWebKit/537.36 (KHTML, like Gecko) "
+    "Chrome/130.0.0.0 Mobile Safari/537.36"
+)
+# each slider's handle in the page's order (press_slider's index), with its slider's top and
+# bottom and whether it is shown
+HANDLES_JS = """() => { const out = []; const walk = (root) => {
+  for (const el of root.querySelectorAll("*")) {
+    if (el.classList && el.classList.contains("noUi-handle")) {
+      const box = el.closest(".noUi-target").getBoundingClientRect();
+      out.push({top: box.top, bottom: box.bottom, visible: el.checkVisibility(),
+                value: el.getAttribute("aria-valuenow")});
+    }
+    if (el.shadowRoot) walk(el.shadowRoot);
+  } };
+  walk(document); return out; }"""
+
+
+def test_a_phone_drags_the_sliders_under_the_plot(browser, app_server, artifacts):
+    """On a phone the Drop's sliders (eps, mu, tau ratio) lay 1100 px under its plot, below
+    the animation, the player, the lesson and the preset: a student could not watch the plot
+    while dragging. They stand right under it, the plot and all three on one screen; moved
+    there, the plot changes and the sidebar's own sliders follow."""
+    base, _ = app_server
+    context = browser.new_context(
+        viewport={"width": 390, "height": 844}, user_agent=PHONE_AGENT, is_mobile=True
+    )
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    try:
+        page.goto(f"{base}/app")
+        wait_for_plots(page)
+        page.wait_for_timeout(800)
+        heights = max(plots_on(page), key=lambda c: c["width"])
+        handles = page.evaluate(HANDLES_JS)
+        shown = [(i, h) for i, h in enumerate(handles) if h["visible"]]
+        near = [(i, h) for i, h in shown if h["top"] >= heights["bottom"] - 1]
+        near = sorted(near, key=lambda ih: ih[1]["top"])[:3]
+        assert len(near) == 3, handles
+        assert near[0][1]["top"] - heights["bottom"] <= 80, (heights, near)  # right under it
+        header = page.locator("#header").bounding_box()
+        span = near[-1][1]["bottom"] - heights["top"]  # the plot and the three sliders
+        assert span <= 844 - header["height"], (heights, near)  # ... on one screen
+        page.screenshot(path=artifacts / "phone-sliders-under-the-plot.png")
+        # the first of them is eps: moved, the plot follows, and so does the sidebar's eps
+        index = near[0][0]
+        assert press_slider(page, index, "ArrowLeft") > 0
+        page.wait_for_timeout(500)
+        values = [h["value"] for h in page.evaluate(HANDLES_JS)]
+        others = [v for i, v in enumerate(values) if i != index]
+        assert values[index] in others, values  # (the sidebar's eps shows the same value)
         assert errors == []
     finally:
         context.close()

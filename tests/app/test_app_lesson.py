@@ -9,9 +9,9 @@ from appdriver import deep_query, open_page, page_query
 from playwright.sync_api import expect
 
 import twoball
-from app.lesson import CHOOSE_FIRST
+from app.lesson import CHOOSE_FIRST, FULL_EXPLANATION, ROOM_PREDICTS
 from app.state import ExplorerState, read_query
-from app.steps import STEPS
+from app.steps import STEPS, gist
 from twoball import presets
 from twoball.observables import BALLS
 
@@ -272,10 +272,47 @@ def test_a_projected_step_asks_large_and_answers_in_one_large_line(
         players = [b for b in deep_query(page, "button.play") if b["visible"]]
         assert len(players) == (step.scene == "drop"), players  # the drop's player on screen
         assert all(b["bottom"] <= 700 for b in players), players  # (with room to spare)
+        # the plot close under the answer line (step 1's, with the aside between, was 196 px
+        # under its top)
+        line = page.get_by_text(answer, exact=True).bounding_box()
+        assert min(c["top"] for c in plots) - line["y"] <= 170, (line, plots)
+        # what the scene says of the answer, on screen under its plots: the first collision's
+        # count of contacts (it ended at y 745), the accuracy's rows at the asked tolerance
+        # (the table of every row began at y 788)
+        if step.scene == "closeup":
+            count = page.get_by_text("before the first apex", exact=False).bounding_box()
+            assert count["y"] + count["height"] <= 720, count
+        if step.scene == "accuracy":
+            asked = page.get_by_text("Asked for 6 digits", exact=False).bounding_box()
+            tables = [t for t in deep_query(page, "table") if t["visible"]]
+            rows = min(tables, key=lambda t: t["top"])
+            assert asked["x"] > 330 and rows["bottom"] <= 720 and rows["right"] <= 1280, rows
+            assert "RK45" in rows["text"] and "error" in rows["text"], rows
+        _check_projected_card(page, step)
         page.screenshot(path=shots / f"step{number}-projected-revealed.png")
         assert errors == []
     finally:
         context.close()
+
+
+def _check_projected_card(page, step) -> None:
+    """The card's answer whole inside a 1280x720 window: the explanation's first sentence, the
+    rest folded (the whole explanation ran to y 1343 on step 1, and step 6's was cut off
+    mid-sentence at the screen's edge); the fold opens on a click."""
+    first, rest = gist(step.explanation)
+    page.get_by_text(first, exact=False).first.wait_for()
+    (card,) = [a for a in deep_query(page, ".twoball-answer") if a["visible"]]
+    assert card["left"] >= 0 and card["right"] <= 330 and card["bottom"] <= 720, card
+    if not rest:
+        return
+    fold = page.get_by_text(FULL_EXPLANATION, exact=True)
+    expect(fold).to_be_in_viewport(ratio=1)
+    more = page.get_by_text(rest[:40], exact=False)
+    expect(more).to_be_hidden()
+    fold.click()
+    expect(more).to_be_visible()
+    fold.click()  # (folded again for the screenshot)
+    expect(more).to_be_hidden()
 
 
 @pytest.mark.browser
@@ -445,11 +482,20 @@ def test_reveal_says_that_it_waits_for_a_choice(browser, app_server, artifacts, 
                 {"text": "Reveal the answer", "disabled": False, "fits": True}
             ]
             expect(page.get_by_role("button", name=CHOOSE_FIRST)).to_have_count(0)
+            # ... and says so beside it (nothing on screen said why it needed no choice)
+            hint = page.get_by_text(ROOM_PREDICTS, exact=True)
+            expect(hint).to_be_in_viewport(ratio=1)
+            box = hint.bounding_box()
+            button = page.get_by_role("button", name="Reveal the answer").bounding_box()
+            assert box["x"] >= button["x"] + button["width"], (box, button)  # beside it
+            middle = box["y"] + box["height"] / 2
+            assert button["y"] <= middle <= button["y"] + button["height"], (box, button)
             page.screenshot(path=shots / f"{name}.png")
             assert errors == []
             return
         waiting = page.get_by_role("button", name=CHOOSE_FIRST)
         expect(waiting).to_be_disabled()
+        expect(page.get_by_text(ROOM_PREDICTS)).to_have_count(0)  # (a student chooses)
         waiting.scroll_into_view_if_needed()
         expect(waiting).to_be_in_viewport(ratio=1)
         assert page.evaluate(REVEAL_JS) == [{"text": CHOOSE_FIRST, "disabled": True, "fits": True}]
@@ -501,5 +547,113 @@ def test_a_phone_shows_the_answer_above_the_plot(browser, app_server, artifacts,
         page.get_by_role("button", name="Next >").click()
         page.get_by_text(f"Step {number + 1} of {len(STEPS)}").first.wait_for()
         assert errors == []
+    finally:
+        context.close()
+
+
+PHONE_START = "Start the six-step lesson"  # (app/static/lesson.js)
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize("size", [(390, 844), (1366, 768)], ids=["phone", "laptop"])
+def test_a_phone_starts_the_lesson_at_the_top_and_finds_next_under_the_answer(
+    browser, app_server, artifacts, size
+):
+    """At 390x844 the lesson's card lies under the scene and the controls: its Start stood at
+    y 1563 of a 2226 px page, and after a reveal Next lay about 1600 px under the answer. A
+    phone is offered Start at the top of the page (a wider screen, whose card is beside the
+    scene, is not), and after a reveal Previous and Next stand under the answer, the card's
+    pair hidden (one Next on screen); Next then shows the new step from its title."""
+    base, _ = app_server
+    width, height = size
+    context, page, errors = open_page(browser, f"{base}/app", viewport=size)
+    try:
+        start = page.get_by_role("button", name=PHONE_START)
+        if width >= 768:
+            page.wait_for_timeout(1500)  # (the page offers it within 0.7 s)
+            expect(start).to_have_count(0)
+            assert errors == []
+            return
+        header = page.locator("#header").bounding_box()
+        below_header = header["y"] + header["height"]
+        expect(start).to_be_visible()
+        box = start.bounding_box()
+        assert below_header <= box["y"] and box["y"] + box["height"] <= 200, box
+        start.click()
+        step = STEPS[0]
+        title = page.get_by_text(f"Step 1 of {len(STEPS)}: {step.title}")
+        expect(title).to_be_in_viewport(ratio=1)
+        expect(start).to_be_hidden()  # (the lesson runs)
+        page.get_by_text(step.choices[step.answer], exact=True).click()
+        page.get_by_role("button", name="Reveal the answer").click()
+        answer = _answer(page)
+        answer.wait_for()
+        page.wait_for_timeout(2500)  # the scene drawn, the page placed
+        following = page.get_by_role("button", name="Next >")
+        expect(following).to_have_count(1)  # (the card's hidden meanwhile)
+        expect(following).to_be_in_viewport(ratio=1)
+        (shown,) = [a for a in deep_query(page, ".twoball-answer") if a["visible"]]
+        box = following.bounding_box()
+        assert 0 <= box["y"] - shown["bottom"] <= 300, (shown, box)  # (step 1's aside between)
+        page.screenshot(path=artifacts / "lesson" / "phone-next-under-the-answer.png")
+        following.click()
+        title = page.get_by_text(f"Step 2 of {len(STEPS)}: {STEPS[1].title}")
+        expect(title).to_be_in_viewport(ratio=1)
+        expect(page.get_by_text(STEPS[1].question, exact=True)).to_be_in_viewport()
+        # the card's pair, back for the next question (the phone's pair waits for its answer)
+        expect(page.get_by_role("button", name="Next >")).to_have_count(1)
+        assert errors == []
+    finally:
+        context.close()
+
+
+@pytest.mark.browser
+def test_a_phone_shows_the_next_step_s_title_from_a_slow_server(browser, app_server, artifacts):
+    """After Next on a phone the page scrolled to the new step's title 300 ms after the click;
+    a busy server's answer came later, the page shrank (the revealed scene's 2700 px, the
+    covered step's 1450) and left the title and the question above the screen. Here the
+    server's messages are held for 1.5 s after the click, the page scrolled 300 px down."""
+    base, _ = app_server
+    step = STEPS[0]
+    context = browser.new_context(viewport={"width": 390, "height": 844})
+    page = context.new_page()
+    link: dict = {"held": None}
+
+    def route(ws):
+        server = ws.connect_to_server()
+        link["ws"] = ws
+        server.on_message(
+            lambda message: (
+                ws.send(message) if link["held"] is None else link["held"].append(message)
+            )
+        )
+
+    try:
+        page.route_web_socket("**/ws*", route)
+        page.goto(f"{base}/app?step=1")
+        page.get_by_text(step.choices[step.answer], exact=True).click()
+        reveal = page.get_by_role("button", name="Reveal the answer")
+        expect(reveal).to_be_enabled(timeout=30_000)
+        reveal.click()
+        _answer(page).wait_for()
+        page.wait_for_timeout(2500)  # the scene drawn, the page placed
+        page.mouse.wheel(0, 300)  # (the student looks at the plot, Next still on screen)
+        page.wait_for_timeout(300)
+        following = page.get_by_role("button", name="Next >")
+        expect(following).to_be_in_viewport(ratio=1)
+        link["held"] = []
+        following.click()
+        page.wait_for_timeout(1500)
+        while link["held"]:
+            link["ws"].send(link["held"].pop(0))
+        link["held"] = None
+        title = page.get_by_text(f"Step 2 of {len(STEPS)}: {STEPS[1].title}")
+        title.wait_for()
+        page.wait_for_timeout(2500)
+        header = page.locator("#header").bounding_box()
+        box = title.bounding_box()
+        assert header["y"] + header["height"] <= box["y"] <= 844 - box["height"], box
+        expect(page.get_by_text(STEPS[1].question, exact=True)).to_be_in_viewport()
+        page.screenshot(path=artifacts / "lesson" / "phone-next-slowly.png")
     finally:
         context.close()
