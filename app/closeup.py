@@ -20,7 +20,7 @@ import twoball
 from twoball.observables import BALLS, FLOOR
 from twoball.units import units_named
 
-from .collisions import first_collision
+from .collisions import collisions, shown_collisions
 from .drop import LOWER, UPPER, legend_above
 from .scene import Scene, Text, answers_pending, draw, on_screen, readable
 
@@ -35,8 +35,8 @@ MARGIN = 0.08  # of the collision's duration, shown before and after it
 
 
 def collision_window(contacts: list[twoball.ContactInterval], end: float) -> tuple[float, float]:
-    """The first collision (:func:`first_collision`) with margins, before the first apex."""
-    collision = first_collision(contacts)
+    """The contacts shown (:func:`shown_collisions`) with margins, before the first apex."""
+    collision = shown_collisions(contacts)
     start = collision[0].start
     stop = max(c.end for c in collision)
     pad = MARGIN * (stop - start)
@@ -141,22 +141,29 @@ class CloseUpScene(Scene):
         self.current()
         units = units_named(self.state.units)
         r = self.result
-        collision = first_collision(r.contacts)
+        collision = shown_collisions(r.contacts)
         floors, balls = r.contacts_first
         counted = f"**{plural(balls, 'ball contact')}** and {plural(floors, 'floor contact')}"
         later = [c for c in r.contacts if c not in collision]
+        alone = len(collisions(collision)) == 1
         if later:
             shown = [sum(c.contact == kind for c in collision) for kind in (FLOOR, BALLS)]
             first = min(c.start for c in collision) * units.time
             last = max(c.end for c in collision) * units.time
+            what = (
+                "the first collision alone"
+                if alone
+                else "the collisions up to the balls' first contact"
+            )
             intro = (
-                f"{counted} before the first apex, all listed below. The plots show the first "
-                f"collision alone, t = {first:.6g} to {last:.6g} "
+                f"{counted} before the first apex, all listed below. The plots show {what}, "
+                f"t = {first:.6g} to {last:.6g} "
                 f"({plural(shown[1], 'ball contact')}, {plural(shown[0], 'floor contact')}); "
                 f"the table lists {len(later)} more after it."
             )
         else:
-            intro = f"{counted} before the first apex, all in the first collision, shown above."
+            where = "in the first collision" if alone else "up to the balls' first contact"
+            intro = f"{counted} before the first apex, all {where}, shown above."
         lines = [intro, "", "| contact | starts | ends | lasts |", "| --- | --- | --- | --- |"]
         numbers = {}  # each contact's number among those of its kind, in time order
         for kind in (BALLS, FLOOR):

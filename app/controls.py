@@ -435,3 +435,6 @@ class Controls(Built):
         for shown in self.scene_controls.objects:
             shown.visible = shown is own
         self.two_ball.visible = self.meanings.visible = own is None
+        # eps12 is the two-ball drop's (a stack has its own eps per contact): typed on the Stack
+        # scene it changed the link and nothing on screen (a teacher's trial)
+        self.eps12.visible = own is None

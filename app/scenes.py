@@ -40,8 +40,8 @@ SCENE_REGISTRY = {
     ),
     "map": SceneEntry(
         "Delayed-rebound map",
-        "Every mass ratio and gap at once: red where the second bounce is the higher one. "
-        "Click a point to drop those balls.",
+        "Every mass ratio and gap at once: inside the black outlines the second bounce is the "
+        "higher one. Click a point to choose those balls for the other tabs.",
         "delayed_map:MapScene",
     ),
     "accuracy": SceneEntry(

@@ -75,8 +75,9 @@ CAPTION_HELP = (
     "textbook chain of independent collisions (floor first, then each pair in turn): for three "
     "elastic balls with a very light top ball, 49 times the drop height. Press play: the "
     "animation slows down through each collision, and draws the balls stacked, each on those "
-    "below it. The stack's sliders are in the side panel, in place of the two-ball ones; it "
-    "shares their drop height H (advanced). Heights here are always dimensionless."
+    "below it. The stack's sliders take the two-ball ones' place among the controls (the side "
+    "panel; below the scene on a phone); it shares their drop height H (advanced). Heights here "
+    "are always dimensionless."
 )
 
 # ... and on a projector, beside the player: below it the whole text ran off a 1280x720 screen
@@ -440,7 +441,9 @@ class StackScene(Scene):
         drop = r.stack.x_start[-1]
         first = "no first bounce" if r.h1 is None else (
             f"the top ball rises to **h1 = {number_text(r.h1)}**{below_zero(r.h1)}, "
-            f"{r.h1 / drop:.3g} times its drop height"
+            # (its own release height, the stack's H plus the balls below it: "times its drop
+            # height" read as h1/H, which it is not)
+            f"{r.h1 / drop:.3g} times its release height {number_text(drop)}"
         )  # fmt: skip
         second = (
             ""

@@ -130,8 +130,8 @@ STEPS = (
         drop={"eps": 0.9, "eps12": None, "mu": 0.01, "tau_ratio": 0.01, "height": HEIGHT},
         look_for="The map shows, for every mass ratio (across) and gap (up), h2/h1: red "
         "where the second bounce is higher (a delayed rebound, inside the black outlines), "
-        "blue where the first is. The star is the drop of the last step. Click anywhere "
-        "to drop those balls.",
+        "blue where the first is. The star is the drop of the last step. A click chooses "
+        "those balls for the other tabs.",
         question="Which drops give a delayed rebound?",
         choices=(
             "A heavy top ball, held far apart",

@@ -71,3 +71,17 @@ def test_the_advanced_inputs_are_made_and_shown_below_their_button_when_first_op
     assert not body.visible and folded.body is body
     folded.open()
     assert folded.opened and body.visible and layout.objects.count(body) == 1
+
+
+def test_eps12_is_offered_only_where_it_drives_the_drop():
+    """eps12 (the two-ball drop's ball-ball restitution) is hidden among the advanced inputs on
+    the Stack scene, whose contacts have their own eps, and shown again on the others."""
+    explorer = Explorer({"scene": "stack"})
+    controls = explorer.controls
+    controls.__panel__()  # (the advanced fold is made with the controls' layout)
+    controls.advanced.open()
+    assert controls.height.visible and not controls.eps12.visible
+    explorer.tabs.active = list(explorer._holders).index("drop")
+    assert explorer.state.scene == "drop" and controls.eps12.visible
+    explorer.tabs.active = list(explorer._holders).index("stack")
+    assert not controls.eps12.visible

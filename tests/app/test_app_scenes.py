@@ -230,6 +230,7 @@ def test_closeup_shows_the_four_contacts_and_forces_only_inside_them():
         {"eps": "1", "mu": "10", "tau_ratio": "10", "H": "1e8"},  # a new user's: 5 and 5
         {"eps": "0.3", "mu": "0.01", "tau_ratio": "1"},  # a second floor bounce before h1
         PAPER,  # all in one collision
+        {"mu": "0.5", "tau_ratio": "10"},  # the floor bounce alone, then the balls meet
     ],
 )
 def test_closeup_s_table_lists_every_contact_its_summary_counts(query):
@@ -250,12 +251,22 @@ def test_closeup_s_table_lists_every_contact_its_summary_counts(query):
         assert len(starts) == count == len(exact)
         assert starts == pytest.approx(exact, rel=1e-5)
     grouped = collisions(solved.contacts)
-    if len(grouped) > 1:  # the plots' window said, and where the table leaves it
-        assert "The plots show the first collision alone" in text
-        assert f"the table lists {len(solved.contacts) - len(grouped[0])} more" in text
+    # the plots show the collisions up to the first in which the balls touch
+    touch = next(i for i, g in enumerate(grouped) if any(c.contact == BALLS for c in g))
+    shown = sum(len(g) for g in grouped[: touch + 1])
+    if shown < len(solved.contacts):  # the plots' window said, and where the table leaves it
+        what = "the first collision alone" if touch == 0 else "the collisions up to the balls'"
+        assert f"The plots show {what}" in text
+        assert f"the table lists {len(solved.contacts) - shown} more" in text
         assert "after the collision shown" in text
     else:
-        assert "all in the first collision" in text and "after the collision" not in text
+        assert "after the collision" not in text
+        assert ("all in the first collision" if touch == 0 else "all up to the balls'") in text
+    # the balls' first contact is in the plots' window, and their force pushes there
+    tr = explorer.scenes["closeup"].result.trajectory
+    contact = min((c for c in solved.contacts if c.contact == BALLS), key=lambda c: c.start)
+    assert tr.t[0] < contact.start and contact.end < tr.t[-1]
+    assert tr.f12.max() > 0
 
 
 def test_accuracy_computes_only_when_opened():
