@@ -29,6 +29,7 @@ PAGE_CSS = """
   #content > #sidebar { order: 2; max-width: 100% !important; width: 100% !important;
                         height: auto !important; flex: none !important; }
   #header .title, .title { font-size: 1.15rem !important; white-space: normal; }
+  #sidebar-toggle { display: none !important; }
 }
 """
 # A change the server has not answered yet (scene.PENDING_JS marks the body): after a quarter of
@@ -46,7 +47,9 @@ body.twoball-pending::after {
 """
 # On a phone (narrower than 768 px) the page scrolls as a whole (the template's container is
 # one screen high and clips: the plots were out of reach), the scene comes first and the lesson
-# and the controls follow it at full width; the button top left still folds them away.
+# and the controls follow it at full width. The template's menu button is hidden there: it
+# folded the controls at the page's foot, out of sight, and seemed to do nothing (a teacher's
+# trial); a finger scrolls to them.
 # presentation mode (?present=1): large text for a room
 PRESENTATION_CSS = """
 :root { --bokeh-font-size: 20px; --bokeh-base-font-size: 20px; --pn-font-size: 20px; }

@@ -171,7 +171,12 @@ def typed_value(
     allowed = span(low, high, unit, shown)
     if math.isnan(number):
         kept = "equal to eps" if last is None else f"{number_text(last)}{unit}"
-        return last, (f"{name} must be a number {allowed}; got {str(text)[:40]!r}. Keeping {kept}.")
+        # (a decimal comma refused, the message's own thousands comma read as one: "got '0,5'.
+        # Keeping 9,949 m", a teacher's trial)
+        point = " Write decimals with a point: 0.5, not 0,5." if "," in str(text) else ""
+        return last, (
+            f"{name} must be a number {allowed}; got {str(text)[:40]!r}. Keeping {kept}.{point}"
+        )
     if number < low or number > high:
         clamped = min(max(number, low), high)
         return clamped, (

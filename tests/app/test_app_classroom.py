@@ -199,6 +199,10 @@ def test_a_phone_gets_a_page_of_its_width(browser, app_server, artifacts):
         lesson = page.get_by_role("button", name="Start the lesson").bounding_box()
         assert lesson is not None and 0 <= lesson["y"] <= 844, lesson
         page.screenshot(path=artifacts / "phone_drop.png", full_page=True)
+        # no menu button: it folded the controls at the page's foot, out of sight
+        assert not page.locator("#sidebar-toggle").is_visible()
+        page.set_viewport_size({"width": 1366, "height": 768})
+        assert page.locator("#sidebar-toggle").is_visible()  # (a laptop's folds the sidebar)
         assert errors == []
     finally:
         context.close()

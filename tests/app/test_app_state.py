@@ -11,6 +11,7 @@ from app.state import (
     app_range,
     preset_drop,
     read_query,
+    typed_value,
     url_query,
     validate,
 )
@@ -176,3 +177,13 @@ def test_a_link_names_its_preset_while_the_drop_is_the_preset_s():
     values, messages = read_query({"preset": "golf"}, ExplorerState())
     assert "preset" not in values
     assert messages == ["URL preset: must be one of tennis, ping-pong; got 'golf'."]
+
+
+def test_a_typed_decimal_comma_is_refused_with_how_to_write_it():
+    """A typed "0,5" keeps the value in use, and the message says to write a point (its own
+    "Keeping 9,949 m" had read as a decimal comma accepted); a typo without a comma does not
+    get that advice."""
+    value, message = typed_value("0,5", 9949.0, 1.0, 1e4, "H", unit=" m")
+    assert value == 9949.0 and "got '0,5'" in message and "with a point: 0.5" in message
+    value, message = typed_value("abc", 9949.0, 1.0, 1e4, "H", unit=" m")
+    assert value == 9949.0 and "point" not in message
