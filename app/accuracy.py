@@ -89,6 +89,7 @@ class AccuracyScene(Scene):
         super().__init__(**params)
         self.rows: list[PrecisionRow] | None = None
         self._request = 0
+        self._measuring = False  # (a thread measures for this page: _measure_in_thread)
         # a new Bokeh figure per result (the number of methods drawn varies; a figure built
         # whole arrives whole in the browser); drawn by HoloViews, a result cost about ten
         # times as much, and the scene's opening twice the others'
@@ -143,7 +144,9 @@ class AccuracyScene(Scene):
             self.results.styles = STALE
         document = pn.state.curdoc
         if document is not None and document.session_context is not None:
-            pn.state.execute(functools.partial(self._compute_in_thread, self._request, document))
+            if not self._measuring:  # (else the running measurement takes the newest next)
+                self._measuring = True
+                pn.state.execute(functools.partial(self._measure_in_thread, document))
         else:  # no server (a script or a test): compute now
             self._show(self._request, self._work())
 
@@ -157,8 +160,21 @@ class AccuracyScene(Scene):
         compiled = jit.state == "compiled"
         return list(measured(s.eps, s.mu, s.tau_ratio, s.eps12, s.height, compiled))
 
-    async def _compute_in_thread(self, request: int, document) -> None:
-        rows = await asyncio.to_thread(self._work)
+    async def _measure_in_thread(self, document) -> None:
+        """Measure in a thread until the drop measured is the newest asked for, then show it.
+
+        One measurement at a time per page: the moves made meanwhile are taken together, by
+        measuring the newest once this one ends. (Each move had started a thread of its own:
+        five key presses on a slider ran five measurements side by side, each slower for the
+        others, and the last drop showed after 20 s, a teacher's trial.)"""
+        try:
+            while True:
+                request = self._request
+                rows = await asyncio.to_thread(self._work)
+                if request == self._request:
+                    break
+        finally:
+            self._measuring = False
         # Shown on the next tick of this session's own document, under its lock: Panel runs the
         # coroutine with no current document (or another session's).
         document.add_next_tick_callback(functools.partial(self._show, request, rows))

@@ -1051,3 +1051,39 @@ def test_a_page_makes_no_busy_spinner_and_no_notebook_view(monkeypatch):
     assert "Launch server" not in made and page._layout.objects == []
     pn.template.BootstrapTemplate()  # (Panel's own makes both: the count sees it)
     assert "Launch server" in made
+
+
+def test_moves_made_while_the_accuracy_is_measured_are_measured_together_once(monkeypatch):
+    """Under a server, one measurement at a time per page: four moves made while a drop is
+    measured start no thread of their own; the newest drop alone is measured next, and only its
+    rows are shown."""
+    import asyncio
+    import types
+
+    from app.accuracy import AccuracyScene
+
+    scene = AccuracyScene(state=ExplorerState())
+    scene.active = True  # (computed at once, with no server)
+    document = types.SimpleNamespace(session_context=object(), ticks=[])
+    document.add_next_tick_callback = document.ticks.append
+    started, measured, results = [], [], []
+
+    def work():
+        measured.append(scene.state.mu)
+        if len(measured) == 1:  # four moves while the first drop is measured
+            for mu in (0.02, 0.03, 0.04, 0.05):
+                scene.state.mu = mu
+        results.append([])  # (each measurement's rows, told apart by identity)
+        return results[-1]
+
+    monkeypatch.setattr(scene, "_work", work)
+    monkeypatch.setattr("panel.state.execute", lambda callback: started.append(callback))
+    monkeypatch.setattr("panel.state.curdoc", document, raising=False)
+    scene.state.mu = 0.015
+    assert len(started) == 1 and scene._measuring
+    asyncio.run(started[0]())
+    assert len(started) == 1  # (the four moves started nothing)
+    assert measured == [0.015, 0.05] and not scene._measuring
+    (show,) = document.ticks
+    show()
+    assert scene.rows is results[-1] and scene.status.object == ""
