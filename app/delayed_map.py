@@ -26,6 +26,7 @@ from __future__ import annotations
 import functools
 import io
 import math
+import re
 import weakref
 
 import holoviews as hv
@@ -106,8 +107,10 @@ def values_hover(label: str) -> HoverTool:
 
 
 def variable_label(variable: str) -> str:
-    """The cube's own name of a variable (its ``long_name``)."""
-    return map_cube()[variable].attrs.get("long_name", variable)
+    """The cube's own name of a variable (its ``long_name``), without the library's name for it
+    in parentheses (a colour bar titled "... (Result.contacts_first[1])" was code to a class)."""
+    name = map_cube()[variable].attrs.get("long_name", variable)
+    return re.sub(r"\s*\(Result\.[^)]*\)", "", name)
 
 
 @functools.cache
@@ -540,7 +543,7 @@ class MapScene(Scene):
         if name != CUBE:
             heights = " and ".join(f"{h:g}" for h in HERTZ_CUBES)
             source = (
-                f"**Hertz force**: slice of the shipped cube {name} at **eps = "
+                f"**Hertz force**: precomputed map {name} at **eps = "
                 f"{self.slice_eps:g}** (nearest to {s.eps:g}), **H = {attrs.get('height'):g} in "
                 "the Hertz length unit** L = (m1 g / k_h)^(2/3) (of the shipped H = "
                 f"{heights}, the nearest to this drop's H = {s.height:g}), eps12 = eps; "
@@ -553,7 +556,7 @@ class MapScene(Scene):
             )
         else:
             source = (
-                f"Slice of the shipped cube at **eps = {self.slice_eps:g}** (nearest to "
+                f"Precomputed map at **eps = {self.slice_eps:g}** (nearest to "
                 f"{s.eps:g}), H = {attrs.get('height'):g}, eps12 = eps"
             )
         click = "Click the map to set mu and tau_d/tau_f."

@@ -59,7 +59,7 @@ def test_each_scene_loads_without_console_errors(browser, app_server, artifacts,
         if scene == "closeup":
             page.get_by_text("4 ball contacts").wait_for()
         if scene == "map":
-            page.get_by_text("Slice of the shipped cube").wait_for()
+            page.get_by_text("Precomputed map at").wait_for()
         page.wait_for_timeout(500)
         page.screenshot(path=artifacts / f"scene_{scene}.png", full_page=True)
         for size, (width, height) in SIZES.items():  # the same page, resized: nothing sideways
@@ -92,7 +92,7 @@ def test_a_map_click_moves_the_sliders(browser, app_server, artifacts):
     base, _ = app_server
     context, page, errors = open_page(browser, f"{base}/app?scene=map")
     try:
-        page.get_by_text("Slice of the shipped cube").wait_for()
+        page.get_by_text("Precomputed map at").wait_for()
         titles = slider_titles(page)
         before = fingerprint(page)
         canvas = max(

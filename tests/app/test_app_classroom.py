@@ -118,7 +118,7 @@ def test_tab_switches_keep_plots_rescaling(browser, app_server, artifacts):
         assert max(page.evaluate(RANGE_ENDS_JS)) < 10
         # 5: the map's explanation is there the first time its tab opens
         tab(page, "Delayed-rebound map")
-        page.get_by_text("Slice of the shipped cube").wait_for(timeout=30_000)
+        page.get_by_text("Precomputed map at").wait_for(timeout=30_000)
         page.get_by_text("Black outlines").wait_for()
         page.wait_for_timeout(1500)
         # 6: the ratio's colour bar has numbers below 1
@@ -534,7 +534,7 @@ def test_a_laptop_shows_the_collision_and_the_map_without_scrolling(
     context, page, errors = open_page(browser, f"{base}/app?scene={scene}", viewport=(1366, 768))
     try:
         if scene == "map":
-            page.get_by_text("Slice of the shipped cube").wait_for()
+            page.get_by_text("Precomputed map at").wait_for()
         page.wait_for_timeout(800)
         plots = plots_on(page)
         plots = list({(c["left"], c["top"]): c for c in plots}.values())  # (canvas layers)
@@ -576,7 +576,7 @@ def test_the_map_hover_says_mu_and_tau_ratio_not_their_logarithms(browser, app_s
     base, _ = app_server
     context, page, errors = open_page(browser, f"{base}/app?scene=map", viewport=(1366, 768))
     try:
-        page.get_by_text("Slice of the shipped cube").wait_for()
+        page.get_by_text("Precomputed map at").wait_for()
         page.wait_for_timeout(500)
         canvas = max(
             (c for c in deep_query(page, "canvas") if c["visible"]),

@@ -205,6 +205,33 @@ def test_a_presentation_clicker_drives_the_lesson(browser, app_server, artifacts
         context.close()
 
 
+def _phone_with_held_messages(browser):
+    """A phone's page (context, page, link) whose messages from the server are held while
+    ``link["held"]`` is a list (set it to ``[]``), then sent on by :func:`_release`."""
+    context = browser.new_context(viewport={"width": 390, "height": 844})
+    page = context.new_page()
+    link: dict = {"held": None}  # the page's websocket; its messages from the server, held
+
+    def route(ws):
+        server = ws.connect_to_server()
+        link["ws"] = ws
+        server.on_message(
+            lambda message: (
+                ws.send(message) if link["held"] is None else link["held"].append(message)
+            )
+        )
+
+    page.route_web_socket("**/ws*", route)
+    return context, page, link
+
+
+def _release(link: dict) -> None:
+    """Send the held messages on, in order, with any that come meanwhile, and hold no more."""
+    while link["held"]:
+        link["ws"].send(link["held"].pop(0))
+    link["held"] = None
+
+
 def _answer(page):
     """The revealed answer shown (a phone's above the scene, else the card's: both are in the
     page, each hidden at the other's widths)."""
@@ -360,21 +387,8 @@ def test_a_phone_shows_the_answer_after_a_reveal_from_a_slow_server(
     server's messages are held for 1.5 s after the click."""
     base, _ = app_server
     step = STEPS[number - 1]
-    context = browser.new_context(viewport={"width": 390, "height": 844})
-    page = context.new_page()
-    link: dict = {"held": None}  # the page's websocket; its messages from the server, held
-
-    def route(ws):
-        server = ws.connect_to_server()
-        link["ws"] = ws
-        server.on_message(
-            lambda message: (
-                ws.send(message) if link["held"] is None else link["held"].append(message)
-            )
-        )
-
+    context, page, link = _phone_with_held_messages(browser)
     try:
-        page.route_web_socket("**/ws*", route)
         page.goto(f"{base}/app?step={number}")
         page.get_by_text(step.choices[step.answer], exact=True).click()
         # (the choice's answer from the server, Reveal enabled and so named, before the hold:
@@ -384,9 +398,7 @@ def test_a_phone_shows_the_answer_after_a_reveal_from_a_slow_server(
         link["held"] = []
         reveal.click()
         page.wait_for_timeout(1500)
-        while link["held"]:  # in order, with any that come meanwhile
-            link["ws"].send(link["held"].pop(0))
-        link["held"] = None
+        _release(link)
         answer = _answer(page)
         answer.wait_for()
         page.wait_for_timeout(2500)  # the scene drawn, the page scrolled
@@ -615,21 +627,8 @@ def test_a_phone_shows_the_next_step_s_title_from_a_slow_server(browser, app_ser
     server's messages are held for 1.5 s after the click, the page scrolled 300 px down."""
     base, _ = app_server
     step = STEPS[0]
-    context = browser.new_context(viewport={"width": 390, "height": 844})
-    page = context.new_page()
-    link: dict = {"held": None}
-
-    def route(ws):
-        server = ws.connect_to_server()
-        link["ws"] = ws
-        server.on_message(
-            lambda message: (
-                ws.send(message) if link["held"] is None else link["held"].append(message)
-            )
-        )
-
+    context, page, link = _phone_with_held_messages(browser)
     try:
-        page.route_web_socket("**/ws*", route)
         page.goto(f"{base}/app?step=1")
         page.get_by_text(step.choices[step.answer], exact=True).click()
         reveal = page.get_by_role("button", name="Reveal the answer")
@@ -644,9 +643,7 @@ def test_a_phone_shows_the_next_step_s_title_from_a_slow_server(browser, app_ser
         link["held"] = []
         following.click()
         page.wait_for_timeout(1500)
-        while link["held"]:
-            link["ws"].send(link["held"].pop(0))
-        link["held"] = None
+        _release(link)
         title = page.get_by_text(f"Step 2 of {len(STEPS)}: {STEPS[1].title}")
         title.wait_for()
         page.wait_for_timeout(2500)

@@ -153,7 +153,7 @@ def test_the_map_of_another_drop_height_and_eps12_is_computed_and_said_so():
     # back to the cube's drop: the shipped slice again
     explorer.state.param.update(height=map_cube().attrs["height"], eps12=None)
     scene.current()
-    assert not scene.computed and "Slice of the shipped cube" in scene._note()
+    assert not scene.computed and "Precomputed map at" in scene._note()
 
 
 def test_a_click_on_the_map_sets_mu_and_tau_ratio_and_moves_the_sliders():
@@ -325,3 +325,16 @@ def test_the_map_s_colour_travels_in_a_link():
     assert "map_colour" not in url_query(explorer.state)
     values, messages = read_query({"map_colour": "speed"}, explorer.state)
     assert "map_colour" not in values and messages[0].startswith("URL map_colour: must be one")
+
+
+def test_the_map_s_labels_say_what_a_class_reads_not_the_library_s_names():
+    """A variable's label is the cube's long name without the library's name for it in
+    parentheses (the count's colour bar read "... (Result.contacts_first[1])")."""
+    from app.delayed_map import MAP_COLOURS, map_cube, variable_label
+
+    long_name = map_cube()["contacts_first"].attrs["long_name"]
+    assert "(Result." in long_name  # (the cube's own, for the library's users)
+    label = variable_label("contacts_first")
+    assert label == long_name.split(" (Result.")[0] and "Result" not in label
+    for variable in MAP_COLOURS:
+        assert "Result." not in variable_label(variable)

@@ -90,7 +90,7 @@ def test_the_map_switches_to_the_hertz_cube(browser, app_server, artifacts):
     folder.mkdir(exist_ok=True)
     context, page, errors = open_page(browser, f"{base}/app?scene=map")
     try:
-        expect(page.get_by_text("Slice of the shipped cube").first).to_be_visible(timeout=60_000)
+        expect(page.get_by_text("Precomputed map at").first).to_be_visible(timeout=60_000)
         before = fingerprint(page)
         page.get_by_role("button", name="hertz").click()
         expect(page.get_by_text("Hertz length unit").first).to_be_visible(timeout=60_000)
@@ -102,7 +102,7 @@ def test_the_map_switches_to_the_hertz_cube(browser, app_server, artifacts):
         assert page_query(page)["map_force"] == "hertz"
         page.screenshot(path=folder / "map_hertz.png", full_page=True)
         page.get_by_role("button", name="linear").click()
-        expect(page.get_by_text("Slice of the shipped cube").first).to_be_visible(timeout=60_000)
+        expect(page.get_by_text("Precomputed map at").first).to_be_visible(timeout=60_000)
         expect(page).not_to_have_url(re.compile("map_force"), timeout=10_000)
         assert "map_force" not in page_query(page)
         assert errors == []
