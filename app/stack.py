@@ -114,6 +114,12 @@ def ball_sizes(masses: np.ndarray) -> np.ndarray:
     return sizes * min(BALL_RADIUS, STACK_SHARE / (2 * sizes.sum()))
 
 
+def times_text(ratio: float) -> str:
+    """A ratio to three significant figures, written out ("1,330 times", not "1.33e+03")."""
+    rounded = float(f"{ratio:.3g}")
+    return f"{rounded:,.0f}" if abs(rounded) >= 1000 else f"{rounded:.3g}"
+
+
 class StackScene(Scene):
     """Every ball's height to the top ball's second apex, the ICM chain, an animation."""
 
@@ -443,7 +449,7 @@ class StackScene(Scene):
             f"the top ball rises to **h1 = {number_text(r.h1)}**{below_zero(r.h1)}, "
             # (its own release height, the stack's H plus the balls below it: "times its drop
             # height" read as h1/H, which it is not)
-            f"{r.h1 / drop:.3g} times its release height {number_text(drop)}"
+            f"{times_text(r.h1 / drop)} times its release height {number_text(drop)}"
         )  # fmt: skip
         second = (
             ""

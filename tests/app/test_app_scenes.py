@@ -1087,3 +1087,25 @@ def test_moves_made_while_the_accuracy_is_measured_are_measured_together_once(mo
     (show,) = document.ticks
     show()
     assert scene.rows is results[-1] and scene.status.object == ""
+
+
+def test_the_stack_s_summary_gives_h1_over_the_top_ball_s_release_height_written_out():
+    """The Stack's ratio is h1 over the top ball's own release height (the stack's H plus the
+    balls below it), which the summary names; a large one is written out ("1,330 times")."""
+    from app.stack import times_text
+
+    for balls in ("3", "8"):
+        explorer = rendered({"scene": "stack", "N": balls})
+        scene = explorer.scenes["stack"]
+        r = scene.result
+        release = r.stack.x_start[-1]
+        text = scene.summary.object
+        assert release > explorer.state.height
+        assert f"{times_text(r.h1 / release)} times its release height" in text, text
+        assert "e+" not in text.split("times its release height")[0], text
+    assert [times_text(x) for x in (8.1834, 1334.9, 999.6, 0.5123)] == [
+        "8.18",
+        "1,330",
+        "1,000",
+        "0.512",
+    ]
