@@ -267,12 +267,16 @@ class Lesson(Built):
         # the press revealed again and the lesson stayed, test_a_presentation_clicker_...)
         self.reveal.disabled = True
         self.choices.disabled = True
+        # the answer said once: an explanation that begins with it follows the verdict alone
+        # ("The answer: 4 times. 4 times: the small ball is hit..." on a projector's card)
+        said = shown.explanation.lower().startswith(correct.lower())
+        named = "" if said else f" {correct.lower()}."
         if self.choices.value is None:
-            verdict = f"The answer: {correct.lower()}."
+            verdict = f"The answer:{named}"
         elif self.choices.value == correct:
             verdict = "Right."
         else:
-            verdict = f"Not quite: {correct.lower()}."
+            verdict = f"Not quite:{named}"
         for answer in self._answers():
             answer.param.update(
                 object=f"**{verdict}** {self._explained(shown.explanation)}",

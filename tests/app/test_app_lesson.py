@@ -77,6 +77,27 @@ def test_a_step_in_the_url_sets_its_drop_and_scene():
         assert "step" not in values and messages and len(messages[0]) < 200
 
 
+def test_a_revealed_answer_names_the_answer_once():
+    """Revealed with no choice (a projector's room) or a wrong one, the card names the answer
+    once: a step whose explanation begins with it ("4 times: ...") is not told it twice."""
+    from app.explorer import Explorer
+
+    for present in ("0", "1"):
+        for number, step in enumerate(STEPS, 1):
+            correct = step.choices[step.answer].lower()
+            wrong = next(c for c in step.choices if c != step.choices[step.answer])
+            for chosen in (None, wrong):
+                explorer = Explorer({"step": str(number), "present": present})
+                lesson = explorer.lesson
+                lesson.choices.value = chosen
+                lesson._reveal()
+                text = lesson.answer.object.lower()
+                assert text.count(correct) >= 1, (number, text)
+                start = text.split("**", 3)
+                verdict, rest = start[1], start[2]  # (**verdict** rest)
+                assert not (correct in verdict and rest.strip().startswith(correct)), text
+
+
 def _scene_canvases(page) -> list[dict]:
     """The plots on screen right of the sidebar (the scene's, not the controls')."""
     found = deep_query(page, "canvas")
