@@ -22,7 +22,7 @@ from twoball.units import units_named
 
 from .collisions import collisions, shown_collisions
 from .drop import LOWER, UPPER, legend_above
-from .scene import Scene, Text, answers_pending, draw, on_screen, readable
+from .scene import Scene, Text, answers_pending, draw, on_screen, readable, wrapping_row
 
 
 def plural(count: int, noun: str) -> str:
@@ -198,5 +198,5 @@ class CloseUpScene(Scene):
         # window), wrapped one above the other on a phone
         self.positions.styles = BESIDE_STYLES
         forces = pn.Column(*panes[1:], styles=BESIDE_STYLES, sizing_mode="stretch_width")
-        plots = pn.FlexBox(panes[0], forces, flex_wrap="wrap", sizing_mode="stretch_width")
+        plots = wrapping_row(panes[0], forces, sizing_mode="stretch_width")
         return pn.Column(plots, self.table, sizing_mode="stretch_width")

@@ -59,6 +59,7 @@ from .scene import (
     for_a_room,
     later,
     on_screen,
+    wrapping_row,
 )
 from .state import MAP_COLOURS, validate
 from .worksheet import slice_csv
@@ -690,4 +691,4 @@ class MapScene(Scene):
             return pn.Row(self.figure, side, sizing_mode="stretch_width")
         # the choices and the note right of the map, wrapped below it on a phone
         side = pn.Column(self.choice, self.force, self.download, self.note, styles=SIDE_STYLES)
-        return pn.FlexBox(self.figure, side, flex_wrap="wrap", sizing_mode="stretch_width")
+        return wrapping_row(self.figure, side, sizing_mode="stretch_width")

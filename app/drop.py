@@ -46,6 +46,7 @@ from .scene import (
     on_screen,
     player_for_a_room,
     readable,
+    wrapping_row,
 )
 from .steps import STEPS
 from .worksheet import drop_csv
@@ -236,7 +237,7 @@ def heights_and_stage(heights, animation, presentation: bool) -> pn.viewable.Vie
     panes = (pn.pane.Bokeh(heights, sizing_mode="stretch_width"), pn.pane.Bokeh(animation))
     if presentation:
         return pn.Row(*panes, sizing_mode="stretch_width")
-    return pn.FlexBox(*panes, sizing_mode="stretch_width", flex_wrap="wrap")
+    return wrapping_row(*panes, sizing_mode="stretch_width")
 
 
 # Presentation mode (scene.py), 1280 x 720: under the header (80 px) and the tabs (60) a one-line
@@ -623,13 +624,8 @@ class DropScene(Scene):
             self.summary,
             *plots,
             # wraps: on a phone a row squeezed the player until its first buttons left the screen
-            pn.FlexBox(
-                self.player,
-                self.trails,
-                self.pin,
-                self.download,
-                flex_wrap="wrap",
-                sizing_mode="stretch_width",
+            wrapping_row(
+                self.player, self.trails, self.pin, self.download, sizing_mode="stretch_width"
             ),
             # (on a projector the teacher says it: the room sees the scene without scrolling)
             *(
@@ -651,8 +647,6 @@ class DropScene(Scene):
         return pn.Column(
             self.summary,
             pn.Row(plots, pn.pane.Bokeh(self.animation), sizing_mode="stretch_width"),
-            pn.FlexBox(
-                self.trails, self.pin, self.download, flex_wrap="wrap", sizing_mode="stretch_width"
-            ),
+            wrapping_row(self.trails, self.pin, self.download, sizing_mode="stretch_width"),
             sizing_mode="stretch_width",
         )

@@ -40,7 +40,7 @@ SCENE_REGISTRY = {
     ),
     "map": SceneEntry(
         "Delayed-rebound map",
-        "Every mass ratio and gap at once: inside the black outlines the second bounce is the "
+        "Every mass ratio and gap at once: outlined in black where the second bounce is the "
         "higher one. Click a point to choose those balls for the other tabs.",
         "delayed_map:MapScene",
     ),
