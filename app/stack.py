@@ -116,8 +116,7 @@ def ball_sizes(masses: np.ndarray) -> np.ndarray:
 
 def times_text(ratio: float) -> str:
     """A ratio to three significant figures, written out ("1,330 times", not "1.33e+03")."""
-    rounded = float(f"{ratio:.3g}")
-    return f"{rounded:,.0f}" if abs(rounded) >= 1000 else f"{rounded:.3g}"
+    return number_text(float(f"{ratio:.3g}"))
 
 
 class StackScene(Scene):
