@@ -27,23 +27,31 @@ import functools
 import io
 import math
 import re
-import weakref
 
-import holoviews as hv
 import numpy as np
 import panel as pn
 import param
 import xarray as xr
+from bokeh.events import Tap
 from bokeh.models import (
     BasicTicker,
     BasicTickFormatter,
+    ColorBar,
+    ColorMapper,
     ColumnDataSource,
     CustomJSHover,
     FixedTicker,
     HoverTool,
+    Image,
+    LinearColorMapper,
+    LogColorMapper,
+    MultiLine,
+    Range1d,
+    Scatter,
 )
-from bokeh.palettes import viridis
-from holoviews.operation import contours
+from bokeh.palettes import RdBu, interp_palette, viridis
+from bokeh.plotting import figure
+from contourpy import LineType, contour_generator
 from scipy import ndimage
 
 import twoball
@@ -55,10 +63,11 @@ from .scene import (
     AnsweringMarkdown,
     Scene,
     answers_pending,
-    font_sizes,
+    draw,
     for_a_room,
     later,
     on_screen,
+    readable,
     wrapping_row,
 )
 from .state import MAP_COLOURS, validate
@@ -89,6 +98,9 @@ FIT_STYLES = {
 # colour-bar ticks of the ratios' log scale: values below 1 get numbers too (LogTicker: powers
 # of ten only, so a range of 0.5 to 2 showed "1" alone)
 RATIO_TICKS = [0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1, 1.4, 2, 3, 5, 10, 20, 50, 100]
+# a ratio's colours: ColorBrewer's RdBu, blue below 1 and red above, in 256 shades
+RATIO_PALETTE = interp_palette(RdBu[11], 256)
+NO_VALUE = "rgba(0, 0, 0, 0)"  # a cell without a value (a drop without a second bounce)
 
 
 def ratio_colorbar() -> dict:
@@ -199,8 +211,7 @@ def slice_image(slice_: xr.Dataset, variable: str) -> tuple[tuple, tuple[float, 
     with rows tau_ratio and columns mu: :func:`on_log_grid`), and its colour limits: for a
     ratio, symmetric about 1 on a log scale out to the 98th percentile (so that outliers do
     not wash it out); for a count, half a count beyond its smallest and largest (a band of
-    :func:`count_palette` each); for the others the values' own range, as HoloViews would take
-    it."""
+    :func:`count_palette` each); for the others the values' own range."""
     values = slice_[variable].transpose("tau_ratio", "mu").values
     shown = on_log_grid(slice_, values)
     if variable in COUNTS:
@@ -243,29 +254,32 @@ def rebound_field(flags: xr.DataArray, ratio: xr.DataArray) -> np.ndarray:
     return np.where(agrees, field, np.where(kept, FLAG_SIDE, -FLAG_SIDE))
 
 
-def outline_path(flags: xr.DataArray, ratio: xr.DataArray) -> hv.Contours:
+def outline_path(flags: xr.DataArray, ratio: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
     """The outline of delayed rebounds (``flags``: h2 > h1 over mu and tau_ratio; ``ratio``:
-    h2/h1), as paths on the map's log axes.
+    h2/h1) on the map's log axes: log10 mu and log10 tau_ratio of its vertices, the paths
+    separated by NaN (one line of the figure's MultiLine).
 
-    Marching squares on the cube's own points, each at its cell's centre (log10 mu, log10
-    tau_ratio), on log10(h2/h1) (:func:`rebound_field`): each vertex lies where the ratio,
-    interpolated between two neighbouring points, crosses 1. Drawn on the image's pixels, the
-    Hertz cubes' (cells evenly spaced in mu, so several pixels wide on a log axis) outlines
-    followed the cells' edges, staircases of right angles; and the flags alone, 0 or 1, put
-    every vertex half-way between two points."""
+    Marching squares (contourpy, Bokeh's own dependency) on the cube's own points, each at its
+    cell's centre (log10 mu, log10 tau_ratio), on log10(h2/h1) (:func:`rebound_field`): each
+    vertex lies where the ratio, interpolated between two neighbouring points, crosses 1.
+    Drawn on the image's pixels, the Hertz cubes' (cells evenly spaced in mu, so several
+    pixels wide on a log axis) outlines followed the cells' edges, staircases of right angles;
+    and the flags alone, 0 or 1, put every vertex half-way between two points."""
     field = rebound_field(flags, ratio)
-    mesh = hv.QuadMesh(
-        (np.log10(flags["mu"].values), np.log10(flags["tau_ratio"].values), field),
-        ["log_mu", "log_tau_ratio"],
-    )
-    return contours(mesh, levels=[0.0])
+    log_mu, log_tau = np.log10(flags["mu"].values), np.log10(flags["tau_ratio"].values)
+    generator = contour_generator(log_mu, log_tau, field, line_type=LineType.ChunkCombinedNan)
+    ((points,),) = generator.lines(0.0)  # (one chunk: None where nothing crosses 1)
+    if points is None:
+        return np.zeros(0), np.zeros(0)
+    return points[:, 0].copy(), points[:, 1].copy()
 
 
 @functools.lru_cache(maxsize=256)  # shared by every session, as the slices are
-def outline_of(name: str, eps: float, drop: tuple[float, float | None] | None) -> hv.Contours:
+def outline_of(
+    name: str, eps: float, drop: tuple[float, float | None] | None
+) -> tuple[np.ndarray, np.ndarray]:
     """The outline of the slice at ``eps`` of the cube ``name``, or (``drop``: its H and eps12)
-    of the slice computed for that drop. (HoloViews' contour operation is most of an eps move's
-    cost: every session moving eps asks for the same few outlines.)"""
+    of the slice computed for that drop (every session moving eps asks for the same few)."""
     if drop is None:
         shown = shown_cube(name)[["delayed_rebound", "h2_over_h1"]].sel(eps=eps)
     else:
@@ -283,36 +297,57 @@ def _decade_ticks(cube: xr.Dataset) -> dict[str, list[tuple[float, str]]]:
     return ticks
 
 
-def weak_hook(method):
-    """A HoloViews hook that calls ``method`` while its object lives.
-
-    HoloViews keeps the options given to an element (``.opts(hooks=...)``) in a global tree,
-    and drops them when the element is garbage-collected. A bound method there held its scene,
-    the scene its figure and so the element: neither was ever collected, and every session
-    that opened the map stayed in memory (about 1.1 MB each; benchmarks/app_load.py --scene
-    map, tests/app/test_app_serve.py)."""
-    method_ref = weakref.WeakMethod(method)
-
-    def hook(plot, element) -> None:
-        bound = method_ref()
-        if bound is not None:
-            bound(plot, element)
-
-    return hook
+def image_frame(log_mu: np.ndarray, log_tau: np.ndarray) -> dict[str, list[float]]:
+    """Where an image of pixel centres ``log_mu`` x ``log_tau`` (evenly spaced) lies: its
+    lower left corner and its width and height, half a pixel beyond the outer centres."""
+    frame = {}
+    for (corner, size), centres in ((("x", "dw"), log_mu), (("y", "dh"), log_tau)):
+        pixel = (centres[-1] - centres[0]) / max(centres.size - 1, 1)
+        frame[corner] = [float(centres[0] - pixel / 2)]
+        frame[size] = [float(centres[-1] - centres[0] + pixel)]
+    return frame
 
 
-def blank_image(
-    mu_dim: hv.Dimension, tau_dim: hv.Dimension, variable: str, cube: xr.Dataset | None = None
-) -> hv.Image:
-    """An empty image on the cube's grid, with the variable's name: the plot keeps the first
-    frame's ranges and colour bar title. (A 2 x 2 image with its centres at the cube's corners
-    stretched the axes by half the cube on every side, and its value was called "z".)"""
-    cube = map_cube() if cube is None else cube
-    log_mu = log_grid(cube["mu"].values)[0]
-    log_tau = log_grid(cube["tau_ratio"].values)[0]
-    neutral = np.ones((log_tau.size, log_mu.size))  # (NaN made HoloViews warn of an empty slice)
-    value = hv.Dimension(variable, label=variable_label(variable))
-    return hv.Image((log_mu, log_tau, neutral), [mu_dim, tau_dim], value)
+def outline_data(xs: np.ndarray, ys: np.ndarray) -> dict[str, list[np.ndarray]]:
+    """An outline (:func:`outline_path`) as the data of a MultiLine: one line, its pieces
+    separated by NaN, or none."""
+    return {"xs": [on_screen(xs)], "ys": [on_screen(ys)]} if xs.size else {"xs": [], "ys": []}
+
+
+def colour_mapper(variable: str, clim: tuple[float, float] | None) -> ColorMapper:
+    """The image's colours: a ratio red above 1 and blue below on a log scale, a count a
+    colour each (:func:`count_palette`), anything else viridis; cells without a value
+    transparent."""
+    if variable in RATIO_CENTRES:
+        low, high = clim or (0.5, 2.0)  # (a log scale needs limits)
+        return LogColorMapper(palette=RATIO_PALETTE, low=low, high=high, nan_color=NO_VALUE)
+    if clim is None:  # (no slice yet: its range and bands come with it, _push_slice)
+        return LinearColorMapper(palette=viridis(256), nan_color=NO_VALUE)
+    palette = count_palette(*clim) if variable in COUNTS else viridis(256)
+    return LinearColorMapper(palette=palette, low=clim[0], high=clim[1], nan_color=NO_VALUE)
+
+
+def colour_bar(variable: str, mapper: ColorMapper, presentation: bool) -> ColorBar:
+    """The colour bar, titled with the variable's name: ticks inside a ratio's range, whole
+    numbers for a count (:func:`ratio_colorbar`, :func:`count_ticker`)."""
+    if variable in RATIO_CENTRES:
+        ticks = ratio_colorbar()
+    elif variable in COUNTS:
+        ticks = {"ticker": count_ticker()}
+    else:
+        ticks = {"ticker": BasicTicker()}
+    sizes = ("16pt", "18pt") if presentation else ("10pt", "11pt")
+    return ColorBar(
+        color_mapper=mapper,
+        title=variable_label(variable),
+        orientation="vertical" if presentation else "horizontal",
+        major_label_text_font_size=sizes[0],
+        title_text_font_size=sizes[1],
+        label_standoff=8,
+        major_tick_line_color="black",
+        bar_line_color="black",
+        **ticks,
+    )
 
 
 class MapScene(Scene):
@@ -322,7 +357,6 @@ class MapScene(Scene):
         default="h2_over_h1", objects=list(MAP_COLOURS), doc="The quantity coloured on the map."
     )
     moved = param.Event(doc="mu or tau_ratio changed while the map is on screen: the star moves.")
-    reframe = param.Event(doc="HoloViews draws the map's frame again (a slice on a new grid).")
 
     watched = (*Scene.watched, "map_force")
 
@@ -355,24 +389,20 @@ class MapScene(Scene):
             pn.bind(self._note, self.param.revision, self.param.moved, self.param.active),
             sizing_mode="stretch_width",
         )
-        self.tap: hv.streams.Tap | None = None
         # the star (current mu, tau_ratio): a glyph of its own on the figure, moved by its data
-        # alone; as a HoloViews layer each move re-rendered the whole overlay (~120 ms of
-        # server CPU), and bound to mu directly it did so on every scene. Each figure gets a
-        # source of its own (:meth:`_on_figure`): one shared by an old and a new figure was, in
-        # the browser, dropped with the old one ("reference ... isn't known" on the next move).
+        # alone. Each figure gets a source of its own (:meth:`_map_figure`): one shared by an
+        # old and a new figure was, in the browser, dropped with the old one ("reference ...
+        # isn't known" on the next move).
         self.star: ColumnDataSource | None = None
-        # the Bokeh models of the figure on screen that a new slice changes (_push_slice)
+        # the Bokeh models of the figure on screen that a new slice changes (_push_slice), and
+        # what that figure was drawn for (its variable and cube)
         self._image_source: ColumnDataSource | None = None
-        self._colour_mapper = None
+        self._colour_mapper: ColorMapper | None = None
         self._outline_source: ColumnDataSource | None = None
-        # a new figure per variable (its colour scale and label change); within one, the
-        # figure's DynamicMaps follow the state
-        # (and per force: the Hertz cubes' axes are not the map cube's)
-        self.figure = pn.pane.HoloViews(
-            pn.bind(self._figure, self.param.variable, self.state.param.map_force),
-            sizing_mode="stretch_width",
-        )
+        self._drawn_for: tuple[str, str] | None = None
+        # a new figure per variable (its colour scale and label change) and per cube (the
+        # Hertz cubes' axes are not the map cube's); within one, its models follow the state
+        self.figure = pn.pane.Bokeh(None, sizing_mode="stretch_width")
 
     def _variable_chosen(self, event: param.parameterized.Event) -> None:
         self.state.map_colour = self.choice.value = event.new
@@ -383,29 +413,84 @@ class MapScene(Scene):
             return hertz_cube_name(self.state.height)
         return CUBE
 
-    def _figure(self, variable: str, force: str = "linear") -> hv.DynamicMap:
-        ticks = _decade_ticks(shown_cube(self.cube_name()))
-        image = hv.DynamicMap(pn.bind(self._image, self.param.reframe, variable))
-        outline = hv.DynamicMap(pn.bind(self._outline, self.param.reframe))
-        # the stream before the overlay that shows the image: HoloViews links it at creation,
-        # and only to a DynamicMap of one element (not of an overlay)
-        self.tap = hv.streams.Tap(source=image, x=None, y=None)
-        self.tap.param.watch(self._tapped, ["x", "y"])
-        return (image * outline).opts(
-            hooks=[weak_hook(self._on_figure)],
-            xticks=ticks["mu"],
-            yticks=ticks["tau_ratio"],
-            xlabel="mu = m2/m1 (log scale)",
-            ylabel="tau_d/tau_f (log scale)",
-            responsive=True,
-            # (with its colour bar; else the window's height: FIT_STYLES, set in the hook)
-            **(
-                {"height": PROJECTOR_MAP_HEIGHT} if self.state.presentation else {"min_height": 380}
-            ),
-            framewise=False,
-            fontsize=font_sizes(self.state.presentation),
-            toolbar="right" if self.state.presentation else "above",
+    def _map_figure(self) -> figure:
+        """The map's Bokeh figure for the current variable and cube: the slice's image (a
+        blank on the cube's grid while off screen), the delayed rebounds' outline, the star,
+        the colour bar, a hover giving mu and tau_d/tau_f as numbers, and a click setting them.
+
+        Drawn with Bokeh directly. Through HoloViews (an Image and Contours overlay in
+        DynamicMaps) the map's page cost about 190 ms of server CPU to open and its first
+        document 62 kB; the drop's, drawn so, 110 ms and 36 kB (benchmarks/app_open.py)."""
+        variable, name = self.variable, self.cube_name()
+        cube = shown_cube(name)
+        if self.active:
+            self.current()
+        if self.active and self.slice is not None:
+            (log_mu, log_tau, shown), clim = slice_image(self.slice, variable)
+            xs, ys = self._outline_of_slice()
+        else:  # (the plot keeps its frame: a later slice fills it, _push_slice)
+            log_mu, log_tau = log_grid(cube["mu"].values)[0], log_grid(cube["tau_ratio"].values)[0]
+            shown, clim = np.full((log_tau.size, log_mu.size), np.nan), None
+            xs = ys = np.zeros(0)
+        frame = image_frame(log_mu, log_tau)
+        presentation = self.state.presentation
+        label = variable_label(variable)
+        hover = values_hover(label)
+        fig = figure(
+            x_range=Range1d(frame["x"][0], frame["x"][0] + frame["dw"][0]),
+            y_range=Range1d(frame["y"][0], frame["y"][0] + frame["dh"][0]),
+            x_axis_label="mu = m2/m1 (log scale)",
+            y_axis_label="tau_d/tau_f (log scale)",
+            tools=[hover, "wheel_zoom", "save", "pan", "box_zoom", "reset", "tap"],
+            active_drag="pan",
+            active_scroll="wheel_zoom",
+            toolbar_location="right" if presentation else "above",
+            sizing_mode="stretch_width",
+            # (with its colour bar; else the window's height: FIT_STYLES)
+            height=PROJECTOR_MAP_HEIGHT if presentation else None,
+            min_height=None if presentation else 380,
+            min_border=10,
+            outline_line_color="#e5e5e5",
         )
+        if not presentation:
+            fig.styles = FIT_STYLES
+        fig.grid.grid_line_color = None
+        for axis, ticks in (
+            (fig.xaxis, _decade_ticks(cube)["mu"]),
+            (fig.yaxis, _decade_ticks(cube)["tau_ratio"]),
+        ):
+            axis.ticker = FixedTicker(ticks=[value for value, _ in ticks])
+            axis.major_label_overrides = {value: text for value, text in ticks}
+        mapper = colour_mapper(variable, clim)
+        self._image_source = ColumnDataSource({**frame, "image": [on_screen(shown)]})
+        image = draw(
+            fig,
+            Image(image="image", x="x", y="y", dw="dw", dh="dh", color_mapper=mapper),
+            self._image_source,
+        )
+        hover.renderers = [image]  # (the outline and the star have no value)
+        self._outline_source = ColumnDataSource(outline_data(xs, ys))
+        width = PROJECTOR_LINE_WIDTH if presentation else 1.5
+        draw(
+            fig,
+            MultiLine(xs="xs", ys="ys", line_color="black", line_width=width),
+            self._outline_source,
+        )
+        readable(fig, presentation)
+        self.star = ColumnDataSource(self._star_position())
+        answers_pending(self.star)
+        star = Scatter(
+            x="x", y="y", marker="star", size=26, line_width=2, fill_color="yellow",
+            line_color="black",
+        )  # fmt: skip
+        draw(fig, star, self.star)
+        fig.add_layout(
+            colour_bar(variable, mapper, presentation), "right" if presentation else "below"
+        )
+        fig.on_event(Tap, self._tapped)
+        self._colour_mapper = mapper
+        self._drawn_for = (variable, name)
+        return fig
 
     def _state_changed(self, *events: param.parameterized.Event) -> None:
         if {e.name for e in events} <= {"mu", "tau_ratio"}:
@@ -428,70 +513,45 @@ class MapScene(Scene):
 
         Only a real move is sent. Bokeh sends a new ``data`` even when equal, and on the map's
         first visit that change reached the browser before the figure holding the star did
-        (built with the star already in place by :meth:`_on_figure`): "reference ... isn't
+        (built with the star already in place by :meth:`_map_figure`): "reference ... isn't
         known" in the browser's console."""
         position = self._star_position()
         if self.star is not None and dict(self.star.data) != position:
             self.star.data = position
         self.param.trigger("moved")
 
-    def _on_figure(self, plot, element) -> None:
-        """HoloViews hook: the star's glyph on the map's Bokeh figure, once per figure, with a
-        source of its own; the figure's height from the window's (FIT_STYLES); and the image's
-        and outline's models, which later slices change directly (:meth:`_push_slice`)."""
-        for layer in plot.subplots.values():
-            handles = layer.handles
-            if "color_mapper" in handles:
-                self._image_source = handles["source"]
-                self._colour_mapper = handles["color_mapper"]
-            else:
-                self._outline_source = handles["source"]
-        figure = plot.state
-        if not self.state.presentation:  # (a projector's map has a fixed height)
-            figure.styles = FIT_STYLES
-        if not any(getattr(r, "name", None) == "star" for r in figure.renderers):
-            self.star = ColumnDataSource(self._star_position())
-            answers_pending(self.star)
-            figure.scatter(
-                "x", "y", source=self.star, marker="star", size=26, line_width=2, name="star",
-                fill_color="yellow", line_color="black",
-            )  # fmt: skip
-
-    @param.depends("revision", watch=True)
+    @param.depends("revision", "variable", watch=True)
     def _draw_slice(self) -> None:
         """The slice on screen: pushed into the figure's models where it fits them, else drawn
-        again by HoloViews."""
-        if self.active and not self._push_slice():
-            self.param.trigger("reframe")
+        in a new figure (another variable or cube, or no figure yet)."""
+        if self.active and self._layout is not None and not self._push_slice():
+            self.figure.object = self._map_figure()
 
     def _push_slice(self) -> bool:
         """Send the current slice's values, colour range and outline to the figure's Bokeh
-        models, as HoloViews would draw them; False if they do not fit (no figure drawn yet,
-        or a slice on another grid), where HoloViews must draw the frame.
+        models; False if they do not fit (no figure drawn yet, or one of another variable or
+        grid), where a new figure must be drawn.
 
-        HoloViews' own update of the overlay cost about 150 ms of server CPU an eps move
-        (``benchmarks/app_cpu.py``, "map (eps slice)"): two DynamicMaps, each re-rendering the
-        whole overlay. The figure's frame (axes, ranges, colour bar, hover, tap) does not
-        change with the slice, only these three models' values do."""
+        The figure's frame (axes, ranges, colour bar, hover, tap) does not change with the
+        slice, only these three models' values do: an eps move sends them alone."""
         source, mapper = self._image_source, self._colour_mapper
         if source is None or mapper is None or self._outline_source is None:
+            return False
+        if self._drawn_for != (self.variable, self.cube_name()):
             return False
         self.current()
         if self.slice is None:
             return False
-        (_, _, shown), clim = slice_image(self.slice, self.variable)
+        (log_mu, log_tau, shown), clim = slice_image(self.slice, self.variable)
+        frame = image_frame(log_mu, log_tau)
         (drawn,) = source.data["image"]
-        if drawn.shape != shown.shape:
+        if drawn.shape != shown.shape or any(source.data[k] != v for k, v in frame.items()):
             return False
-        source.data = {**source.data, "image": [on_screen(shown)]}
+        source.data = {**frame, "image": [on_screen(shown)]}
         # (a count's bands, one a count: their number follows the slice's)
         bands = {"palette": count_palette(*clim)} if self.variable in COUNTS else {}
         mapper.update(low=clim[0], high=clim[1], **bands)
-        path = self._outline_of_slice()
-        self._outline_source.data = {
-            "xs": [path.dimension_values(0)] if len(path) else [],
-            "ys": [path.dimension_values(1)] if len(path) else [],
-        }
+        self._outline_source.data = outline_data(*self._outline_of_slice())
         return True
 
     def inputs(self) -> tuple:
@@ -592,64 +652,7 @@ class MapScene(Scene):
             )
         return "  \n".join(lines)
 
-    def _image(self, revision: bool, variable: str) -> hv.Image:
-        """The slice's image; off screen (nothing is read until the map is opened) or without
-        a slice, a blank on the cube's grid. Both in the variable's colours, scale, colour bar
-        and tools: a blank drawn first is later given the slice's values alone
-        (:meth:`_push_slice`; a blank in HoloViews' default colours and without the colour
-        bar stayed so, a map opened from its tab blue where it should be red)."""
-        mu_dim = hv.Dimension("log_mu", label="log10 mu")
-        tau_dim = hv.Dimension("log_tau_ratio", label="log10 tau_d/tau_f")
-        label = variable_label(variable)
-        ratio = variable in RATIO_CENTRES
-        if self.active:
-            self.current()
-        if self.active and self.slice is not None:
-            (log_mu, log_tau, shown), clim = slice_image(self.slice, variable)
-            dims = [mu_dim, tau_dim], hv.Dimension(variable, label=label)
-            image = hv.Image((log_mu, log_tau, on_screen(shown)), *dims)
-        else:  # (the plot keeps its first ticker; a log scale needs limits)
-            image = blank_image(mu_dim, tau_dim, variable, shown_cube(self.cube_name()))
-            clim = (0.5, 2.0) if ratio else None
-        if ratio:
-            opts = dict(cmap="RdBu_r", logz=True, clim=clim, colorbar_opts=ratio_colorbar())
-        elif variable in COUNTS and clim is not None:
-            # a colour a count, its tick at the middle of its band: whole numbers only
-            opts = dict(cmap=count_palette(*clim), logz=False, clim=clim)
-            opts["colorbar_opts"] = {"ticker": count_ticker()}
-        else:
-            opts = dict(cmap="viridis", logz=False, clim=clim or (np.nan, np.nan))
-            if variable in COUNTS:  # (a blank: its palette comes with the slice, _push_slice)
-                opts["colorbar_opts"] = {"ticker": count_ticker()}
-        return image.opts(
-            colorbar=True,
-            colorbar_position=self._colorbar_position(),
-            tools=[values_hover(label), "tap"],
-            **opts,
-        )
-
-    def _colorbar_position(self) -> str:
-        """Below the map, so that a phone's width is the map's (beside it, with the tools,
-        the map was a strip 145 px wide at 390 px); beside it on a projector, whose height is
-        the scarce side."""
-        return "right" if self.state.presentation else "bottom"
-
-    def _outline(self, revision: bool) -> hv.Contours:
-        """The outline of the delayed rebounds (h2 > h1) of the slice.
-
-        One path per region instead of one cross per grid point: ~3000 markers made every
-        repaint of the plot ~100 ms slower in the browser.
-        """
-        width = PROJECTOR_LINE_WIDTH if self.state.presentation else 1.5
-        if self.active:
-            self.current()
-        if not self.active or self.slice is None:  # (drawn as the outlines are, for later)
-            outline = hv.Contours([], ["log_mu", "log_tau_ratio"])
-        else:  # (a copy: the cached outline is every session's, its options this page's)
-            outline = self._outline_of_slice().clone()
-        return outline.opts(color="black", line_width=width)
-
-    def _outline_of_slice(self) -> hv.Contours:
+    def _outline_of_slice(self) -> tuple[np.ndarray, np.ndarray]:
         s = self.state
         drop = (s.height, s.eps12) if self.computed else None
         return outline_of(self.slice_cube, self.slice_eps, drop)
@@ -677,15 +680,16 @@ class MapScene(Scene):
         }
         return io.StringIO(slice_csv(self.slice, self.variable, about))
 
-    def _tapped(self, *events: param.parameterized.Event) -> None:
-        tap = events[0].obj
-        if tap.x is None or tap.y is None:
+    def _tapped(self, event: Tap) -> None:
+        """A click on the map: mu and tau_d/tau_f where it landed (the map is drawn in log10)."""
+        if event.x is None or event.y is None:
             return
-        mu, _ = validate("mu", 10.0**tap.x, self.state.mu)  # the map is drawn in log10
-        tau_ratio, _ = validate("tau_ratio", 10.0**tap.y, self.state.tau_ratio)
+        mu, _ = validate("mu", 10.0**event.x, self.state.mu)
+        tau_ratio, _ = validate("tau_ratio", 10.0**event.y, self.state.tau_ratio)
         self.state.param.update(mu=mu, tau_ratio=tau_ratio)
 
     def layout(self) -> pn.viewable.Viewable:
+        self.figure.object = self._map_figure()
         if self.state.presentation:  # 1280x720 (scene.py): the choices beside the map
             side = pn.Column(self.choice, self.force, self.download, self.note, width=300)
             return pn.Row(self.figure, side, sizing_mode="stretch_width")

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import holoviews as hv
 import numpy as np
 import panel as pn
 import param
@@ -12,8 +11,6 @@ from bokeh.models import ColumnDataSource, CustomJS, GlyphRenderer, LabelSet, Sp
 from bokeh.models.glyph import Glyph
 
 from .state import ExplorerState
-
-hv.renderer("bokeh")  # the plotting backend of every scene, also without ``panel serve``
 
 MODEL_PARAMETERS = ("eps", "eps12", "mu", "tau_ratio", "height")
 # Presentation mode (?present=1) lays every scene out for the smaller projector, 1280 x 720
@@ -340,13 +337,6 @@ def draw(fig, glyph: Glyph, source: ColumnDataSource) -> GlyphRenderer:
     costs the server about a millisecond a model (docs/performance.md, "A class at once"), and
     nothing here is selected or muted."""
     return fig.add_glyph(source, glyph)
-
-
-def font_sizes(presentation: bool) -> dict[str, int]:
-    """HoloViews' ``fontsize`` option, the same sizes as :func:`readable`."""
-    if presentation:
-        return {"ticks": "16pt", "labels": "18pt", "title": "18pt", "legend": "16pt"}
-    return {"ticks": "10pt", "labels": "11pt", "title": "12pt", "legend": "10pt"}
 
 
 def alert(text: str = "", **params) -> pn.pane.Alert:

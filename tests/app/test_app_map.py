@@ -1,20 +1,22 @@
 """The map scene (app/delayed_map.py) without a browser: the slice shown is the cube's (or
 computed, or a Hertz cube's) and agrees with the solver; a click sets mu and tau_ratio; an eps
-move sends the new slice into the figure HoloViews drew, and what it sends is what HoloViews
-itself draws for that slice."""
+move sends the new slice into the figure on screen, and what it sends is the cube's slice
+(each pixel the cube's value at its mu and tau_ratio, the colour range computed here again, the
+outline crossing h2/h1 = 1 between grid points)."""
 
 from __future__ import annotations
 
 import math
 
-import holoviews as hv
 import numpy as np
 import pytest
 from bokeh.document import Document
-from bokeh.models import ColorBar, ColorMapper, GlyphRenderer, Image, MultiLine
+from bokeh.events import Tap
+from bokeh.models import ColorBar, ColorMapper, GlyphRenderer, MultiLine
+from bokeh.palettes import viridis
 
 import twoball
-from app.delayed_map import MapScene, map_cube, nearest_eps
+from app.delayed_map import MapScene, map_cube, nearest_eps, shown_cube
 from app.explorer import Explorer
 
 
@@ -26,6 +28,11 @@ def map_on_screen(query: dict) -> tuple[Explorer, MapScene]:
     explorer = Explorer({"scene": "map", **query})
     explorer.__panel__().get_root(Document())
     return explorer, explorer.scenes["map"]
+
+
+def click(scene: MapScene, x: float, y: float) -> None:
+    """A click on the map at (x, y) in its coordinates (log10), as Bokeh delivers it."""
+    scene.figure.object._trigger_event(Tap(scene.figure.object, x=x, y=y))
 
 
 def looks(figure) -> dict:
@@ -44,24 +51,98 @@ def looks(figure) -> dict:
 
 def on_screen(scene: MapScene):
     """The map's Bokeh figure in the page."""
-    ((plot, _),) = scene.figure._plots.values()
-    return plot.state
+    return scene.figure.object
 
 
-def drawn_by_holoviews(scene: MapScene) -> dict:
-    """The scene's current slice rendered by HoloViews from scratch: the image's values, the
-    colour mapper's range and the outline's paths, and how it draws them."""
-    figure = hv.render(scene._image(True, scene.variable) * scene._outline(True))
-    renderers = figure.select({"type": GlyphRenderer})
-    (image,) = [r.data_source for r in renderers if isinstance(r.glyph, Image)]
-    (outline,) = [r.data_source for r in renderers if isinstance(r.glyph, MultiLine)]
-    mapper = figure.select_one({"type": ColorMapper})
+def pixels_of(cube, eps: float, variable: str, drop=None) -> np.ndarray:
+    """The slice's ``variable`` as the map should show it, found here again: rows tau_ratio,
+    columns mu, each pixel the cell nearest its centre in log10 (the map cube's axes are
+    evenly spaced in log10, one pixel a cell; the Hertz cubes' are not, and get more)."""
+    shown = cube[variable].sel(eps=eps) if drop is None else drop[variable]
+    centres = {}
+    for axis in ("mu", "tau_ratio"):
+        logs = np.log10(cube[axis].values)
+        steps = np.diff(logs)
+        if np.allclose(steps, steps[0], rtol=1e-6):
+            centres[axis] = logs
+        else:
+            count = min(400, int(np.ceil((logs[-1] - logs[0]) / steps.min())) + 1)
+            centres[axis] = np.linspace(logs[0], logs[-1], count)
+        nearest = np.abs(np.subtract.outer(centres[axis], logs)).argmin(axis=1)
+        shown = shown.isel({axis: nearest})
+    return shown.transpose("tau_ratio", "mu").values.astype(np.float32)
+
+
+def colour_range(values: np.ndarray, variable: str) -> tuple[float, float]:
+    """The colour limits of a slice's cells (each computed drop once, however many pixels
+    show it), worked out here: a ratio symmetric about 1 on a log scale to its 98th percentile
+    (at least 10**0.05), a count half a count beyond its extremes, else the values' range."""
+    if variable in ("h2_over_h1", "h1_over_icm"):
+        positive = values[values > 0]
+        spread = max(float(np.percentile(np.abs(np.log10(positive)), 98)), 0.05)
+        return 10**-spread, 10**spread
+    if variable == "contacts_first":
+        return float(values.min()) - 0.5, float(values.max()) + 0.5
+    return float(values.min()), float(values.max())
+
+
+def assert_outline_crosses_one(scene: MapScene) -> None:
+    """The outline on screen is the current slice's: each of its vertices lies on the segment
+    between two neighbouring grid points where log10(h2/h1), interpolated linearly between
+    them, is 0 (as flagged: :func:`rebound_field`), to float32."""
+    from app.delayed_map import rebound_field
+
+    source = scene._outline_source.data
+    slice_ = scene.slice if scene.computed else None
+    cube = shown_cube(scene.slice_cube).sel(eps=scene.slice_eps) if slice_ is None else slice_
+    field = rebound_field(cube["delayed_rebound"], cube["h2_over_h1"])
+    if not source["xs"]:
+        assert (field > 0).all() or (field < 0).all()
+        return
+    log_mu, log_tau = np.log10(cube["mu"].values), np.log10(cube["tau_ratio"].values)
+    xs, ys = (np.asarray(source[k][0], dtype=float) for k in ("xs", "ys"))
+    kept = np.isfinite(xs)
+    assert kept.sum() > 10
+    for x, y in zip(xs[kept], ys[kept], strict=True):
+        on_column = np.abs(log_mu - x).min() < 1e-5
+        axis, across, at = (log_tau, y, np.abs(log_mu - x).argmin()) if on_column else (
+            log_mu, x, np.abs(log_tau - y).argmin())  # fmt: skip
+        line = field[:, at] if on_column else field[at, :]
+        k = np.clip(np.searchsorted(axis, across) - 1, 0, axis.size - 2)
+        share = (across - axis[k]) / (axis[k + 1] - axis[k])
+        assert -1e-4 <= share <= 1 + 1e-4
+        crossing = line[k] + share * (line[k + 1] - line[k])
+        assert abs(crossing) < 1e-4 * max(abs(line[k]), abs(line[k + 1])), (x, y)
+
+
+def expected(scene: MapScene) -> dict:
+    """What the figure should hold for the scene's slice, worked out from the cube."""
+    from app.delayed_map import RATIO_PALETTE, computed_slice, count_palette
+
+    variable = scene.variable
+    cube = shown_cube(scene.slice_cube)
+    drop = None
+    if scene.computed:
+        drop = computed_slice(scene.slice_eps, scene.state.height, scene.state.eps12)
+    image = pixels_of(cube, scene.slice_eps, variable, drop)
+    cells = (cube[variable].sel(eps=scene.slice_eps) if drop is None else drop[variable]).values
+    low, high = colour_range(cells.astype(np.float32), variable)
+    if variable in ("h2_over_h1", "h1_over_icm"):
+        mapper = ("LogColorMapper", tuple(RATIO_PALETTE))
+    elif variable == "contacts_first":
+        mapper = ("LinearColorMapper", tuple(count_palette(low, high)))
+    else:
+        mapper = ("LinearColorMapper", tuple(viridis(256)))
+    tools = ["BoxZoomTool", "HoverTool", "PanTool", "ResetTool", "SaveTool", "TapTool"]
     return {
-        "image": image.data["image"][0],
-        "range": (mapper.low, mapper.high),
-        "xs": list(outline.data["xs"]),
-        "ys": list(outline.data["ys"]),
-        "looks": looks(figure),
+        "image": image,
+        "range": (low, high),
+        "looks": {
+            "mapper": mapper,
+            "colour bar": 1,
+            "outline": ("black", 1.5),
+            "tools": sorted([*tools, "WheelZoomTool"]),
+        },
     }
 
 
@@ -71,54 +152,65 @@ def sent(scene: MapScene) -> dict:
         "looks": looks(on_screen(scene)),
         "image": scene._image_source.data["image"][0],
         "range": (scene._colour_mapper.low, scene._colour_mapper.high),
-        "xs": list(scene._outline_source.data["xs"]),
-        "ys": list(scene._outline_source.data["ys"]),
     }
 
 
-def assert_same(held: dict, drawn: dict) -> None:
-    assert held["looks"] == drawn["looks"]
-    assert held["image"].dtype == drawn["image"].dtype
-    np.testing.assert_array_equal(held["image"], drawn["image"])
-    assert held["range"] == pytest.approx(drawn["range"], rel=1e-6)
-    assert len(held["xs"]) == len(drawn["xs"])
-    for mine, theirs in zip(held["xs"] + held["ys"], drawn["xs"] + drawn["ys"], strict=True):
-        np.testing.assert_array_equal(mine, theirs)
+def assert_shows_its_slice(scene: MapScene) -> None:
+    """The figure on screen shows the scene's current slice: its pixels, colours, range and
+    outline, worked out here from the cube."""
+    held, want = sent(scene), expected(scene)
+    assert held["looks"] == want["looks"]
+    assert held["image"].dtype == np.float32
+    np.testing.assert_array_equal(held["image"], want["image"])
+    assert held["range"] == pytest.approx(want["range"], rel=1e-5)
+    assert_outline_crosses_one(scene)
 
 
 @pytest.mark.parametrize("variable", ["h2_over_h1", "h1_over_drop", "contacts_first"])
-def test_an_eps_move_sends_the_slice_holoviews_would_draw_without_redrawing(variable):
+def test_an_eps_move_sends_the_new_slice_into_the_same_figure(variable):
     explorer, scene = map_on_screen({"eps": "0.6"})
-    scene.variable = variable  # (a new figure, drawn by HoloViews)
+    scene.variable = variable  # (a new figure)
     scene.current()
+    assert_shows_its_slice(scene)
+    drawn = on_screen(scene)
     before = sent(scene)["image"].copy()
-    reframes = []
-    scene.param.watch(lambda event: reframes.append(event), "reframe")
 
     explorer.state.eps = 0.9
-    assert not reframes  # the figure's frame stayed; its models took the new slice
+    assert on_screen(scene) is drawn  # the figure stayed; its models took the new slice
     assert scene.slice_eps == nearest_eps(0.9) != nearest_eps(0.6)
-    held = sent(scene)
-    assert not np.array_equal(held["image"], before, equal_nan=True)
-    assert_same(held, drawn_by_holoviews(scene))
+    assert not np.array_equal(sent(scene)["image"], before, equal_nan=True)
+    assert_shows_its_slice(scene)
 
 
 def test_the_hertz_map_takes_its_slices_the_same_way():
     explorer, scene = map_on_screen({"eps": "0.7", "map_force": "hertz"})
+    assert_shows_its_slice(scene)
+    drawn = on_screen(scene)
     explorer.state.eps = 0.95
-    assert "hertz" in scene.slice_cube
-    assert_same(sent(scene), drawn_by_holoviews(scene))
+    assert "hertz" in scene.slice_cube and on_screen(scene) is drawn
+    assert_shows_its_slice(scene)
 
 
-def test_a_slice_on_another_grid_is_drawn_again_by_holoviews():
-    """The pushed image must fit the drawn one; a slice that does not (here: a figure drawn
-    from a blank of another shape) makes HoloViews draw the frame again."""
+def test_another_cube_s_grid_gets_a_figure_of_its_own():
+    """The Hertz cubes' axes are not the map cube's: the linear map's figure cannot take their
+    slice, and a new figure spans their grid, its image placed half a pixel beyond the outer
+    cells' centres."""
     explorer, scene = map_on_screen({"eps": "0.6"})
-    scene._image_source.data = {**scene._image_source.data, "image": [np.ones((3, 3))]}
-    reframes = []
-    scene.param.watch(lambda event: reframes.append(event), "reframe")
-    explorer.state.eps = 0.9
-    assert len(reframes) == 1
+    linear = on_screen(scene)
+    explorer.state.map_force = "hertz"
+    hertz = on_screen(scene)
+    assert hertz is not linear
+    assert_shows_its_slice(scene)
+    cube = shown_cube(scene.slice_cube)
+    for axis, corner, size, span in (("mu", "x", "dw", hertz.x_range),
+                                     ("tau_ratio", "y", "dh", hertz.y_range)):  # fmt: skip
+        logs = np.log10(cube[axis].values)
+        pixels = scene._image_source.data["image"][0].shape[1 if axis == "mu" else 0]
+        half = (logs[-1] - logs[0]) / (pixels - 1) / 2
+        (start,), (width,) = (scene._image_source.data[k] for k in (corner, size))
+        assert start == pytest.approx(logs[0] - half) and width == pytest.approx(
+            logs[-1] - logs[0] + 2 * half)  # fmt: skip
+        assert (span.start, span.end) == pytest.approx((start, start + width))
 
 
 def test_map_shows_the_cube_slice_nearest_eps_as_the_solver_computes_it():
@@ -159,7 +251,7 @@ def test_the_map_of_another_drop_height_and_eps12_is_computed_and_said_so():
 def test_a_click_on_the_map_sets_mu_and_tau_ratio_and_moves_the_sliders():
     explorer = rendered({"scene": "map"})
     scene = explorer.scenes["map"]
-    scene.tap.event(x=math.log10(0.02), y=math.log10(0.15))  # the map is drawn in log10
+    click(scene, math.log10(0.02), math.log10(0.15))  # the map is drawn in log10
     assert explorer.state.mu == pytest.approx(0.02)
     assert explorer.state.tau_ratio == pytest.approx(0.15)
     assert explorer.controls.sliders["mu"].value == pytest.approx(math.log10(0.02))
@@ -171,9 +263,8 @@ def test_the_map_of_contact_counts_ticks_whole_numbers():
     explorer = rendered({"scene": "map"})
     scene = explorer.scenes["map"]
     scene.variable = "contacts_first"
-    image = scene._image(scene.revision, "contacts_first")
-    colorbar = hv.render(image).select_one({"type": ColorBar})
-    assert colorbar.ticker.min_interval == 1
+    colorbar = on_screen(scene).select_one({"type": ColorBar})
+    assert colorbar.ticker.min_interval == 1 and colorbar.color_mapper is scene._colour_mapper
 
 
 def _one_band_a_count(scene: MapScene) -> None:
@@ -202,13 +293,13 @@ def test_the_map_of_contact_counts_is_one_colour_a_count(force):
     _one_band_a_count(scene)
     explorer.state.eps = 0.3 if force == "linear" else 0.55
     _one_band_a_count(scene)
-    assert_same(sent(scene), drawn_by_holoviews(scene))
+    assert_shows_its_slice(scene)
 
 
-def _turns(path: hv.Contours) -> np.ndarray:
+def _turns(path: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
     """The angles (degrees) by which an outline turns at each of its vertices (those where it
     turns at all), over every piece of it (pieces separated by NaN)."""
-    xs, ys = path.dimension_values(0), path.dimension_values(1)
+    xs, ys = path
     cuts = np.flatnonzero(np.isnan(xs))
     turns = []
     for x, y in zip(np.split(xs, cuts), np.split(ys, cuts), strict=True):
@@ -239,7 +330,7 @@ def test_the_delayed_rebound_outline_is_smooth(cube):
     axes = [np.log10(shown[name].values) for name in ("mu", "tau_ratio")]
     middles = [(axis[1:] + axis[:-1]) / 2 for axis in axes]
     at_middle = np.zeros(0, dtype=bool)
-    for values, axis, middle in zip(path.columns().values(), axes, middles, strict=False):
+    for values, axis, middle in zip(path, axes, middles, strict=True):
         values = values[np.isfinite(values)]
         gap = np.diff(axis).min()
         on_point = np.abs(np.subtract.outer(values, axis)).min(axis=1) < 1e-6 * gap
@@ -278,13 +369,13 @@ def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
     assert url_query(explorer.state)["map_force"] == "hertz"
     assert read_query(url_query(explorer.state), explorer.state)[0]["map_force"] == "hertz"
     # every pixel of the image is one of the slice's cells (none interpolated)
-    shown = scene._image(True, "h2_over_h1").dimension_values(2)
+    shown = scene._image_source.data["image"][0]
     assert np.isin(shown[np.isfinite(shown)], values.values).all()
     # a drop nearer H = 100: the other cube; a click still sets mu and tau_ratio
     explorer.state.height = 300.0
     scene.current()
     assert scene.cube_name() == "hertz-h1e2" and "hertz-h1e2" in scene._note()
-    scene.tap.event(x=math.log10(0.05), y=math.log10(0.3))
+    click(scene, math.log10(0.05), math.log10(0.3))
     assert explorer.state.mu == pytest.approx(0.05)
     assert explorer.state.tau_ratio == pytest.approx(0.3)
     # back to linear: the map cube again
@@ -296,14 +387,14 @@ def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
 
 def test_a_map_first_opened_from_another_scene_shows_its_slice():
     """Built when its tab is first chosen, the map's figure is drawn before the scene is on
-    screen (a blank frame), then given the slice: what HoloViews would draw for it."""
+    screen (a blank frame), then given the slice."""
     explorer = Explorer({"scene": "drop", "eps": "0.7"})
     explorer.__panel__().get_root(Document())
     explorer.state.scene = "map"
     scene = explorer.scenes["map"]
     scene._redraw()  # (what the page does on the next tick)
     assert scene.active and scene.slice_eps == nearest_eps(0.7)
-    assert_same(sent(scene), drawn_by_holoviews(scene))
+    assert_shows_its_slice(scene)
 
 
 def test_the_map_s_colour_travels_in_a_link():
