@@ -7,6 +7,7 @@ import types
 
 import panel as pn
 import panel.io.document
+import panel.io.logging
 import pytest
 from tornado.websocket import WebSocketClosedError, WebSocketHandler
 
@@ -356,3 +357,41 @@ def test_the_loading_style_is_sent_once_per_page_with_panels_own_text(monkeypatc
         assert len(users) > 20, scene
         assert first_message_bytes(after) < first_message_bytes(before[scene]) - 5000, scene
     assert panel.reactive.loading_css(*settings) == own(*settings)  # (outside a page: the text)
+
+
+def test_panel_makes_no_debug_record_its_handlers_would_drop(monkeypatch):
+    """Panel's logger stood at DEBUG with a WARNING handler: every browser event made a log
+    record only to drop it. At its handlers' level, a debug message makes none, while a
+    warning still reaches the handler; a handler at DEBUG (Panel's admin page's) gets them."""
+    import logging
+
+    from app.app_hooks import panel_debug_messages_not_made
+
+    logger = logging.getLogger("panel")
+    monkeypatch.setattr(logger, "level", logging.DEBUG)  # (Panel's own setting, restored)
+    # Panel's own handler alone (pytest adds its capturing handlers, at NOTSET, to the logger)
+    monkeypatch.setattr(logger, "handlers", [panel.io.logging.panel_log_handler])
+    made: list[str] = []
+    make = logging.Logger.makeRecord
+
+    def making(self, *args, **kwargs):
+        made.append(self.name)
+        return make(self, *args, **kwargs)
+
+    monkeypatch.setattr(logging.Logger, "makeRecord", making)
+    child = logging.getLogger("panel.reactive.Syncable")
+    child.debug("Session %s received events", 1)
+    assert len(made) == 1  # (as Panel ships: made, then dropped by its handler)
+    panel_debug_messages_not_made()
+    assert logger.level == panel.io.logging.panel_log_handler.level > logging.DEBUG
+    child.debug("Session %s received events", 2)
+    assert len(made) == 1
+    child.warning("Session %s could not ...", 3)
+    assert len(made) == 2
+    handler = logging.NullHandler(logging.DEBUG)
+    logger.addHandler(handler)
+    try:
+        panel_debug_messages_not_made()
+        assert logger.level == logging.DEBUG
+    finally:
+        logger.removeHandler(handler)
