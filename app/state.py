@@ -75,6 +75,10 @@ class ExplorerState(Parameters):
     presentation = param.Boolean(
         default=False, doc="Large text and plots for a projector (URL: present=1)."
     )
+    slider_moved = param.Event(
+        doc="A slider released by the user, wherever it stands (the sidebar, or a copy under a "
+        "phone's plot): the messages of a bad URL or typed value go (app/controls.py)."
+    )
     # the Stack scene's drop (twoball.stacks): one mass ratio, restitution and gap for every pair
     balls = param.Integer(default=3, bounds=(2, 8), doc="Balls in the stack.")
     stack_ratio = param.Number(
