@@ -916,3 +916,73 @@ def test_a_phone_drags_the_sliders_under_the_plot(browser, app_server, artifacts
         assert errors == []
     finally:
         context.close()
+
+
+# the Bokeh models of the page's phone copies of the sliders (controls.phone_only)
+PHONE_COPIES_JS = """() => [...Bokeh.documents[0].all_models]
+  .filter((m) => (m.css_classes || []).includes("twoball-phone-sliders")).length"""
+
+
+@pytest.mark.parametrize(
+    "scene, count", [("drop", 3), ("closeup", 3), ("accuracy", 3), ("stack", 4)]
+)
+def test_every_scene_of_a_phone_has_its_sliders_under_its_plots(
+    browser, app_server, artifacts, scene, count
+):
+    """On a phone the Close-up's, the Accuracy's and the Stack's sliders lay at the page's foot,
+    far under their plots (a teacher's trial): each scene's own sliders (the Stack's N, ratio,
+    eps and gap; the two-ball ones elsewhere) stand right under its plots. A release of one of
+    them clears the message of a bad URL value, as the sidebar's do (the phone's mu and the
+    Stack's sliders left it up), and the sidebar's copy follows it. A laptop's page does not
+    build them."""
+    base, _ = app_server
+    context = browser.new_context(
+        viewport={"width": 390, "height": 844}, user_agent=PHONE_AGENT, is_mobile=True
+    )
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    try:
+        page.goto(f"{base}/app?scene={scene}&eps=5")
+        wait_for_plots(page)
+        deadline = 60_000  # (the Accuracy's plot comes once the drop is measured)
+        while deadline > 0 and not plots_on(page):
+            page.wait_for_timeout(500)
+            deadline -= 500
+        page.wait_for_timeout(800)
+        warning = page.get_by_text("URL eps: eps must be a number").first
+        assert warning.is_visible()
+        assert page.evaluate(PHONE_COPIES_JS) == 1
+        sidebar = page.locator("#sidebar").bounding_box()
+        handles = page.evaluate(HANDLES_JS)
+        copies = [
+            (i, h) for i, h in enumerate(handles) if h["visible"] and h["bottom"] < sidebar["y"]
+        ]
+        assert len(copies) == count, handles  # in the scene, above the sidebar
+        first = copies[0][1]
+        above = [c for c in plots_on(page) if c["bottom"] <= first["top"] + 1]
+        plot = max(above, key=lambda c: c["bottom"])
+        assert 0 <= first["top"] - plot["bottom"] <= 80, (plot, copies)  # right under it
+        tops = [h["top"] for _, h in copies]
+        assert tops == sorted(tops) and tops[-1] - tops[0] <= 70 * count, copies  # together
+        page.screenshot(path=artifacts / f"phone-sliders-{scene}.png", full_page=True)
+        # the second of them (mu; the Stack's ratio): released, the URL's warning goes and the
+        # sidebar's copy shows the same value
+        index = copies[1][0]
+        assert press_slider(page, index, "ArrowLeft", timeout_ms=30_000) > 0
+        expect(warning).to_be_hidden(timeout=10_000)
+        page.wait_for_timeout(500)
+        values = [h["value"] for h in page.evaluate(HANDLES_JS)]
+        others = [v for i, v in enumerate(values) if i != index]
+        assert values[index] in others, values
+        assert errors == []
+    finally:
+        context.close()
+    context, page, errors = open_page(browser, f"{base}/app?scene={scene}", viewport=(1366, 768))
+    try:
+        page.wait_for_timeout(500)
+        assert page.evaluate(PHONE_COPIES_JS) == 0  # (a laptop's page pays for no copies)
+        assert errors == []
+    finally:
+        context.close()
