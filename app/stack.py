@@ -83,8 +83,8 @@ CAPTION_HELP = (
     "elastic balls with a very light top ball, 49 times the drop height. Press play: the "
     "animation slows down through each collision, and draws the balls stacked, each on those "
     "below it. The stack's sliders take the two-ball ones' place among the controls (the side "
-    "panel; below the scene on a phone); it shares their drop height H (advanced). Heights here "
-    "are always dimensionless."
+    "panel; on a phone also right under the heights); it shares their drop height H (advanced). "
+    "Heights here are always dimensionless."
 )
 
 # ... and on a projector, beside the player: below it the whole text ran off a 1280x720 screen
