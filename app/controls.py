@@ -298,6 +298,7 @@ class Controls(Built):
         finally:
             self._syncing = False
         self.scene_controls = pn.Column(sizing_mode="stretch_width")
+        self.explained: Folded | None = None  # (a projector's: layout)
 
     def show_messages(self, messages: list[str], typed: bool = False) -> None:
         """Show the messages, literally: a typed value's under the inputs (``typed``), others at
@@ -438,10 +439,18 @@ class Controls(Built):
             *([self.message] if self.message.visible else []),
             self.two_ball,
             self.scene_controls,
-            self.meanings,
             sizing_mode="stretch_width",
         )
-        layout.insert(len(layout) - 1, self.advanced.place(layout))
+        layout.append(self.advanced.place(layout))
+        if self.state.presentation:
+            # On a projector the sliders' meanings are folded: open, their 720 px ran under
+            # "advanced", and the sidebar scrolled, the button itself cut at the screen's foot
+            # (1280x720, a teacher's trial); the teacher says what the sliders mean
+            self.explained = Folded("what the sliders mean", lambda: [self.meanings])
+            self.explained.button.visible = self.meanings.visible  # (show_scene_controls)
+            layout.append(self.explained.place(layout))
+        else:
+            layout.append(self.meanings)
         return layout
 
     def show_scene_controls(self, own: pn.viewable.Viewable | None) -> None:
@@ -453,6 +462,8 @@ class Controls(Built):
         for shown in self.scene_controls.objects:
             shown.visible = shown is own
         self.two_ball.visible = self.meanings.visible = own is None
+        if self.explained is not None:  # (a projector's fold of the meanings: layout)
+            self.explained.button.visible = own is None
         # eps12 is the two-ball drop's (a stack has its own eps per contact): typed on the Stack
         # scene it changed the link and nothing on screen (a teacher's trial)
         self.eps12.visible = own is None
