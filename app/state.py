@@ -275,8 +275,10 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
                 f"URL step: must be a lesson step from 1 to {len(STEPS)}; got {text[:40]!r}."
             )
     if "scene" in query and "step" not in values:
-        if query["scene"] in SCENES:
-            values["scene"] = query["scene"]
+        # in any case ("Map", as the tab's title reads, had opened the Drop: a teacher's link)
+        name = query["scene"].strip().lower()
+        if name in SCENES:
+            values["scene"] = name
         else:
             messages.append(
                 f"URL scene: must be one of {', '.join(SCENES)}; got {query['scene']!r}. "

@@ -1117,3 +1117,12 @@ def test_the_stack_s_summary_gives_h1_over_the_top_ball_s_release_height_written
         "1,000",
         "0.512",
     ]
+
+
+def test_a_url_s_scene_name_opens_its_scene_in_any_case():
+    """?scene=Map opened the Drop, with a message: the Map's tab is shown, built, no message."""
+    explorer = Explorer({"scene": "Map"})
+    assert explorer.state.scene == "map"
+    assert explorer.tabs.active == list(SCENE_REGISTRY).index("map")
+    assert explorer.scenes["map"].active and "drop" not in explorer.scenes
+    assert not explorer.controls.message.visible
