@@ -19,6 +19,7 @@ from bokeh.plotting import figure
 from twoball import jit
 from twoball.studies.precision import ERROR_FLOOR, FAILED_ERROR, PrecisionRow, work_precision
 
+from .controls import PhoneSliders, on_a_phone
 from .scene import (
     MODEL_PARAMETERS,
     PROJECTOR_LINE_WIDTH,
@@ -119,6 +120,7 @@ class AccuracyScene(Scene):
         # the last drop's plot and table, dimmed while the next is measured (at full strength
         # they were read as the new drop's for the few seconds of the measurement)
         self.results = pn.Column(*parts, self.table, sizing_mode="stretch_width")
+        self._dimmed = [self.results]
         self.view = pn.Column(self.status, self.results, sizing_mode="stretch_width")
 
     def _state_changed(self, *events: param.parameterized.Event) -> None:
@@ -141,7 +143,7 @@ class AccuracyScene(Scene):
             "*Computing: every method at every tolerance on this drop (a few seconds)...*"
         )
         if self.rows is not None:
-            self.results.styles = STALE
+            self._dim(STALE)
         document = pn.state.curdoc
         if document is not None and document.session_context is not None:
             if not self._measuring:  # (else the running measurement takes the newest next)
@@ -185,7 +187,11 @@ class AccuracyScene(Scene):
         self.rows = rows
         self.param.trigger("revision")
         self.status.object = ""
-        self.results.styles = {"opacity": "1"}
+        self._dim({"opacity": "1"})
+
+    def _dim(self, styles: dict[str, str]) -> None:
+        for shown in self._dimmed:
+            shown.styles = styles
 
     @param.depends("revision", watch=True)
     def _draw(self) -> None:
@@ -279,4 +285,12 @@ class AccuracyScene(Scene):
         return "\n".join(lines)
 
     def layout(self) -> pn.viewable.Viewable:
+        if on_a_phone() and not self.state.presentation:
+            # the two-ball sliders right under the plot, as on the Drop (the sidebar's lay
+            # under the table's 21 rows: a teacher's trial), never dimmed: the plot and the
+            # table are, each apart, while the next drop is measured
+            table = pn.Column(self.table, styles=self.results.styles, sizing_mode="stretch_width")
+            self.results.remove(self.table)
+            self._dimmed.append(table)
+            self.view.extend([PhoneSliders(state=self.state), table])
         return self.view

@@ -21,6 +21,7 @@ from twoball.observables import BALLS, FLOOR
 from twoball.units import units_named
 
 from .collisions import collisions, shown_collisions
+from .controls import PhoneSliders, on_a_phone
 from .drop import LOWER, UPPER, legend_above
 from .scene import Scene, Text, answers_pending, draw, on_screen, readable, wrapping_row
 
@@ -199,4 +200,7 @@ class CloseUpScene(Scene):
         self.positions.styles = BESIDE_STYLES
         forces = pn.Column(*panes[1:], styles=BESIDE_STYLES, sizing_mode="stretch_width")
         plots = wrapping_row(panes[0], forces, sizing_mode="stretch_width")
-        return pn.Column(plots, self.table, sizing_mode="stretch_width")
+        # on a phone the two-ball sliders right under the plots, as on the Drop (the sidebar's
+        # lay at the page's foot, under the contacts' table: a teacher's trial)
+        phone = [PhoneSliders(state=self.state)] if on_a_phone() else []
+        return pn.Column(plots, *phone, self.table, sizing_mode="stretch_width")

@@ -180,12 +180,31 @@ def on_a_phone() -> bool:
 PHONE_ONLY = "@media (min-width: 768px) { :host { display: none !important; } }"
 
 
+def phone_only(*widgets: pn.viewable.Viewable, css_class: str) -> pn.Column:
+    """``widgets`` in a column shown on a phone only (:data:`PHONE_ONLY`)."""
+    return pn.Column(
+        *widgets,
+        sizing_mode="stretch_width",
+        stylesheets=[PHONE_ONLY],
+        css_classes=[css_class],
+    )
+
+
+def announce_moves(slider: pn.widgets.Widget, state: ExplorerState) -> None:
+    """A release of ``slider`` fires the state's ``slider_moved``: the messages of a bad URL
+    value go (:class:`Controls`), as at a release of the sidebar's two-ball sliders. (A
+    slider made by ``from_param`` is also released when the state moves it: as the sidebar's
+    eps, which always cleared them then.)"""
+    slider.param.watch(lambda event: state.param.trigger("slider_moved"), "value_throttled")
+
+
 class PhoneSliders(Built):
-    """The three two-ball sliders again, for a phone's Drop scene, right under its plot: the
-    sidebar's, below the scene, the player, the lesson and the preset, lay 1100 px under it,
-    and a student could not watch the plot while dragging (a teacher's trial). Made only for
-    a phone's page (:func:`on_a_phone`: no other page pays for them), shown under 768 px; both
-    sets follow the state."""
+    """The three two-ball sliders again, for a phone's scene (the Drop, the Close-up, the
+    Accuracy), right under its plot: the sidebar's, below the scene, the player, the lesson
+    and the preset, lay 1100 px under it, and a student could not watch the plot while
+    dragging (a teacher's trial). Made only for a phone's page (:func:`on_a_phone`: no other
+    page pays for them), shown under 768 px; both sets follow the state, and a release of
+    either clears the URL's messages (the state's ``slider_moved``)."""
 
     state = param.ClassSelector(class_=ExplorerState)
 
@@ -193,6 +212,7 @@ class PhoneSliders(Built):
         super().__init__(**params)
         self.sliders = two_ball_sliders(self.state)
         self._syncing = False
+        announce_moves(self.sliders["eps"], self.state)  # (eps is linked by Panel)
         for name in LOG_SLIDERS:
             self.sliders[name].param.watch(
                 lambda event, name=name: self._moved(name, event.new), "value_throttled"
@@ -202,6 +222,7 @@ class PhoneSliders(Built):
 
     def _moved(self, name: str, value: float | None) -> None:
         if not self._syncing and value is not None:
+            self.state.param.trigger("slider_moved")
             self.state.param.update(**{name: 10.0**value})
 
     def _follow(self, *events: param.parameterized.Event) -> None:
@@ -212,12 +233,7 @@ class PhoneSliders(Built):
             self._syncing = False
 
     def layout(self) -> pn.viewable.Viewable:
-        return pn.Column(
-            *self.sliders.values(),
-            sizing_mode="stretch_width",
-            stylesheets=[PHONE_ONLY],
-            css_classes=["twoball-phone-sliders"],
-        )
+        return phone_only(*self.sliders.values(), css_class="twoball-phone-sliders")
 
 
 class Controls(Built):
@@ -271,6 +287,8 @@ class Controls(Built):
         self.state.param.watch(
             self._show_state, ["eps", "mu", "tau_ratio", "height", "eps12", "units"]
         )
+        # a slider released, here or elsewhere (a phone's copies under the plot: PhoneSliders)
+        self.state.param.watch(lambda event: self.show_messages([]), "slider_moved")
         self._show_state()
         self.show_messages(messages or [])
         self.two_ball.extend([self.units, *self.sliders.values()])
@@ -280,6 +298,7 @@ class Controls(Built):
         finally:
             self._syncing = False
         self.scene_controls = pn.Column(sizing_mode="stretch_width")
+        self.explained: Folded | None = None  # (a projector's: layout)
 
     def show_messages(self, messages: list[str], typed: bool = False) -> None:
         """Show the messages, literally: a typed value's under the inputs (``typed``), others at
@@ -297,7 +316,7 @@ class Controls(Built):
         changes nothing."""
         if self._syncing or value is None:
             return
-        self.show_messages([])
+        self.state.param.trigger("slider_moved")  # (the messages go)
         if name in LOG_SLIDERS:
             self.state.param.update(**{name: 10.0**value})
 
@@ -420,10 +439,18 @@ class Controls(Built):
             *([self.message] if self.message.visible else []),
             self.two_ball,
             self.scene_controls,
-            self.meanings,
             sizing_mode="stretch_width",
         )
-        layout.insert(len(layout) - 1, self.advanced.place(layout))
+        layout.append(self.advanced.place(layout))
+        if self.state.presentation:
+            # On a projector the sliders' meanings are folded: open, their 720 px ran under
+            # "advanced", and the sidebar scrolled, the button itself cut at the screen's foot
+            # (1280x720, a teacher's trial); the teacher says what the sliders mean
+            self.explained = Folded("what the sliders mean", lambda: [self.meanings])
+            self.explained.button.visible = self.meanings.visible  # (show_scene_controls)
+            layout.append(self.explained.place(layout))
+        else:
+            layout.append(self.meanings)
         return layout
 
     def show_scene_controls(self, own: pn.viewable.Viewable | None) -> None:
@@ -435,6 +462,8 @@ class Controls(Built):
         for shown in self.scene_controls.objects:
             shown.visible = shown is own
         self.two_ball.visible = self.meanings.visible = own is None
+        if self.explained is not None:  # (a projector's fold of the meanings: layout)
+            self.explained.button.visible = own is None
         # eps12 is the two-ball drop's (a stack has its own eps per contact): typed on the Stack
         # scene it changed the link and nothing on screen (a teacher's trial)
         self.eps12.visible = own is None

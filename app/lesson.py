@@ -98,6 +98,8 @@ class Lesson(Built):
             sizing_mode="stretch_width",
             margin=(0, 10),
             css_classes=["twoball-step-title"] if projected else [],
+            # (on a projector a paragraph's 20 px margins took the sidebar past 720 px)
+            stylesheets=[TIGHT] if projected else [],
         )
         self.start = ScriptedButton(
             label="Start the lesson",
@@ -314,8 +316,12 @@ class Lesson(Built):
                 shown.visible = False
             self._answered(False)
         if not lesson_on:
+            # (on a projector the teacher says it: its three lines of 20 px, with the sliders'
+            # and the folds' rows, took the sidebar past a 1280x720 screen, the Stack's too)
             self.heading.object = (
-                "A guided path through the demonstration in six steps: predict, then see."
+                ""
+                if self.state.presentation
+                else "A guided path through the demonstration in six steps: predict, then see."
             )
             return
         shown = STEPS[step - 1]

@@ -33,7 +33,14 @@ from twoball.stacks.model import MASS_RATIO_RANGE
 from twoball.units import number_text
 
 from .animation import Animation, FramePlayer
-from .controls import ReleasedIntSlider, ReleasedSlider, plain
+from .controls import (
+    ReleasedIntSlider,
+    ReleasedSlider,
+    announce_moves,
+    on_a_phone,
+    phone_only,
+    plain,
+)
 from .drop import (
     balls_glyph,
     below_zero,
@@ -76,8 +83,8 @@ CAPTION_HELP = (
     "elastic balls with a very light top ball, 49 times the drop height. Press play: the "
     "animation slows down through each collision, and draws the balls stacked, each on those "
     "below it. The stack's sliders take the two-ball ones' place among the controls (the side "
-    "panel; below the scene on a phone); it shares their drop height H (advanced). Heights here "
-    "are always dimensionless."
+    "panel; on a phone also right under the heights); it shares their drop height H (advanced). "
+    "Heights here are always dimensionless."
 )
 
 # ... and on a projector, beside the player: below it the whole text ran off a 1280x720 screen
@@ -137,36 +144,15 @@ class StackScene(Scene):
         super().__init__(**params)
         self.result: StackResult | None = None  # the last stack the solver carried
         self.refused: str | None = None  # why it refused the stack asked for, if it did
-        self._plots: pn.viewable.Viewable | None = None  # (built by :meth:`layout`)
+        self._plots: list[pn.viewable.Viewable] = []  # dimmed when refused (:meth:`layout`)
         self._carried = ""  # the last stack carried, in words (for a refusal's message)
         self._run: tuple[tuple, dict] = ((), {})  # simulate_stack's arguments, options (update)
         self.times = np.zeros(1)
         self.slow = np.zeros(1, dtype=bool)  # (frames in slow motion: frame_times)
         state = self.state.param
         # in the sidebar, in place of the two-ball sliders (own_controls), one under the other
-        ratio = "mass ratio" if self.state.presentation else "mass ratio (ball / ball below)"
         self.widgets = pn.Column(
-            # each recomputes the stack on release only (not at every step of a drag)
-            ReleasedIntSlider.from_param(
-                state.balls, name="balls N", throttled=True, sizing_mode="stretch_width"
-            ),
-            ReleasedSlider.from_param(
-                state.stack_ratio,
-                name=ratio,
-                step=0.01,
-                throttled=True,
-                sizing_mode="stretch_width",
-            ),
-            ReleasedSlider.from_param(
-                state.stack_eps, name="eps", step=0.01, throttled=True, sizing_mode="stretch_width"
-            ),
-            ReleasedSlider.from_param(
-                state.stack_gap,
-                name="gap td/tau_f",
-                step=0.05,
-                throttled=True,
-                sizing_mode="stretch_width",
-            ),
+            *self._sliders(),
             # (no tooltip from the parameter's doc: to the buttons' right, a phone cut it off)
             pn.widgets.RadioButtonGroup.from_param(
                 state.force, name="force", width=200, description=None
@@ -213,6 +199,39 @@ class StackScene(Scene):
         if self.state.presentation:  # plots and player within 720 px (scene.py)
             self.heights.height = self.animation.height = PROJECTOR_PLOT_HEIGHT
             self.heights.xaxis.axis_label, self.heights.yaxis.axis_label = "time tau", "height X"
+
+    def _sliders(self) -> list[pn.widgets.Widget]:
+        """N, the mass ratio, eps and the gap, each linked both ways to the state (a set for the
+        sidebar, and one under a phone's plots: :meth:`layout`); each recomputes the stack on
+        release only (not at every step of a drag), and its release clears the URL's messages
+        (the state's ``slider_moved``), as the two-ball sliders' does."""
+        state = self.state.param
+        ratio = "mass ratio" if self.state.presentation else "mass ratio (ball / ball below)"
+        sliders = [
+            ReleasedIntSlider.from_param(
+                state.balls, name="balls N", throttled=True, sizing_mode="stretch_width"
+            ),
+            ReleasedSlider.from_param(
+                state.stack_ratio,
+                name=ratio,
+                step=0.01,
+                throttled=True,
+                sizing_mode="stretch_width",
+            ),
+            ReleasedSlider.from_param(
+                state.stack_eps, name="eps", step=0.01, throttled=True, sizing_mode="stretch_width"
+            ),
+            ReleasedSlider.from_param(
+                state.stack_gap,
+                name="gap td/tau_f",
+                step=0.05,
+                throttled=True,
+                sizing_mode="stretch_width",
+            ),
+        ]
+        for slider in sliders:
+            announce_moves(slider, self.state)
+        return sliders
 
     def _heights_figure(self):
         fig = figure(
@@ -488,13 +507,24 @@ class StackScene(Scene):
 
     def _dim(self) -> None:
         """The plots dimmed while they show the last stack carried, not the one asked for."""
-        if self._plots is not None:
-            # (not {}: BokehJS keeps a style that is dropped rather than set)
-            self._plots.styles = {"opacity": "0.35" if self.refused is not None else "1"}
+        # (not {}: BokehJS keeps a style that is dropped rather than set)
+        for plot in self._plots:
+            plot.styles = {"opacity": "0.35" if self.refused is not None else "1"}
 
     def layout(self) -> pn.viewable.Viewable:
-        plots = heights_and_stage(self.heights, self.animation, self.state.presentation)
-        self._plots = plots
+        if on_a_phone() and not self.state.presentation:
+            # the stack's sliders (not its force, nor eps per contact) right under the heights,
+            # as the Drop's (the sidebar's lay under the player and the explanation: a
+            # teacher's trial); never dimmed, they are what undoes a refused stack
+            self._plots = [
+                pn.pane.Bokeh(self.heights, sizing_mode="stretch_width"),
+                pn.pane.Bokeh(self.animation),
+            ]
+            sliders = phone_only(*self._sliders(), css_class="twoball-phone-sliders")
+            plots = pn.Column(self._plots[0], sliders, self._plots[1], sizing_mode="stretch_width")
+        else:
+            plots = heights_and_stage(self.heights, self.animation, self.state.presentation)
+            self._plots = [plots]
         self._draw()
         self._dim()
         if self.state.presentation:

@@ -75,6 +75,10 @@ class ExplorerState(Parameters):
     presentation = param.Boolean(
         default=False, doc="Large text and plots for a projector (URL: present=1)."
     )
+    slider_moved = param.Event(
+        doc="A slider released by the user, wherever it stands (the sidebar, or a copy under a "
+        "phone's plot): the messages of a bad URL or typed value go (app/controls.py)."
+    )
     # the Stack scene's drop (twoball.stacks): one mass ratio, restitution and gap for every pair
     balls = param.Integer(default=3, bounds=(2, 8), doc="Balls in the stack.")
     stack_ratio = param.Number(
@@ -271,8 +275,10 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
                 f"URL step: must be a lesson step from 1 to {len(STEPS)}; got {text[:40]!r}."
             )
     if "scene" in query and "step" not in values:
-        if query["scene"] in SCENES:
-            values["scene"] = query["scene"]
+        # in any case ("Map", as the tab's title reads, had opened the Drop: a teacher's link)
+        name = query["scene"].strip().lower()
+        if name in SCENES:
+            values["scene"] = name
         else:
             messages.append(
                 f"URL scene: must be one of {', '.join(SCENES)}; got {query['scene']!r}. "

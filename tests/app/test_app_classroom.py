@@ -7,6 +7,7 @@ guards. The server log is checked after every test (conftest.py).
 from __future__ import annotations
 
 import re
+import time
 
 import pytest
 from appdriver import (
@@ -237,6 +238,45 @@ def test_presentation_mode_fits_a_projector(browser, app_server, artifacts):
         assert sizes and all(size == "16pt" for size in sizes), sizes
         assert page.evaluate("parseFloat(getComputedStyle(document.body).fontSize)") >= 18
         page.screenshot(path=artifacts / "presentation_drop.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
+SIDEBAR_SCROLLS_JS = """() => { const s = document.querySelector("#sidebar");
+  return [s.scrollHeight, s.clientHeight]; }"""
+
+
+@pytest.mark.parametrize("scene", ["drop", "stack"])
+def test_a_projector_s_sidebar_fits_its_screen(browser, app_server, artifacts, scene):
+    """?present=1 at 1280x720: the sidebar scrolled (the lesson's intro, the sliders, the
+    meanings' 720 px) and its "advanced" button was cut at the screen's foot (y 709, a
+    teacher's trial). Every control is on the screen, the sidebar does not scroll, and the
+    meanings are one press away. (Opened once the server's kernels are compiled: until then
+    the note that says so comes last in the sidebar, and may run past the screen's foot.)"""
+    base, log = app_server
+    for _ in range(240):
+        if "compiled kernels in use" in log.read_text():
+            break
+        time.sleep(0.5)
+    context, page, errors = open_page(
+        browser, f"{base}/app?present=1&scene={scene}", viewport=(1280, 720)
+    )
+    try:
+        page.wait_for_timeout(800)
+        advanced = page.get_by_role("button", name="advanced", exact=True).bounding_box()
+        assert advanced["y"] + advanced["height"] <= 720, advanced
+        scroll, client = page.evaluate(SIDEBAR_SCROLLS_JS)
+        assert scroll <= client, (scroll, client)  # (nothing under the screen's foot)
+        page.screenshot(path=artifacts / f"projector-sidebar-{scene}.png")
+        meanings = page.get_by_role("button", name="what the sliders mean")
+        if scene == "stack":  # (the two-ball sliders' meanings: not the stack's)
+            assert not meanings.is_visible()
+        else:
+            box = meanings.bounding_box()
+            assert box["y"] + box["height"] <= 720, box
+            meanings.click()
+            page.get_by_text("how bouncy each contact is").wait_for()
         assert errors == []
     finally:
         context.close()
@@ -913,6 +953,76 @@ def test_a_phone_drags_the_sliders_under_the_plot(browser, app_server, artifacts
         values = [h["value"] for h in page.evaluate(HANDLES_JS)]
         others = [v for i, v in enumerate(values) if i != index]
         assert values[index] in others, values  # (the sidebar's eps shows the same value)
+        assert errors == []
+    finally:
+        context.close()
+
+
+# the Bokeh models of the page's phone copies of the sliders (controls.phone_only)
+PHONE_COPIES_JS = """() => [...Bokeh.documents[0].all_models]
+  .filter((m) => (m.css_classes || []).includes("twoball-phone-sliders")).length"""
+
+
+@pytest.mark.parametrize(
+    "scene, count", [("drop", 3), ("closeup", 3), ("accuracy", 3), ("stack", 4)]
+)
+def test_every_scene_of_a_phone_has_its_sliders_under_its_plots(
+    browser, app_server, artifacts, scene, count
+):
+    """On a phone the Close-up's, the Accuracy's and the Stack's sliders lay at the page's foot,
+    far under their plots (a teacher's trial): each scene's own sliders (the Stack's N, ratio,
+    eps and gap; the two-ball ones elsewhere) stand right under its plots. A release of one of
+    them clears the message of a bad URL value, as the sidebar's do (the phone's mu and the
+    Stack's sliders left it up), and the sidebar's copy follows it. A laptop's page does not
+    build them."""
+    base, _ = app_server
+    context = browser.new_context(
+        viewport={"width": 390, "height": 844}, user_agent=PHONE_AGENT, is_mobile=True
+    )
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    try:
+        page.goto(f"{base}/app?scene={scene}&eps=5")
+        wait_for_plots(page)
+        deadline = 60_000  # (the Accuracy's plot comes once the drop is measured)
+        while deadline > 0 and not plots_on(page):
+            page.wait_for_timeout(500)
+            deadline -= 500
+        page.wait_for_timeout(800)
+        warning = page.get_by_text("URL eps: eps must be a number").first
+        assert warning.is_visible()
+        assert page.evaluate(PHONE_COPIES_JS) == 1
+        sidebar = page.locator("#sidebar").bounding_box()
+        handles = page.evaluate(HANDLES_JS)
+        copies = [
+            (i, h) for i, h in enumerate(handles) if h["visible"] and h["bottom"] < sidebar["y"]
+        ]
+        assert len(copies) == count, handles  # in the scene, above the sidebar
+        first = copies[0][1]
+        above = [c for c in plots_on(page) if c["bottom"] <= first["top"] + 1]
+        plot = max(above, key=lambda c: c["bottom"])
+        assert 0 <= first["top"] - plot["bottom"] <= 80, (plot, copies)  # right under it
+        tops = [h["top"] for _, h in copies]
+        assert tops == sorted(tops) and tops[-1] - tops[0] <= 70 * count, copies  # together
+        page.screenshot(path=artifacts / f"phone-sliders-{scene}.png", full_page=True)
+        # the second of them (mu; the Stack's ratio): released, the URL's warning goes and the
+        # sidebar's copy shows the same value
+        index = copies[1][0]
+        assert press_slider(page, index, "ArrowLeft", timeout_ms=30_000) > 0
+        expect(warning).to_be_hidden(timeout=10_000)
+        page.wait_for_timeout(500)
+        values = [h["value"] for h in page.evaluate(HANDLES_JS)]
+        others = [v for i, v in enumerate(values) if i != index]
+        assert values[index] in others, values
+        assert errors == []
+    finally:
+        context.close()
+    context, page, errors = open_page(browser, f"{base}/app?scene={scene}", viewport=(1366, 768))
+    try:
+        page.wait_for_timeout(500)
+        assert page.evaluate(PHONE_COPIES_JS) == 0  # (a laptop's page pays for no copies)
         assert errors == []
     finally:
         context.close()

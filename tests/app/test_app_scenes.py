@@ -530,10 +530,10 @@ def test_a_stack_refused_after_one_carried_keeps_that_one_dimmed():
     simulate_stack([0.06] * 7, 0.9, 0.2)  # (accepted: eight balls at 0.06)
     with pytest.raises(ParameterError):
         simulate_stack([0.05] * 7, 0.9, 0.2)
-    assert scene.curves.data is plotted and scene._plots.styles["opacity"] == "0.35"
+    assert scene.curves.data is plotted and scene._plots[0].styles["opacity"] == "0.35"
     explorer.state.balls = 7
     assert scene.refused is None and "7 balls, linear force" in scene.summary.object
-    assert scene._plots.styles["opacity"] == "1"
+    assert scene._plots[0].styles["opacity"] == "1"
 
 
 def test_accuracy_explains_a_drop_without_a_bounce():
@@ -1117,3 +1117,12 @@ def test_the_stack_s_summary_gives_h1_over_the_top_ball_s_release_height_written
         "1,000",
         "0.512",
     ]
+
+
+def test_a_url_s_scene_name_opens_its_scene_in_any_case():
+    """?scene=Map opened the Drop, with a message: the Map's tab is shown, built, no message."""
+    explorer = Explorer({"scene": "Map"})
+    assert explorer.state.scene == "map"
+    assert explorer.tabs.active == list(SCENE_REGISTRY).index("map")
+    assert explorer.scenes["map"].active and "drop" not in explorer.scenes
+    assert not explorer.controls.message.visible

@@ -83,6 +83,18 @@ def test_read_query_keeps_good_values_and_reports_each_bad_one():
     assert any(m.startswith("URL scene:") for m in messages)
 
 
+@pytest.mark.parametrize(
+    "text, scene", [("Map", "map"), ("STACK", "stack"), (" CloseUp ", "closeup")]
+)
+def test_read_query_takes_a_scene_s_name_in_any_case(text, scene):
+    """?scene=Map (the tab's title reads "Delayed-rebound map", a teacher typed it capitalised)
+    opened the Drop with a message: a scene's name is read in any case, and written back in
+    its own (url_query)."""
+    values, messages = read_query({"scene": text}, ExplorerState())
+    assert messages == [] and values["scene"] == scene
+    assert url_query(ExplorerState(scene=values["scene"]))["scene"] == scene
+
+
 def test_url_query_round_trips_through_read_query():
     state = ExplorerState(eps=0.7321, mu=0.0123456, tau_ratio=0.456, height=2.5e4, eps12=0.6)
     state.scene = "map"
