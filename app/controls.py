@@ -8,6 +8,7 @@ and either way a message under the inputs says so; the app keeps running.
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 
@@ -236,6 +237,17 @@ class PhoneSliders(Built):
         return phone_only(*self.sliders.values(), css_class="twoball-phone-sliders")
 
 
+def message_box() -> pn.pane.Alert:
+    """A hidden box for messages about bad input."""
+    return alert(
+        "",
+        alert_type="warning",
+        visible=False,
+        sizing_mode="stretch_width",
+        styles={"overflow-wrap": "anywhere"},
+    )
+
+
 class Controls(Built):
     """Widgets bound to one :class:`ExplorerState`, and the message box for bad input."""
 
@@ -243,18 +255,6 @@ class Controls(Built):
 
     def __init__(self, messages: list[str] | None = None, **params):
         super().__init__(**params)
-        # the URL's messages at the top; a typed value's under its input (at the top, a phone
-        # showed it out of view of the field just typed in)
-        self.message, self.typed_message = (
-            alert(
-                "",
-                alert_type="warning",
-                visible=False,
-                sizing_mode="stretch_width",
-                styles={"overflow-wrap": "anywhere"},
-            )
-            for _ in range(2)
-        )
         # on a projector the titles are short: at 20 px a long one pushed its value out of
         # the sidebar ("mu = m2/m1 (log scale): 0.09...")
         self.sliders = two_ball_sliders(self.state, short=self.state.presentation)
@@ -269,7 +269,6 @@ class Controls(Built):
         )
         self.preset.param.watch(self._apply_preset, "value")
         self._applying_preset = False
-        self.preset_source = pn.pane.Markdown("", styles={"font-size": "0.8em"})
         self.two_ball = pn.Column(self.preset, sizing_mode="stretch_width")
         self.units = pn.widgets.RadioButtonGroup(
             label="Units",
@@ -277,10 +276,6 @@ class Controls(Built):
             value=self.state.units,  # (a link syncs changes only: a lesson's URL opens in SI)
         )
         self.units.link(self.state, value="units", bidirectional=True)
-        self.height = pn.widgets.TextInput(label="", width=140)
-        self.eps12 = pn.widgets.TextInput(label="eps12 (ball-ball; empty: equal to eps)", width=140)
-        self.height.param.watch(self._height_typed, "value")
-        self.eps12.param.watch(self._eps12_typed, "value")
         self._syncing = False  # True while the widgets follow the state
         self.meanings = pn.pane.Markdown(self._meanings(), sizing_mode="stretch_width")
         # (a watcher, not @param.depends: _show_state reads which parameters changed)
@@ -300,14 +295,53 @@ class Controls(Built):
         self.scene_controls = pn.Column(sizing_mode="stretch_width")
         self.explained: Folded | None = None  # (a projector's: layout)
 
+    # The message boxes, the preset's source and the advanced inputs are made when first
+    # needed: most pages never show them, and each cost about a millisecond of a page's
+    # opening to make (a text box, and its own watchers of the state)
+    @functools.cached_property
+    def preset_source(self) -> pn.pane.Markdown:
+        """Where a chosen preset's numbers come from, under the preset."""
+        return pn.pane.Markdown("", styles={"font-size": "0.8em"})
+
+    @functools.cached_property
+    def height(self) -> pn.widgets.TextInput:
+        """The drop height, typed (under "advanced")."""
+        box = pn.widgets.TextInput(label="", width=140)
+        self._inputs_follow_state(box, None)
+        box.param.watch(self._height_typed, "value")
+        return box
+
+    @functools.cached_property
+    def eps12(self) -> pn.widgets.TextInput:
+        """The ball-ball restitution, typed (under "advanced"; empty: equal to eps)."""
+        box = pn.widgets.TextInput(label="eps12 (ball-ball; empty: equal to eps)", width=140)
+        box.visible = self.two_ball.visible  # (not on the Stack: show_scene_controls)
+        self._inputs_follow_state(None, box)
+        box.param.watch(self._eps12_typed, "value")
+        return box
+
+    @functools.cached_property
+    def message(self) -> pn.pane.Alert:
+        """The URL's messages, at the top of the controls."""
+        return message_box()
+
+    @functools.cached_property
+    def typed_message(self) -> pn.pane.Alert:
+        """A typed value's message, under its input (at the top, a phone showed it out of view
+        of the field just typed in)."""
+        return message_box()
+
     def show_messages(self, messages: list[str], typed: bool = False) -> None:
         """Show the messages, literally: a typed value's under the inputs (``typed``), others at
         the top; either box is hidden when it has none, and new messages clear the old."""
-        for box in (self.message, self.typed_message):
-            shown = messages if (box is self.typed_message) == typed else []
+        for name in ("message", "typed_message"):
+            shown = messages if (name == "typed_message") == typed else []
+            if not shown and name not in self.__dict__:  # (never made: nothing to clear)
+                continue
+            box = getattr(self, name)
             box.object = "\n\n".join(plain(m) for m in shown)
             box.visible = bool(shown)
-        if self.message.visible:
+        if "message" in self.__dict__ and self.message.visible:
             join(self._layout, self.message)
 
     def _slider_moved(self, name: str, value: float) -> None:
@@ -401,20 +435,28 @@ class Controls(Built):
     def _follow_state(self) -> None:
         s = self.state
         follow_log_sliders(self.sliders, s)
-        si = s.units == "SI"
-        self.height.label = "drop height [m]" if si else "H (dimensionless drop height)"
         if self.meanings.object != self._meanings():
             self.meanings.object = self._meanings()
-        # metres to three digits (the default H read 0.994898 m), H to six; a height typed
-        # stays as typed while it is the drop's
-        if not self._shows_height(self.height.value):
-            metres = presets.metres_from_height(s.height)
-            self.height.value = f"{metres:.3g}" if si else f"{s.height:.6g}"
+        self._inputs_follow_state(self.__dict__.get("height"), self.__dict__.get("eps12"))
+
+    def _inputs_follow_state(
+        self, height: pn.widgets.TextInput | None, eps12: pn.widgets.TextInput | None
+    ) -> None:
+        """The typed inputs (those made: :attr:`height`, :attr:`eps12`) to the state."""
+        s = self.state
+        if height is not None:
+            si = s.units == "SI"
+            height.label = "drop height [m]" if si else "H (dimensionless drop height)"
+            # metres to three digits (the default H read 0.994898 m), H to six; a height typed
+            # stays as typed while it is the drop's
+            if not self._shows_height(height.value):
+                metres = presets.metres_from_height(s.height)
+                height.value = f"{metres:.3g}" if si else f"{s.height:.6g}"
         # set only when changed: param's update reads every parameter of the widget first
         # (0.3 ms at every slider move, for inputs that rarely change)
-        eps12 = "" if s.eps12 is None else f"{s.eps12:.6g}"
-        if self.eps12.value != eps12:
-            self.eps12.value = eps12
+        text = "" if s.eps12 is None else f"{s.eps12:.6g}"
+        if eps12 is not None and eps12.value != text:
+            eps12.value = text
 
     def _meanings(self) -> str:
         return MEANINGS.format(height=HEIGHT_MEANINGS[self.state.units])
@@ -435,10 +477,11 @@ class Controls(Built):
         self.advanced = Folded("advanced", lambda: [self.typed_message, self.height, self.eps12])
         # the URL's message box joins the page when it first has something to say
         # (show_messages): empty in every page's first document, it cost 0.6 kB
+        # (a scene's own controls join it when such a scene is first shown: show_scene_controls)
         layout = pn.Column(
-            *([self.message] if self.message.visible else []),
+            *([self.message] if "message" in self.__dict__ and self.message.visible else []),
             self.two_ball,
-            self.scene_controls,
+            *([self.scene_controls] if self.scene_controls.objects else []),
             sizing_mode="stretch_width",
         )
         layout.append(self.advanced.place(layout))
@@ -459,6 +502,9 @@ class Controls(Built):
         'eps' sliders, one of them doing nothing there); None shows the two-ball ones."""
         if own is not None and own not in self.scene_controls.objects:
             self.scene_controls.append(own)
+            if self._layout is not None:  # (an empty box in every page cost a Bokeh column)
+                at = self._layout.objects.index(self.two_ball) + 1
+                join(self._layout, self.scene_controls, at)
         for shown in self.scene_controls.objects:
             shown.visible = shown is own
         self.two_ball.visible = self.meanings.visible = own is None
@@ -466,4 +512,5 @@ class Controls(Built):
             self.explained.button.visible = own is None
         # eps12 is the two-ball drop's (a stack has its own eps per contact): typed on the Stack
         # scene it changed the link and nothing on screen (a teacher's trial)
-        self.eps12.visible = own is None
+        if "eps12" in self.__dict__:
+            self.eps12.visible = own is None

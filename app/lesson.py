@@ -12,7 +12,7 @@ from __future__ import annotations
 import panel as pn
 import param
 
-from .scene import Built, ScriptedButton, alert, later
+from .scene import Built, ScriptedButton, alert, join, later
 from .state import ExplorerState
 from .steps import STEPS, gist
 
@@ -364,6 +364,8 @@ class Lesson(Built):
             self._steps.objects = [self._card_buttons, self.answer]
         else:
             self._steps.objects = [self.answer, self._card_buttons]
+        if self._layout is not None:  # (the card's foot: layout)
+            join(self._layout, self._steps, len(self._layout.objects))
 
     def _place_answer_by_width(self) -> None:
         """The answer in the card beside the scene, and on a phone above it (:data:`PHONE`)."""
@@ -425,10 +427,11 @@ class Lesson(Built):
         self._place_title()
 
     def layout(self) -> pn.viewable.Viewable:
+        # (the step's widgets join it when first made: empty, a box in every page's document)
         return pn.Card(
             self.heading,
             self.start,
-            self._steps,
+            *([self._steps] if self._steps.objects else []),
             title="Lesson",
             collapsed=False,
             sizing_mode="stretch_width",
