@@ -46,6 +46,7 @@ from bokeh.models import (
     LinearColorMapper,
     LogColorMapper,
     MultiLine,
+    NoOverlap,
     Range1d,
     Scatter,
 )
@@ -58,6 +59,7 @@ import twoball
 from twoball import jit
 from twoball.batch.sweep import compute_block
 
+from .controls import PhoneSliders, on_a_phone
 from .scene import (
     PROJECTOR_LINE_WIDTH,
     AnsweringMarkdown,
@@ -78,14 +80,27 @@ CUBE = "map"
 HERTZ_CUBES = {1e2: "hertz-h1e2", 1e4: "hertz-h1e4"}
 MOST_PIXELS = 400  # per axis, of a cube not evenly spaced in log10 (log_grid)
 SMALLEST_OUTLINED = 4  # cells: a delayed-rebound patch smaller than this is not outlined
-PROJECTOR_MAP_HEIGHT = 490  # presentation mode (scene.py): both axes and the colour bar in 720 px
+PROJECTOR_MAP_HEIGHT = 560  # presentation mode (scene.py): both axes and the colour bar in 720 px
 RATIO_CENTRES = {"h2_over_h1": 1.0, "h1_over_icm": 1.0}
 # whole numbers: coloured one colour each (:func:`count_palette`), not a gradient whose shades
 # between two counts stand for nothing
 COUNTS = ("contacts_first",)
-# the choice's words for a variable where the cube's long name is too long for it (the select
-# showed "number of ball-ball contact intervals bef"); the colour bar keeps the long name
-CHOICE_LABELS = {"contacts_first": "ball contacts before h1"}
+# a variable's words for a class, in the choice and on the colour bar alike (the cube's own
+# names, "h1 / h_ICM", "h1 / X2(0)", are the library's: a new user could not read them, and the
+# choice and the bar named the count differently)
+LABELS = {
+    "h2_over_h1": "h2 / h1",
+    "h1_over_icm": "h1 / textbook (ICM) height",
+    "h1_over_drop": "h1 / drop height",
+    "h2_over_drop": "h2 / drop height",
+    "contacts_first": "ball contacts before h1",
+}
+# the map's eps: a drop whose eps lies outside a shipped cube's is computed at its eps rounded
+# to this (once the solver is compiled), every session moving there sharing the few slices
+COMPUTED_EPS_STEP = 0.01
+# cells whose ratio is undefined (an apex below 0, the height at which the balls first touch):
+# grey, not the colour of a ratio (a negative h1 had read as "h2 far below h1", dark blue)
+NO_RATIO = "#9a9a9a"
 # the map's style on a laptop, desktop or phone: beside the choices where the screen is wide
 # enough (below them, the 640 px map of a 1366x768 laptop needed scrolling to see its lower
 # half), and as tall as the window leaves under the header and tabs, at most 640 px
@@ -109,13 +124,41 @@ def ratio_colorbar() -> dict:
     return {"ticker": FixedTicker(ticks=RATIO_TICKS), "formatter": BasicTickFormatter()}
 
 
-def values_hover(label: str) -> HoverTool:
-    """The map's hover: mu and tau_d/tau_f as numbers, not the log10 the image is drawn in (a
-    new model each time, as :func:`ratio_colorbar`)."""
-    power = CustomJSHover(code="return (10 ** value).toPrecision(3)")
+# the hover's value: three decimals (or three digits, below 0.01), and a cell without a ratio
+# said so (its image value NaN: :func:`slice_image`)
+VALUE_JS = """
+if (Number.isNaN(value)) return "none: an apex below 0";
+return Math.abs(value) >= 0.01 ? value.toFixed(3) : value.toPrecision(3);
+"""
+# the computed cell nearest the pointer on an axis (log10 values ``logs``), as a number
+CELL_JS = """
+let best = logs[0];
+for (const log of logs) if (Math.abs(log - value) < Math.abs(best - value)) best = log;
+return (10 ** best).toPrecision(3);
+"""
+
+
+def values_hover(label: str, cube: xr.Dataset) -> HoverTool:
+    """The map's hover: the mu and tau_d/tau_f of the computed cell under the pointer (what a
+    click chooses, :meth:`MapScene._tapped`) as numbers, not the log10 the image is drawn in,
+    and its value (a new model each time, as :func:`ratio_colorbar`). The pointer's own
+    coordinates had given a value that was not that point's: the map read 1.973 where the
+    Drop, at the clicked point, gave 2.014."""
+    axes = {
+        axis: CustomJSHover(args={"logs": np.log10(cube[axis].values).tolist()}, code=CELL_JS)
+        for axis in ("mu", "tau_ratio")
+    }
     return HoverTool(
-        tooltips=[("mu", "$x{custom}"), ("tau_d/tau_f", "$y{custom}"), (label, "@image")],
-        formatters={"$x": power, "$y": power},
+        tooltips=[
+            ("mu", "$x{custom}"),
+            ("tau_d/tau_f", "$y{custom}"),
+            (label, "@image{custom}"),
+        ],
+        formatters={
+            "$x": axes["mu"],
+            "$y": axes["tau_ratio"],
+            "@image": CustomJSHover(code=VALUE_JS),
+        },
     )
 
 
@@ -124,6 +167,11 @@ def variable_label(variable: str) -> str:
     in parentheses (a colour bar titled "... (Result.contacts_first[1])" was code to a class)."""
     name = map_cube()[variable].attrs.get("long_name", variable)
     return re.sub(r"\s*\(Result\.[^)]*\)", "", name)
+
+
+def shown_label(variable: str) -> str:
+    """A variable's name on the map (:data:`LABELS`), the cube's own for one not listed."""
+    return LABELS.get(variable, variable_label(variable))
 
 
 @functools.cache
@@ -206,30 +254,49 @@ def outlined(delayed: np.ndarray, smallest: int = SMALLEST_OUTLINED) -> np.ndarr
     return kept
 
 
-def slice_image(slice_: xr.Dataset, variable: str) -> tuple[tuple, tuple[float, float]]:
+def colour_limits(values: np.ndarray, variable: str) -> tuple[float, float]:
+    """The colour limits of ``values``: for a ratio, symmetric about 1 on a log scale out to
+    the 98th percentile (so that outliers do not wash it out); for a count, half a count beyond
+    its smallest and largest (a band of :func:`count_palette` each); for the others the values'
+    own range."""
+    values = np.asarray(values)
+    if variable in RATIO_CENTRES:
+        finite = values[np.isfinite(values) & (values > 0)]
+        spread = float(np.percentile(np.abs(np.log10(finite)), 98)) if finite.size else 1.0
+        spread = max(spread, 0.05)
+        return 10**-spread, 10**spread
+    finite = values[np.isfinite(values)]
+    low, high = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+    if variable in COUNTS:
+        return round(low) - 0.5, round(high) + 0.5  # (count_palette)
+    return low, high
+
+
+@functools.cache  # (a variable of a cube read once per server: about 120 000 values)
+def cube_colour_limits(name: str, variable: str) -> tuple[float, float]:
+    """The colour limits of a shipped cube's ``variable`` over all its eps: every slice of it
+    in the same colours, so that a colour means one value whatever eps is shown (each slice's
+    own had made the h2/h1 scale run 0.15-6.6 at eps 0.9 and 0.05-20 at 0.5)."""
+    return colour_limits(shown_cube(name)[variable].values, variable)
+
+
+def slice_image(
+    slice_: xr.Dataset, variable: str, limits: tuple[float, float] | None = None
+) -> tuple[tuple, tuple[float, float]]:
     """The slice's ``variable`` on the map's log grid (log10 mu, log10 tau_ratio, the values
-    with rows tau_ratio and columns mu: :func:`on_log_grid`), and its colour limits: for a
-    ratio, symmetric about 1 on a log scale out to the 98th percentile (so that outliers do
-    not wash it out); for a count, half a count beyond its smallest and largest (a band of
-    :func:`count_palette` each); for the others the values' own range."""
+    with rows tau_ratio and columns mu: :func:`on_log_grid`; a ratio's without a value, an
+    apex below 0, NaN), and its colour limits: ``limits`` (a shipped cube's, the same for all
+    its slices: :func:`cube_colour_limits`), else the slice's own (:func:`colour_limits`)."""
     values = slice_[variable].transpose("tau_ratio", "mu").values
     shown = on_log_grid(slice_, values)
-    if variable in COUNTS:
-        finite = shown[2][np.isfinite(shown[2])]
-        low, high = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
-        return shown, (round(low) - 0.5, round(high) + 0.5)  # (count_palette)
-    if variable not in RATIO_CENTRES:
-        finite = shown[2][np.isfinite(shown[2])]
-        return shown, (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
-    finite = values[np.isfinite(values) & (values > 0)]
-    spread = float(np.percentile(np.abs(np.log10(finite)), 98)) if finite.size else 1.0
-    spread = max(spread, 0.05)
-    return shown, (10**-spread, 10**spread)
+    if variable in RATIO_CENTRES:  # (a ratio with an apex below 0 is none: NO_RATIO)
+        shown = (*shown[:2], np.where(shown[2] > 0, shown[2], np.nan))
+    return shown, limits or colour_limits(values, variable)
 
 
 def count_palette(low: float, high: float) -> list[str]:
     """One colour for each whole number from ``low + 0.5`` to ``high - 0.5`` (a count's colour
-    limits, :func:`slice_image`): each count a band of its own, centred on its tick."""
+    limits, :func:`colour_limits`): each count a band of its own, centred on its tick."""
     return list(viridis(max(1, round(high - low))))
 
 
@@ -288,12 +355,16 @@ def outline_of(
 
 
 def _decade_ticks(cube: xr.Dataset) -> dict[str, list[tuple[float, str]]]:
-    """Ticks at the powers of ten inside each log axis, labelled with the value itself."""
+    """Ticks at 1, 2 and 5 times the powers of ten inside each log axis, labelled with the
+    value itself (those that would overlap are left out by the axis). Powers of ten alone
+    left a zoomed map with one label per axis, or none."""
     ticks = {}
     for name in ("mu", "tau_ratio"):
         logs = np.log10(cube[name].values)
-        decades = range(math.ceil(logs.min() - 1e-9), math.floor(logs.max() + 1e-9) + 1)
-        ticks[name] = [(float(d), f"{10.0**d:g}") for d in decades]
+        decades = range(math.floor(logs.min()) - 1, math.ceil(logs.max()) + 1)
+        values = [m * 10.0**d for d in decades for m in (1, 2, 5)]
+        inside = [v for v in values if logs.min() - 1e-9 <= math.log10(v) <= logs.max() + 1e-9]
+        ticks[name] = [(math.log10(v), f"{v:.3g}") for v in inside]
     return ticks
 
 
@@ -320,7 +391,7 @@ def colour_mapper(variable: str, clim: tuple[float, float] | None) -> ColorMappe
     transparent."""
     if variable in RATIO_CENTRES:
         low, high = clim or (0.5, 2.0)  # (a log scale needs limits)
-        return LogColorMapper(palette=RATIO_PALETTE, low=low, high=high, nan_color=NO_VALUE)
+        return LogColorMapper(palette=RATIO_PALETTE, low=low, high=high, nan_color=NO_RATIO)
     if clim is None:  # (no slice yet: its range and bands come with it, _push_slice)
         return LinearColorMapper(palette=viridis(256), nan_color=NO_VALUE)
     palette = count_palette(*clim) if variable in COUNTS else viridis(256)
@@ -339,7 +410,7 @@ def colour_bar(variable: str, mapper: ColorMapper, presentation: bool) -> ColorB
     sizes = ("16pt", "18pt") if presentation else ("10pt", "11pt")
     return ColorBar(
         color_mapper=mapper,
-        title=variable_label(variable),
+        title=shown_label(variable),
         orientation="vertical" if presentation else "horizontal",
         major_label_text_font_size=sizes[0],
         title_text_font_size=sizes[1],
@@ -369,7 +440,7 @@ class MapScene(Scene):
         self.error: str | None = None
         self.choice = pn.widgets.Select(
             label="Colour by",
-            options={CHOICE_LABELS.get(v, variable_label(v)): v for v in MAP_COLOURS},
+            options={shown_label(v): v for v in MAP_COLOURS},
             value=self.variable,
             width=270,  # (within the 300 px column beside the map)
             stylesheets=for_a_room(self.state.presentation),
@@ -426,7 +497,7 @@ class MapScene(Scene):
         if self.active:
             self.current()
         if self.active and self.slice is not None:
-            (log_mu, log_tau, shown), clim = slice_image(self.slice, variable)
+            (log_mu, log_tau, shown), clim = slice_image(self.slice, variable, self._limits())
             xs, ys = self._outline_of_slice()
         else:  # (the plot keeps its frame: a later slice fills it, _push_slice)
             log_mu, log_tau = log_grid(cube["mu"].values)[0], log_grid(cube["tau_ratio"].values)[0]
@@ -434,8 +505,7 @@ class MapScene(Scene):
             xs = ys = np.zeros(0)
         frame = image_frame(log_mu, log_tau)
         presentation = self.state.presentation
-        label = variable_label(variable)
-        hover = values_hover(label)
+        hover = values_hover(shown_label(variable), cube)
         fig = figure(
             x_range=Range1d(frame["x"][0], frame["x"][0] + frame["dw"][0]),
             y_range=Range1d(frame["y"][0], frame["y"][0] + frame["dh"][0]),
@@ -461,6 +531,7 @@ class MapScene(Scene):
         ):
             axis.ticker = FixedTicker(ticks=[value for value, _ in ticks])
             axis.major_label_overrides = {value: text for value, text in ticks}
+            axis.major_label_policy = NoOverlap()
         mapper = colour_mapper(variable, clim)
         self._image_source = ColumnDataSource({**frame, "image": [on_screen(shown)]})
         image = draw(
@@ -542,7 +613,7 @@ class MapScene(Scene):
         self.current()
         if self.slice is None:
             return False
-        (log_mu, log_tau, shown), clim = slice_image(self.slice, self.variable)
+        (log_mu, log_tau, shown), clim = slice_image(self.slice, self.variable, self._limits())
         frame = image_frame(log_mu, log_tau)
         (drawn,) = source.data["image"]
         if drawn.shape != shown.shape or any(source.data[k] != v for k, v in frame.items()):
@@ -569,17 +640,35 @@ class MapScene(Scene):
         """Whether the current drop's H and eps12 are the cube's (else a slice is computed)."""
         return self.state.height == map_cube().attrs.get("height") and self.state.eps12 is None
 
+    def _limits(self) -> tuple[float, float] | None:
+        """The colour limits of the shown cube's variable over all its eps; None for a slice
+        computed for another drop (its own: its values may lie outside the cube's)."""
+        return None if self.computed else cube_colour_limits(self.slice_cube, self.variable)
+
+    def _eps_outside(self) -> bool:
+        """Whether the drop's eps lies outside the shown cube's (both run from 0.5 to 1)."""
+        values = shown_cube(self.cube_name())["eps"].values
+        return not values.min() - 1e-9 <= self.state.eps <= values.max() + 1e-9
+
     def update(self) -> None:
         s = self.state
         try:
             name = self.slice_cube = self.cube_name()
             self.slice_eps = nearest_eps(s.eps, name)
+            self.download.filename = f"map-{name}-{self.variable}-eps{self.slice_eps:g}.csv"
             if name != CUBE:  # a shipped Hertz cube, never computed here
                 self.computed = False
                 self.slice = eps_slice(self.slice_eps, self.variable, name)
                 self.error = None
                 return
-            self.computed = not self._is_cube_drop() and jit.state == "compiled"
+            compiled = jit.state == "compiled"
+            self.computed = (not self._is_cube_drop() or self._eps_outside()) and compiled
+            if self.computed and self._eps_outside():  # (a shared slice near the drop's eps)
+                rounded = round(s.eps / COMPUTED_EPS_STEP) * COMPUTED_EPS_STEP
+                self.slice_eps = round(max(rounded, COMPUTED_EPS_STEP), 6)
+                self.download.filename = f"map-computed-{self.variable}-eps{self.slice_eps:g}.csv"
+            elif self.computed:
+                self.download.filename = f"map-computed-{self.variable}-eps{self.slice_eps:g}.csv"
             if self.computed:
                 whole = computed_slice(self.slice_eps, s.height, s.eps12)
                 self.slice = whole[[self.variable, "delayed_rebound"]]
@@ -610,6 +699,13 @@ class MapScene(Scene):
                 f"{heights}, the nearest to this drop's H = {s.height:g}), eps12 = eps; "
                 "**tau_d/tau_f counts the Hertz floor contact time** at that H"
             )
+        elif self.computed and self._eps_outside():
+            low, high = float(cube["eps"].min()), float(cube["eps"].max())
+            source = (
+                f"Computed for this drop at **eps = {self.slice_eps:g}** (the precomputed "
+                f"maps run from eps = {low:g} to {high:g}; this drop's eps is {s.eps:g}), "
+                f"**H = {s.height:g}, eps12 = {eps12}**"
+            )
         elif self.computed:
             source = (
                 f"Computed for this drop at **eps = {self.slice_eps:g}** (the map's eps "
@@ -626,12 +722,28 @@ class MapScene(Scene):
                 "Click the map to set mu and tau_d/tau_f for the other scenes, whose drops "
                 "use the **linear** force (the Stack scene offers the Hertz force)."
             )
+        grey = ""
+        ratio = self.variable in RATIO_CENTRES and self.slice is not None
+        if ratio and (self.slice[self.variable].values <= 0).any():
+            grey = "grey: no ratio (an apex below 0, where the balls first touch); "
+        # (on a projector the teacher says the rest: the whole note ran below a 720 px screen)
+        why = (
+            ""
+            if self.state.presentation
+            else "; its holes, islands and odd single cells are real: mostly where one brief "
+            "contact more or fewer happens, h2 jumps"
+        )
         lines = [
-            f"{source}. Black outlines: delayed rebound (h2 > h1; its holes, islands and odd "
-            "single cells are real: mostly where one brief contact more or fewer happens, h2 "
-            "jumps); "
+            f"{source}. Black outlines: delayed rebound (h2 > h1{why}); {grey}"
             "star: current parameters. " + click
         ]
+        if self._eps_outside() and not self.computed:
+            low, high = float(cube["eps"].min()), float(cube["eps"].max())
+            lines.append(
+                f"**The current eps = {s.eps:g} lies outside the map** (eps = {low:g} to "
+                f"{high:g}): it shows eps = {self.slice_eps:g}, not this drop"
+                + (" (the solver is still being compiled)." if name == CUBE else ".")
+            )
         for name, what in (("mu", "mu"), ("tau_ratio", "tau_d/tau_f")):
             low, high = float(cube[name].min()), float(cube[name].max())
             if not low <= getattr(s, name) <= high:
@@ -681,12 +793,18 @@ class MapScene(Scene):
         return io.StringIO(slice_csv(self.slice, self.variable, about))
 
     def _tapped(self, event: Tap) -> None:
-        """A click on the map: mu and tau_d/tau_f where it landed (the map is drawn in log10)."""
+        """A click on the map: the mu and tau_d/tau_f of the computed cell nearest it (the map
+        is drawn in log10), so that the other scenes' drop is the cell's, its h2/h1 the one the
+        map shows there."""
         if event.x is None or event.y is None:
             return
-        mu, _ = validate("mu", 10.0**event.x, self.state.mu)
-        tau_ratio, _ = validate("tau_ratio", 10.0**event.y, self.state.tau_ratio)
-        self.state.param.update(mu=mu, tau_ratio=tau_ratio)
+        cube = shown_cube(self.cube_name())
+        chosen = {}
+        for name, at in (("mu", event.x), ("tau_ratio", event.y)):
+            values = cube[name].values
+            nearest = float(values[np.abs(np.log10(values) - at).argmin()])
+            chosen[name], _ = validate(name, nearest, getattr(self.state, name))
+        self.state.param.update(**chosen)
 
     def layout(self) -> pn.viewable.Viewable:
         self.figure.object = self._map_figure()
@@ -695,4 +813,6 @@ class MapScene(Scene):
             return pn.Row(self.figure, side, sizing_mode="stretch_width")
         # the choices and the note right of the map, wrapped below it on a phone
         side = pn.Column(self.choice, self.force, self.download, self.note, styles=SIDE_STYLES)
+        if on_a_phone():  # the sliders under the map, as on the Drop (a new user's trial)
+            side.insert(0, PhoneSliders(state=self.state))
         return wrapping_row(self.figure, side, sizing_mode="stretch_width")

@@ -11,6 +11,7 @@ import json
 import re
 import time
 
+import numpy as np
 import pytest
 from appdriver import (
     deep_query,
@@ -108,6 +109,11 @@ def test_a_map_click_moves_the_sliders(browser, app_server, artifacts):
         assert after[1] != titles[1] and after[2] != titles[2]  # mu and tau_d/tau_f moved
         query = page_query(page)
         assert float(query["mu"]) != 0.05 and float(query["tau_ratio"]) != 0.3
+        # a computed cell of the map: the other tabs' drop is the one the map shows there
+        from app.delayed_map import map_cube
+
+        for name in ("mu", "tau_ratio"):
+            assert np.isclose(map_cube()[name].values, float(query[name]), rtol=1e-11).any(), query
         page.screenshot(path=artifacts / "map_after_click.png", full_page=True)
         assert errors == []
     finally:

@@ -472,6 +472,9 @@ def test_presentation_mode_shows_each_scene_on_one_screen(
         buttons = [b for b in deep_query(page, "button.play, button.pause") if b["visible"]]
         assert len(buttons) == 2 * len(players), buttons
         assert all(b["height"] >= 36 and b["width"] >= 50 for b in buttons), buttons
+        if scene == "map":  # its note whole beside it (it ran below the screen's foot)
+            note = page.get_by_text("Precomputed map at").bounding_box()
+            assert note is not None and note["y"] + note["height"] <= height, note
         if scene == "drop":  # the summary styled as Panel styles Markdown (app.scene.Text)
             margins = page.evaluate(SUMMARY_MARGINS_JS)
             assert margins == ["0px"], margins
@@ -634,6 +637,15 @@ def test_the_map_hover_says_mu_and_tau_ratio_not_their_logarithms(browser, app_s
         ).json_value()
         mu, tau_ratio = float(tooltip[0]), float(tooltip[1])
         assert 0.003 < mu < 0.3 and 0.003 < tau_ratio < 1, tooltip  # the values, not log10
+        # the computed cell's mu and tau_d/tau_f (to three digits), and that cell's value
+        from app.delayed_map import map_cube
+
+        cube = map_cube()
+        cells = {}
+        for name, shown in (("mu", tooltip[0]), ("tau_ratio", tooltip[1])):
+            (cells[name],) = [v for v in cube[name].values if f"{v:.3g}" == shown]
+        value = float(cube["h2_over_h1"].sel(eps=0.9, **cells))
+        assert tooltip[2] == (f"{value:.3f}" if value > 0 else "none: an apex below 0"), tooltip
         assert errors == []
     finally:
         context.close()

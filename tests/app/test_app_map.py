@@ -35,6 +35,14 @@ def click(scene: MapScene, x: float, y: float) -> None:
     scene.figure.object._trigger_event(Tap(scene.figure.object, x=x, y=y))
 
 
+def nearest_cell(cube, mu: float, tau_ratio: float) -> tuple[float, float]:
+    """The cube's cell nearest (mu, tau_ratio) on the map's log axes."""
+    return tuple(
+        float(values[np.abs(np.log10(values) - math.log10(value)).argmin()])
+        for values, value in ((cube["mu"].values, mu), (cube["tau_ratio"].values, tau_ratio))
+    )
+
+
 def looks(figure) -> dict:
     """How a map figure draws: its colour mapper's kind and palette, whether it has a colour
     bar, the outline's colour and width, and its tools."""
@@ -59,6 +67,8 @@ def pixels_of(cube, eps: float, variable: str, drop=None) -> np.ndarray:
     columns mu, each pixel the cell nearest its centre in log10 (the map cube's axes are
     evenly spaced in log10, one pixel a cell; the Hertz cubes' are not, and get more)."""
     shown = cube[variable].sel(eps=eps) if drop is None else drop[variable]
+    if variable in ("h2_over_h1", "h1_over_icm"):  # (no ratio where an apex is below 0)
+        shown = shown.where(shown > 0)
     centres = {}
     for axis in ("mu", "tau_ratio"):
         logs = np.log10(cube[axis].values)
@@ -74,9 +84,10 @@ def pixels_of(cube, eps: float, variable: str, drop=None) -> np.ndarray:
 
 
 def colour_range(values: np.ndarray, variable: str) -> tuple[float, float]:
-    """The colour limits of a slice's cells (each computed drop once, however many pixels
-    show it), worked out here: a ratio symmetric about 1 on a log scale to its 98th percentile
-    (at least 10**0.05), a count half a count beyond its extremes, else the values' range."""
+    """The colour limits of cells (each computed drop once, however many pixels show it):
+    a shipped cube's over all its eps, a computed slice's its own. Worked out here: a ratio
+    symmetric about 1 on a log scale to its 98th percentile (at least 10**0.05), a count half a
+    count beyond its extremes, else the values' range."""
     if variable in ("h2_over_h1", "h1_over_icm"):
         positive = values[values > 0]
         spread = max(float(np.percentile(np.abs(np.log10(positive)), 98)), 0.05)
@@ -125,7 +136,7 @@ def expected(scene: MapScene) -> dict:
     if scene.computed:
         drop = computed_slice(scene.slice_eps, scene.state.height, scene.state.eps12)
     image = pixels_of(cube, scene.slice_eps, variable, drop)
-    cells = (cube[variable].sel(eps=scene.slice_eps) if drop is None else drop[variable]).values
+    cells = (cube[variable] if drop is None else drop[variable]).values  # (all the cube's eps)
     low, high = colour_range(cells.astype(np.float32), variable)
     if variable in ("h2_over_h1", "h1_over_icm"):
         mapper = ("LogColorMapper", tuple(RATIO_PALETTE))
@@ -252,10 +263,15 @@ def test_a_click_on_the_map_sets_mu_and_tau_ratio_and_moves_the_sliders():
     explorer = rendered({"scene": "map"})
     scene = explorer.scenes["map"]
     click(scene, math.log10(0.02), math.log10(0.15))  # the map is drawn in log10
-    assert explorer.state.mu == pytest.approx(0.02)
-    assert explorer.state.tau_ratio == pytest.approx(0.15)
-    assert explorer.controls.sliders["mu"].value == pytest.approx(math.log10(0.02))
-    assert explorer.controls.sliders["tau_ratio"].value == pytest.approx(math.log10(0.15))
+    # the computed cell nearest the click: its drop is the one the map shows there
+    mu, tau_ratio = nearest_cell(map_cube(), 0.02, 0.15)
+    assert explorer.state.mu == mu and explorer.state.tau_ratio == tau_ratio
+    assert mu == pytest.approx(0.02, rel=0.05) and tau_ratio == pytest.approx(0.15, rel=0.07)
+    assert explorer.controls.sliders["mu"].value == pytest.approx(math.log10(mu))
+    assert explorer.controls.sliders["tau_ratio"].value == pytest.approx(math.log10(tau_ratio))
+    drop = twoball.simulate(0.9, mu, tau_ratio, height=map_cube().attrs["height"])
+    cell = scene.slice["h2_over_h1"].sel(mu=mu, tau_ratio=tau_ratio)
+    assert float(cell) == pytest.approx(drop.h2_over_h1, rel=1e-5)
 
 
 def test_the_map_of_contact_counts_ticks_whole_numbers():
@@ -268,10 +284,10 @@ def test_the_map_of_contact_counts_ticks_whole_numbers():
 
 
 def _one_band_a_count(scene: MapScene) -> None:
-    """The figure on screen colours each whole number of the slice with a colour of its own:
-    a palette of one colour per count from the smallest to the largest, its limits half a
-    count beyond them (each count's band centred on it, where its tick is)."""
-    counts = scene.slice["contacts_first"].values
+    """The figure on screen colours each whole number of the cube with a colour of its own:
+    a palette of one colour per count from the smallest to the largest of all its eps, its
+    limits half a count beyond them (each count's band centred on it, where its tick is)."""
+    counts = shown_cube(scene.slice_cube)["contacts_first"].values
     low, high = int(np.nanmin(counts)), int(np.nanmax(counts))
     mapper = scene._colour_mapper
     assert type(mapper).__name__ == "LinearColorMapper"
@@ -286,12 +302,11 @@ def _one_band_a_count(scene: MapScene) -> None:
 @pytest.mark.parametrize("force", ["linear", "hertz"])
 def test_the_map_of_contact_counts_is_one_colour_a_count(force):
     """A count's colours were a smooth gradient (256 shades between 1 and 12 contacts, shades
-    that stand for no count): a band per whole number, also after an eps move (its range of
-    counts changes)."""
+    that stand for no count): a band per whole number, the same after an eps move."""
     explorer, scene = map_on_screen({"map_colour": "contacts_first", "map_force": force})
     scene.current()
     _one_band_a_count(scene)
-    explorer.state.eps = 0.3 if force == "linear" else 0.55
+    explorer.state.eps = 0.6 if force == "linear" else 0.55
     _one_band_a_count(scene)
     assert_shows_its_slice(scene)
 
@@ -376,8 +391,8 @@ def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
     scene.current()
     assert scene.cube_name() == "hertz-h1e2" and "hertz-h1e2" in scene._note()
     click(scene, math.log10(0.05), math.log10(0.3))
-    assert explorer.state.mu == pytest.approx(0.05)
-    assert explorer.state.tau_ratio == pytest.approx(0.3)
+    mu, tau_ratio = nearest_cell(shown_cube("hertz-h1e2"), 0.05, 0.3)
+    assert (explorer.state.mu, explorer.state.tau_ratio) == (mu, tau_ratio)
     # back to linear: the map cube again
     explorer.state.map_force = "linear"
     scene.current()
@@ -429,3 +444,70 @@ def test_the_map_s_labels_say_what_a_class_reads_not_the_library_s_names():
     assert label == long_name.split(" (Result.")[0] and "Result" not in label
     for variable in MAP_COLOURS:
         assert "Result." not in variable_label(variable)
+
+
+def test_the_choice_and_the_colour_bar_name_a_variable_alike():
+    """A new user met "h1 / h_ICM" and "X2(0)", and a count named one way in the choice and
+    another on the bar: one label, in words, for both."""
+    from app.delayed_map import MAP_COLOURS, shown_label
+
+    explorer, scene = map_on_screen({})
+    for variable in MAP_COLOURS:
+        scene.choice.value = variable
+        (bar,) = on_screen(scene).select({"type": ColorBar})
+        (label,) = [k for k, v in scene.choice.options.items() if v == variable]
+        assert bar.title == label == shown_label(variable)
+        assert "X2(0)" not in label and "h_ICM" not in label
+
+
+def test_a_ratio_with_an_apex_below_zero_is_grey_not_a_colour_of_the_scale():
+    """h2/h1 is negative where the first apex lies below 0 (h1 = -134, h2 = 9329: a strong
+    delayed rebound): drawn dark blue, it read as h2 far below h1. It is no ratio: NaN in the
+    image, grey, and the note says what grey means."""
+    from app.delayed_map import NO_RATIO
+
+    explorer, scene = map_on_screen({"eps": "0.9"})
+    values = scene.slice["h2_over_h1"].transpose("tau_ratio", "mu").values
+    below = values <= 0
+    assert below.any()  # (five such cells at eps 0.9)
+    image = scene._image_source.data["image"][0]
+    assert np.isnan(image[below]).all() and np.isfinite(image[~below]).all()
+    assert scene._colour_mapper.nan_color == NO_RATIO
+    assert "grey: no ratio (an apex below 0" in scene._note()
+    scene.variable = "h1_over_drop"  # (not a ratio of two apexes: its values drawn as they are)
+    scene.current()
+    assert np.isfinite(scene._image_source.data["image"][0]).all()
+    assert "grey" not in scene._note()
+
+
+def test_a_slice_s_colours_are_the_cube_s_whatever_eps():
+    """Each slice had its own colour range (h2/h1 0.15-6.6 at eps 0.9, 0.05-20 at 0.5): one
+    colour meant two values. Every slice of a shipped cube now has the cube's."""
+    explorer, scene = map_on_screen({"eps": "0.9"})
+    first = (scene._colour_mapper.low, scene._colour_mapper.high)
+    explorer.state.eps = 0.5
+    assert scene.slice_eps == 0.5
+    assert (scene._colour_mapper.low, scene._colour_mapper.high) == first
+    assert first == pytest.approx(colour_range(map_cube()["h2_over_h1"].values, "h2_over_h1"))
+
+
+def test_a_drop_whose_eps_lies_outside_the_cube_gets_its_own_slice():
+    """Below eps 0.5 the map kept showing eps 0.5, whose delayed rebound the Drop tab did not
+    show. The drop's eps (to 0.01) is computed and said so; a Hertz map, never computed, says
+    that the drop's eps lies outside it."""
+    explorer, scene = map_on_screen({"eps": "0.164"})
+    assert scene.computed and scene.slice_eps == pytest.approx(0.16)
+    note = scene._note()
+    assert "Computed for this drop at **eps = 0.16**" in note and "run from eps = 0.5 to 1" in note
+    values = scene.slice["h2_over_h1"]
+    for i, j in ((5, 70), (30, 10), (60, 45)):
+        mu, tau = float(values["mu"][i]), float(values["tau_ratio"][j])
+        direct = twoball.simulate(0.16, mu, tau, height=map_cube().attrs["height"])
+        assert float(values[i, j]) == pytest.approx(direct.h2_over_h1, rel=1e-12, nan_ok=True)
+    assert_shows_its_slice(scene)
+    assert scene.download.filename == "map-computed-h2_over_h1-eps0.16.csv"
+    explorer.state.map_force = "hertz"
+    scene.current()
+    assert not scene.computed and scene.slice_eps == 0.5
+    assert "**The current eps = 0.164 lies outside the map**" in scene._note()
+    assert scene.download.filename == f"map-{scene.slice_cube}-h2_over_h1-eps0.5.csv"

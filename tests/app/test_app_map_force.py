@@ -19,7 +19,7 @@ from appdriver import (
 )
 from playwright.sync_api import expect
 
-from app.delayed_map import eps_slice, nearest_eps, on_screen, slice_image
+from app.delayed_map import cube_colour_limits, eps_slice, nearest_eps, on_screen, slice_image
 
 pytestmark = pytest.mark.browser
 # the map's image (its values, flattened) and its colour mapper's range, in the browser
@@ -47,7 +47,10 @@ def test_an_eps_move_shows_the_new_slice_in_the_browser(browser, app_server, art
         eps = nearest_eps(float(page.locator(".bk-slider-value").first.inner_text()))
         expect(page.get_by_text(f"at eps = {eps:g} (nearest").first).to_be_visible()
         page.wait_for_timeout(500)
-        (_, _, expected), (low, high) = slice_image(eps_slice(eps, "h2_over_h1"), "h2_over_h1")
+        limits = cube_colour_limits("map", "h2_over_h1")  # (every slice's: the cube's)
+        (_, _, expected), (low, high) = slice_image(
+            eps_slice(eps, "h2_over_h1"), "h2_over_h1", limits
+        )
         drawn, mapped, _, _ = page.evaluate(IMAGE_JS)
         np.testing.assert_array_equal(np.array(drawn, dtype=float), on_screen(expected).ravel())
         assert mapped == pytest.approx([low, high])
