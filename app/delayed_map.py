@@ -145,7 +145,7 @@ def values_hover(label: str, cube: xr.Dataset) -> HoverTool:
     coordinates had given a value that was not that point's: the map read 1.973 where the
     Drop, at the clicked point, gave 2.014."""
     axes = {
-        axis: CustomJSHover(args={"logs": np.log10(cube[axis].values).tolist()}, code=CELL_JS)
+        axis: CustomJSHover(args={"logs": on_screen(np.log10(cube[axis].values))}, code=CELL_JS)
         for axis in ("mu", "tau_ratio")
     }
     return HoverTool(
