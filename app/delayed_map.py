@@ -645,6 +645,30 @@ class MapScene(Scene):
         computed for another drop (its own: its values may lie outside the cube's)."""
         return None if self.computed else cube_colour_limits(self.slice_cube, self.variable)
 
+    def _star_value(self) -> str:
+        """The shown value at the star (the computed cell nearest it), for a screen without a
+        hover (a phone's tap showed none; a projected hover is too small for a room); empty
+        with the star off the map."""
+        if self.slice is None:
+            return ""
+        cell = {}
+        for name in ("mu", "tau_ratio"):
+            values = self.slice[name].values
+            at = getattr(self.state, name)
+            if not values.min() <= at <= values.max():
+                return ""
+            cell[name] = int(np.abs(np.log10(values) - math.log10(at)).argmin())
+        value = float(self.slice[self.variable].isel(cell))
+        if self.variable in RATIO_CENTRES and not value > 0:
+            shown = "none (an apex below 0)"
+        else:
+            shown = f"{value:.3f}" if abs(value) >= 0.01 else f"{value:.3g}"
+        mu, tau = (float(self.slice[k][cell[k]]) for k in ("mu", "tau_ratio"))
+        return (
+            f"At the star (mu = {mu:.3g}, tau_d/tau_f = {tau:.3g}): "
+            f"**{shown_label(self.variable)} = {shown}**."
+        )
+
     def _eps_outside(self) -> bool:
         """Whether the drop's eps lies outside the shown cube's (both run from 0.5 to 1)."""
         values = shown_cube(self.cube_name())["eps"].values
@@ -722,20 +746,24 @@ class MapScene(Scene):
                 "Click the map to set mu and tau_d/tau_f for the other scenes, whose drops "
                 "use the **linear** force (the Stack scene offers the Hertz force)."
             )
+        projected = self.state.presentation
         grey = ""
         ratio = self.variable in RATIO_CENTRES and self.slice is not None
         if ratio and (self.slice[self.variable].values <= 0).any():
-            grey = "grey: no ratio (an apex below 0, where the balls first touch); "
-        # (on a projector the teacher says the rest: the whole note ran below a 720 px screen)
+            grey = "grey: no ratio; " if projected else (
+                "grey: no ratio (an apex below 0, where the balls first touch); "
+            )  # fmt: skip
+        # (on a projector the teacher says the rest and clicks: the whole note ran below a
+        # 720 px screen)
         why = (
             ""
-            if self.state.presentation
+            if projected
             else "; its holes, islands and odd single cells are real: mostly where one brief "
             "contact more or fewer happens, h2 jumps"
         )
         lines = [
             f"{source}. Black outlines: delayed rebound (h2 > h1{why}); {grey}"
-            "star: current parameters. " + click
+            "star: current parameters." + ("" if projected else " " + click)
         ]
         if self._eps_outside() and not self.computed:
             low, high = float(cube["eps"].min()), float(cube["eps"].max())
@@ -751,6 +779,9 @@ class MapScene(Scene):
                     f"**The current {what} = {getattr(s, name):g} lies outside the map** "
                     f"({low:g} to {high:g}): the star is off the map."
                 )
+        star = self._star_value()
+        if star:
+            lines.append(star)
         if cube is not map_cube():
             if s.eps12 is not None:
                 lines.append(

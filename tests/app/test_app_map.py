@@ -511,3 +511,18 @@ def test_a_drop_whose_eps_lies_outside_the_cube_gets_its_own_slice():
     assert not scene.computed and scene.slice_eps == 0.5
     assert "**The current eps = 0.164 lies outside the map**" in scene._note()
     assert scene.download.filename == f"map-{scene.slice_cube}-h2_over_h1-eps0.5.csv"
+
+
+def test_the_note_gives_the_value_at_the_star():
+    """A phone's tap shows no hover, and a projected hover is too small for a room: the note
+    gives the value of the computed cell at the star, the one a drop there has."""
+    explorer, scene = map_on_screen({"eps": "0.9"})
+    click(scene, math.log10(0.0302), math.log10(0.0205))
+    mu, tau_ratio = explorer.state.mu, explorer.state.tau_ratio
+    drop = twoball.simulate(0.9, mu, tau_ratio, height=map_cube().attrs["height"])
+    assert (
+        f"At the star (mu = {mu:.3g}, tau_d/tau_f = {tau_ratio:.3g}): "
+        f"**h2 / h1 = {drop.h2_over_h1:.3f}**." in scene._note()
+    )
+    explorer.state.mu = 5.0  # (beyond the map's mu: no value)
+    assert "At the star" not in scene._note()
