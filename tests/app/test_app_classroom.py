@@ -930,12 +930,8 @@ HANDLES_JS = """() => { const out = []; const walk = (root) => {
   walk(document); return out; }"""
 
 
-def test_a_phone_drags_the_sliders_under_the_plot(browser, app_server, artifacts):
-    """On a phone the Drop's sliders (eps, mu, tau ratio) lay 1100 px under its plot, below
-    the animation, the player, the lesson and the preset: a student could not watch the plot
-    while dragging. They stand right under it, the plot and all three on one screen; moved
-    there, the plot changes and the sidebar's own sliders follow."""
-    base, _ = app_server
+def phone_page(browser):
+    """A phone's page (its size and User-Agent), and the errors its console reports."""
     context = browser.new_context(
         viewport={"width": 390, "height": 844}, user_agent=PHONE_AGENT, is_mobile=True
     )
@@ -943,6 +939,16 @@ def test_a_phone_drags_the_sliders_under_the_plot(browser, app_server, artifacts
     errors: list[str] = []
     page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
     page.on("pageerror", lambda error: errors.append(str(error)))
+    return context, page, errors
+
+
+def test_a_phone_drags_the_sliders_under_the_plot(browser, app_server, artifacts):
+    """On a phone the Drop's sliders (eps, mu, tau ratio) lay 1100 px under its plot, below
+    the animation, the player, the lesson and the preset: a student could not watch the plot
+    while dragging. They stand right under it, the plot and all three on one screen; moved
+    there, the plot changes and the sidebar's own sliders follow."""
+    base, _ = app_server
+    context, page, errors = phone_page(browser)
     try:
         page.goto(f"{base}/app")
         wait_for_plots(page)
@@ -976,7 +982,7 @@ PHONE_COPIES_JS = """() => [...Bokeh.documents[0].all_models]
 
 
 @pytest.mark.parametrize(
-    "scene, count", [("drop", 3), ("closeup", 3), ("accuracy", 3), ("stack", 4)]
+    "scene, count", [("drop", 3), ("closeup", 3), ("map", 3), ("accuracy", 3), ("stack", 4)]
 )
 def test_every_scene_of_a_phone_has_its_sliders_under_its_plots(
     browser, app_server, artifacts, scene, count
@@ -988,13 +994,7 @@ def test_every_scene_of_a_phone_has_its_sliders_under_its_plots(
     Stack's sliders left it up), and the sidebar's copy follows it. A laptop's page does not
     build them."""
     base, _ = app_server
-    context = browser.new_context(
-        viewport={"width": 390, "height": 844}, user_agent=PHONE_AGENT, is_mobile=True
-    )
-    page = context.new_page()
-    errors: list[str] = []
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    page.on("pageerror", lambda error: errors.append(str(error)))
+    context, page, errors = phone_page(browser)
     try:
         page.goto(f"{base}/app?scene={scene}&eps=5")
         wait_for_plots(page)
