@@ -98,6 +98,9 @@ LABELS = {
 # the map's eps: a drop whose eps lies outside a shipped cube's is computed at its eps rounded
 # to this (once the solver is compiled), every session moving there sharing the few slices
 COMPUTED_EPS_STEP = 0.01
+# ... down to this eps: below it a slice's ~6000 drops, each contact barely bouncing, took the
+# server 0.5 s (eps 0.08) to 2 s (0.01), every session waiting (0.14 s at 0.12; 0.08 s at 0.3)
+LOWEST_COMPUTED_EPS = 0.1
 # cells whose ratio is undefined (an apex below 0, the height at which the balls first touch):
 # grey, not the colour of a ratio (a negative h1 had read as "h2 far below h1", dark blue)
 NO_RATIO = "#9a9a9a"
@@ -127,7 +130,7 @@ def ratio_colorbar() -> dict:
 # the hover's value: three decimals (or three digits, below 0.01), and a cell without a ratio
 # said so (its image value NaN: :func:`slice_image`)
 VALUE_JS = """
-if (Number.isNaN(value)) return "none: an apex below 0";
+if (Number.isNaN(value)) return "none: an apex below 0, or missing";
 return Math.abs(value) >= 0.01 ? value.toFixed(3) : value.toPrecision(3);
 """
 # the computed cell nearest the pointer on an axis (log10 values ``logs``), as a number
@@ -645,6 +648,14 @@ class MapScene(Scene):
         computed for another drop (its own: its values may lie outside the cube's)."""
         return None if self.computed else cube_colour_limits(self.slice_cube, self.variable)
 
+    def _why_not_computed(self, name: str) -> str:
+        """Why a drop outside the cube's eps is not computed (the end of a sentence)."""
+        if name != CUBE:
+            return " (the Hertz maps are not computed here)."
+        if self.state.eps < LOWEST_COMPUTED_EPS - 1e-9:
+            return f" (maps are computed down to eps = {LOWEST_COMPUTED_EPS:g})."
+        return " (the solver is still being compiled)."
+
     def _star_value(self) -> str:
         """The shown value at the star (the computed cell nearest it), for a screen without a
         hover (a phone's tap showed none; a projected hover is too small for a room); empty
@@ -660,7 +671,7 @@ class MapScene(Scene):
             cell[name] = int(np.abs(np.log10(values) - math.log10(at)).argmin())
         value = float(self.slice[self.variable].isel(cell))
         if self.variable in RATIO_CENTRES and not value > 0:
-            shown = "none (an apex below 0)"
+            shown = "none (an apex below 0, or missing)"
         else:
             shown = f"{value:.3f}" if abs(value) >= 0.01 else f"{value:.3g}"
         mu, tau = (float(self.slice[k][cell[k]]) for k in ("mu", "tau_ratio"))
@@ -674,6 +685,13 @@ class MapScene(Scene):
         values = shown_cube(self.cube_name())["eps"].values
         return not values.min() - 1e-9 <= self.state.eps <= values.max() + 1e-9
 
+    def _computable(self) -> bool:
+        """Whether a slice is computed for this drop: the map cube's axes, another H or eps12
+        or an eps outside the cube (not below :data:`LOWEST_COMPUTED_EPS`), once compiled."""
+        if jit.state != "compiled" or self.state.eps < LOWEST_COMPUTED_EPS - 1e-9:
+            return False
+        return not self._is_cube_drop() or self._eps_outside()
+
     def update(self) -> None:
         s = self.state
         try:
@@ -685,8 +703,7 @@ class MapScene(Scene):
                 self.slice = eps_slice(self.slice_eps, self.variable, name)
                 self.error = None
                 return
-            compiled = jit.state == "compiled"
-            self.computed = (not self._is_cube_drop() or self._eps_outside()) and compiled
+            self.computed = self._computable()
             if self.computed and self._eps_outside():  # (a shared slice near the drop's eps)
                 rounded = round(s.eps / COMPUTED_EPS_STEP) * COMPUTED_EPS_STEP
                 self.slice_eps = round(max(rounded, COMPUTED_EPS_STEP), 6)
@@ -749,9 +766,9 @@ class MapScene(Scene):
         projected = self.state.presentation
         grey = ""
         ratio = self.variable in RATIO_CENTRES and self.slice is not None
-        if ratio and (self.slice[self.variable].values <= 0).any():
+        if ratio and (~(self.slice[self.variable].values > 0)).any():
             grey = "grey: no ratio; " if projected else (
-                "grey: no ratio (an apex below 0, where the balls first touch); "
+                "grey: no ratio (an apex below 0, where the balls first touch, or none); "
             )  # fmt: skip
         # (on a projector the teacher says the rest and clicks: the whole note ran below a
         # 720 px screen)
@@ -770,7 +787,7 @@ class MapScene(Scene):
             lines.append(
                 f"**The current eps = {s.eps:g} lies outside the map** (eps = {low:g} to "
                 f"{high:g}): it shows eps = {self.slice_eps:g}, not this drop"
-                + (" (the solver is still being compiled)." if name == CUBE else ".")
+                + self._why_not_computed(name)
             )
         for name, what in (("mu", "mu"), ("tau_ratio", "tau_d/tau_f")):
             low, high = float(cube[name].min()), float(cube[name].max())

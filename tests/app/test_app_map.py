@@ -506,10 +506,15 @@ def test_a_drop_whose_eps_lies_outside_the_cube_gets_its_own_slice():
         assert float(values[i, j]) == pytest.approx(direct.h2_over_h1, rel=1e-12, nan_ok=True)
     assert_shows_its_slice(scene)
     assert scene.download.filename == "map-computed-h2_over_h1-eps0.16.csv"
-    explorer.state.map_force = "hertz"
+    explorer.state.eps = 0.05  # (below 0.1 a slice took the server 0.8 s and more)
+    scene.current()
+    assert not scene.computed and scene.slice_eps == 0.5
+    assert "maps are computed down to eps = 0.1" in scene._note()
+    explorer.state.param.update(eps=0.164, map_force="hertz")
     scene.current()
     assert not scene.computed and scene.slice_eps == 0.5
     assert "**The current eps = 0.164 lies outside the map**" in scene._note()
+    assert "the Hertz maps are not computed here" in scene._note()
     assert scene.download.filename == f"map-{scene.slice_cube}-h2_over_h1-eps0.5.csv"
 
 
