@@ -80,7 +80,8 @@ CUBE = "map"
 HERTZ_CUBES = {1e2: "hertz-h1e2", 1e4: "hertz-h1e4"}
 MOST_PIXELS = 400  # per axis, of a cube not evenly spaced in log10 (log_grid)
 SMALLEST_OUTLINED = 4  # cells: a delayed-rebound patch smaller than this is not outlined
-PROJECTOR_MAP_HEIGHT = 560  # presentation mode (scene.py): both axes and the colour bar in 720 px
+PROJECTOR_MAP_HEIGHT = 490  # presentation mode (scene.py): both axes and the colour bar in 720 px,
+# under a lesson step's one-line answer too (560 px ran below the screen there)
 RATIO_CENTRES = {"h2_over_h1": 1.0, "h1_over_icm": 1.0}
 # whole numbers: coloured one colour each (:func:`count_palette`), not a gradient whose shades
 # between two counts stand for nothing
