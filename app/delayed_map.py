@@ -40,6 +40,7 @@ from bokeh.models import (
     ColorMapper,
     ColumnDataSource,
     CustomJSHover,
+    CustomJSTickFormatter,
     FixedTicker,
     HoverTool,
     Image,
@@ -358,18 +359,27 @@ def outline_of(
     return outline_path(shown["delayed_rebound"], shown["h2_over_h1"])
 
 
-def _decade_ticks(cube: xr.Dataset) -> dict[str, list[tuple[float, str]]]:
-    """Ticks at 1, 2 and 5 times the powers of ten inside each log axis, labelled with the
-    value itself (those that would overlap are left out by the axis). Powers of ten alone
-    left a zoomed map with one label per axis, or none."""
+def _log_ticks(cube: xr.Dataset) -> dict[str, list[float]]:
+    """Ticks at 1, 2 and 5 times the powers of ten inside each log axis (log10 values), each
+    labelled by :data:`LOG_TICK_JS`. Powers of ten alone left a zoomed map with one label per
+    axis, or none."""
     ticks = {}
     for name in ("mu", "tau_ratio"):
         logs = np.log10(cube[name].values)
         decades = range(math.floor(logs.min()) - 1, math.ceil(logs.max()) + 1)
-        values = [m * 10.0**d for d in decades for m in (1, 2, 5)]
-        inside = [v for v in values if logs.min() - 1e-9 <= math.log10(v) <= logs.max() + 1e-9]
-        ticks[name] = [(math.log10(v), f"{v:.3g}") for v in inside]
+        values = [math.log10(m * 10.0**d) for d in decades for m in (1, 2, 5)]
+        ticks[name] = [v for v in values if logs.min() - 1e-9 <= v <= logs.max() + 1e-9]
     return ticks
+
+
+# a log axis's tick label: the value itself; over more than two decades in view, the powers of
+# ten alone (1, 2 and 5 each labelled, a narrow projected or phone map dropped "0.01" and "0.1"
+# for lack of room), the others marked by their ticks
+LOG_TICK_JS = """
+const decade = Math.abs(tick - Math.round(tick)) < 1e-9;
+if (ticks[ticks.length - 1] - ticks[0] > 2 && !decade) return "";
+return String(Number((10 ** tick).toPrecision(3)));
+"""
 
 
 def image_frame(log_mu: np.ndarray, log_tau: np.ndarray) -> dict[str, list[float]]:
@@ -529,12 +539,10 @@ class MapScene(Scene):
         if not presentation:
             fig.styles = FIT_STYLES
         fig.grid.grid_line_color = None
-        for axis, ticks in (
-            (fig.xaxis, _decade_ticks(cube)["mu"]),
-            (fig.yaxis, _decade_ticks(cube)["tau_ratio"]),
-        ):
-            axis.ticker = FixedTicker(ticks=[value for value, _ in ticks])
-            axis.major_label_overrides = {value: text for value, text in ticks}
+        ticks = _log_ticks(cube)
+        for axis, name in ((fig.xaxis, "mu"), (fig.yaxis, "tau_ratio")):
+            axis.ticker = FixedTicker(ticks=ticks[name])
+            axis.formatter = CustomJSTickFormatter(code=LOG_TICK_JS)
             axis.major_label_policy = NoOverlap()
         mapper = colour_mapper(variable, clim)
         self._image_source = ColumnDataSource({**frame, "image": [on_screen(shown)]})

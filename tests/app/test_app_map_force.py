@@ -135,3 +135,32 @@ def test_the_stack_scene_takes_eps_per_contact_under_advanced(browser, app_serve
         assert errors == []
     finally:
         context.close()
+
+
+# the labels the map's x axis formatter gives ticks (log10 values), in the browser
+TICK_LABELS_JS = """(ticks) => {
+  const models = [...Bokeh.documents[0].all_models];
+  const formatter = models.find((m) => m.constructor.__name__ === "CustomJSTickFormatter"
+    && m.code.includes("decade"));
+  return formatter.doFormat(ticks, {loc: 0});
+}"""
+
+
+def test_the_map_s_axes_label_decades_and_zoomed_1_2_5(browser, app_server):
+    """Over more than two decades the map's axes label the powers of ten alone (labelling 1, 2
+    and 5 each, a projector's narrow map dropped 0.01 and 0.1 for lack of room); zoomed
+    closer, 2 and 5 are labelled too (a zoomed map had kept one label per axis, or none)."""
+    import math
+
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?scene=map")
+    try:
+        expect(page.get_by_text("Precomputed map at").first).to_be_visible(timeout=60_000)
+        whole = [math.log10(m * 10.0**d) for d in (-3, -2, -1) for m in (1, 2, 5)] + [0.0]
+        labels = page.evaluate(TICK_LABELS_JS, whole)
+        assert labels == ["0.001", "", "", "0.01", "", "", "0.1", "", "", "1"], labels
+        zoomed = [math.log10(v) for v in (0.01, 0.02, 0.05, 0.1, 0.2)]
+        assert page.evaluate(TICK_LABELS_JS, zoomed) == ["0.01", "0.02", "0.05", "0.1", "0.2"]
+        assert errors == []
+    finally:
+        context.close()
