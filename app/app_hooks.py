@@ -31,7 +31,7 @@ from twoball import warmup
 
 from .accuracy import measure_ahead
 from .bokeh_defaults import cache_property_defaults, themed_values_read_directly
-from .delayed_map import map_cube
+from .map_slices import map_cube
 from .scenes import SCENE_REGISTRY
 
 # under bokeh's logger, which `panel serve --log-level` shows (info by default)

@@ -1,19 +1,15 @@
-"""Scene 3, the delayed-rebound map: the shipped "map" cube's slice nearest the current eps.
+"""Scene 3, the delayed-rebound map: a slice of a shipped cube at the eps nearest the drop's.
 
 A heat map over mu and tau_d/tau_f (both logarithmic) of the chosen variable, the delayed
-rebounds (h2 > h1) marked, the current parameters marked; a click sets mu and tau_d/tau_f.
-Only the slice on screen is read from the cube (one chunk per variable), and slices are kept
-for all sessions. For a drop whose H or eps12 differ from the cube's, the slice is computed on
-the cube's axes with the sweep's batch path (:func:`computed_slice`, ~6000 drops in a fraction
-of a second) once the solver is compiled, and the note says which one is shown.
+rebounds (h2 > h1) outlined, the current parameters starred; a click sets mu and tau_d/tau_f
+to the computed cell nearest it. The slices, computed slices (another H or eps12, or an eps
+outside the cube) and outlines are app/map_slices.py's; this module draws them, with Bokeh
+directly, and says in its note which one is shown.
 
-With the Hertz force (state ``map_force``) the map shows a slice of one of the two shipped
-two-ball Hertz cubes (``hertz-h1e2``, ``hertz-h1e4``: the paper's linear grid, 50 values per
-axis), the one whose H is nearer the drop's; nothing is computed (a Hertz drop costs about a
-millisecond, a slice seconds). Their H is in the Hertz length unit and their tau_ratio counts
-the Hertz floor contact (twoball/precomputed/README.md), which the note says. Their axes are
-evenly spaced in mu and tau_ratio, not in log10: the image on the map's log axes repeats each
-cell over the pixels nearest it (:func:`log_grid`), no value interpolated.
+With the Hertz force (state ``map_force``) the map shows a slice of the shipped two-ball Hertz
+cube whose H is nearer the drop's; nothing is computed (a Hertz drop costs about a
+millisecond, a slice seconds), and the note says that H is in the Hertz length unit and that
+tau_ratio counts the Hertz floor contact.
 
 The map is one image on log10 coordinates (the cube's mu and tau_ratio are evenly spaced in
 log10), not a mesh of ~6000 cells: the browser repaints the whole plot whenever the marker
@@ -23,10 +19,8 @@ mesh).
 
 from __future__ import annotations
 
-import functools
 import io
 import math
-import re
 
 import numpy as np
 import panel as pn
@@ -53,14 +47,28 @@ from bokeh.models import (
 )
 from bokeh.palettes import RdBu, interp_palette, viridis
 from bokeh.plotting import figure
-from contourpy import LineType, contour_generator
-from scipy import ndimage
 
-import twoball
 from twoball import jit
-from twoball.batch.sweep import compute_block
 
 from .controls import PhoneSliders, on_a_phone
+from .map_slices import (
+    COUNTS,
+    CUBE,
+    HERTZ_CUBES,
+    RATIO_CENTRES,
+    computed_slice,
+    cube_colour_limits,
+    eps_slice,
+    hertz_cube_name,
+    log_grid,
+    map_cube,
+    nearest_eps,
+    outline_of,
+    shown_cube,
+    shown_label,
+    slice_image,
+    variable_label,
+)
 from .scene import (
     PROJECTOR_LINE_WIDTH,
     AnsweringMarkdown,
@@ -76,27 +84,8 @@ from .scene import (
 from .state import MAP_COLOURS, validate
 from .worksheet import slice_csv
 
-CUBE = "map"
-# the shipped two-ball Hertz cubes by their drop height H (in the Hertz length unit)
-HERTZ_CUBES = {1e2: "hertz-h1e2", 1e4: "hertz-h1e4"}
-MOST_PIXELS = 400  # per axis, of a cube not evenly spaced in log10 (log_grid)
-SMALLEST_OUTLINED = 4  # cells: a delayed-rebound patch smaller than this is not outlined
 PROJECTOR_MAP_HEIGHT = 490  # presentation mode (scene.py): both axes and the colour bar in 720 px,
 # under a lesson step's one-line answer too (560 px ran below the screen there)
-RATIO_CENTRES = {"h2_over_h1": 1.0, "h1_over_icm": 1.0}
-# whole numbers: coloured one colour each (:func:`count_palette`), not a gradient whose shades
-# between two counts stand for nothing
-COUNTS = ("contacts_first",)
-# a variable's words for a class, in the choice and on the colour bar alike (the cube's own
-# names, "h1 / h_ICM", "h1 / X2(0)", are the library's: a new user could not read them, and the
-# choice and the bar named the count differently)
-LABELS = {
-    "h2_over_h1": "h2 / h1",
-    "h1_over_icm": "h1 / textbook (ICM) height",
-    "h1_over_drop": "h1 / drop height",
-    "h2_over_drop": "h2 / drop height",
-    "contacts_first": "ball contacts before h1",
-}
 # the map's eps: a drop whose eps lies outside a shipped cube's is computed at its eps rounded
 # to this (once the solver is compiled), every session moving there sharing the few slices
 COMPUTED_EPS_STEP = 0.01
@@ -167,138 +156,6 @@ def values_hover(label: str, cube: xr.Dataset) -> HoverTool:
     )
 
 
-def variable_label(variable: str) -> str:
-    """The cube's own name of a variable (its ``long_name``), without the library's name for it
-    in parentheses (a colour bar titled "... (Result.contacts_first[1])" was code to a class)."""
-    name = map_cube()[variable].attrs.get("long_name", variable)
-    return re.sub(r"\s*\(Result\.[^)]*\)", "", name)
-
-
-def shown_label(variable: str) -> str:
-    """A variable's name on the map (:data:`LABELS`), the cube's own for one not listed."""
-    return LABELS.get(variable, variable_label(variable))
-
-
-@functools.cache
-def shown_cube(name: str) -> xr.Dataset:
-    """A shipped cube the map shows ("map" or a Hertz one), opened lazily once per server."""
-    return twoball.load_cube(name)
-
-
-def map_cube() -> xr.Dataset:
-    """The shipped (linear) map cube, opened lazily once per server."""
-    return shown_cube(CUBE)
-
-
-def hertz_cube_name(height: float) -> str:
-    """The shipped Hertz cube whose drop height is nearest ``height`` (on a log scale)."""
-    nearest = min(HERTZ_CUBES, key=lambda h: abs(math.log10(h) - math.log10(height)))
-    return HERTZ_CUBES[nearest]
-
-
-@pn.cache(max_items=128)  # shared by every session of the server, as the cube is
-def eps_slice(eps: float, variable: str, name: str = CUBE) -> xr.Dataset:
-    """One variable and the delayed-rebound flags at one of the cube's eps values."""
-    return shown_cube(name)[[variable, "delayed_rebound"]].sel(eps=eps).load()
-
-
-def log_grid(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Evenly spaced log10 pixel centres over an axis, and the index of the axis value each
-    pixel shows (the nearest in log10).
-
-    An axis evenly spaced in log10 (the map cube's) is its own grid. Another (the Hertz cubes',
-    evenly spaced in the value) gets enough pixels for its narrowest cell to have one, at most
-    :data:`MOST_PIXELS`: each pixel shows a computed cell, none is interpolated."""
-    logs = np.log10(np.asarray(values, dtype=float))
-    steps = np.diff(logs)
-    if steps.size == 0 or np.allclose(steps, steps[0], rtol=1e-6, atol=0.0):
-        return logs, np.arange(logs.size)
-    count = min(MOST_PIXELS, int(math.ceil((logs[-1] - logs[0]) / steps.min())) + 1)
-    grid = np.linspace(logs[0], logs[-1], count)
-    return grid, np.searchsorted((logs[1:] + logs[:-1]) / 2, grid)
-
-
-def on_log_grid(slice_: xr.Dataset, values: np.ndarray) -> tuple:
-    """(log10 mu, log10 tau_ratio, values as (tau_ratio, mu)) to draw as one image."""
-    log_mu, mu_index = log_grid(slice_["mu"].values)
-    log_tau, tau_index = log_grid(slice_["tau_ratio"].values)
-    return log_mu, log_tau, np.asarray(values)[np.ix_(tau_index, mu_index)]
-
-
-@pn.cache(max_items=32)
-def computed_slice(eps: float, height: float, eps12: float | None) -> xr.Dataset:
-    """The map's slice at ``eps`` for another drop height or ball-ball restitution than the
-    cube's, computed on the cube's mu and tau_ratio axes with the sweep's batch path (about
-    6000 drops, a fraction of a second compiled); kept for all sessions."""
-    cube = map_cube()
-    mu, tau_ratio = cube["mu"].values, cube["tau_ratio"].values
-    block = compute_block([eps], mu, tau_ratio, height=height, eps12=eps12)
-    variables = {
-        name: (("mu", "tau_ratio"), block[name][0], cube[name].attrs)
-        for name in (*MAP_COLOURS, "delayed_rebound")
-    }
-    return xr.Dataset(variables, coords={"mu": mu, "tau_ratio": tau_ratio, "eps": eps})
-
-
-def nearest_eps(eps: float, name: str = CUBE) -> float:
-    """The eps of the cube ``name`` nearest to ``eps``."""
-    values = shown_cube(name)["eps"].values
-    return float(values[np.abs(values - eps).argmin()])
-
-
-def outlined(delayed: np.ndarray, smallest: int = SMALLEST_OUTLINED) -> np.ndarray:
-    """The delayed-rebound flags as outlined: a patch (or a hole) of fewer than ``smallest``
-    cells takes its surroundings' value. Its colour still shows it; outlined, single cells drew
-    small diamonds that read as noise from the back of a room."""
-    kept = np.asarray(delayed, dtype=bool).copy()
-    for value in (True, False):
-        patches, count = ndimage.label(kept == value)
-        sizes = np.bincount(patches.ravel())
-        small = np.flatnonzero(sizes < smallest)
-        kept[np.isin(patches, small[small > 0])] = not value
-    return kept
-
-
-def colour_limits(values: np.ndarray, variable: str) -> tuple[float, float]:
-    """The colour limits of ``values``: for a ratio, symmetric about 1 on a log scale out to
-    the 98th percentile (so that outliers do not wash it out); for a count, half a count beyond
-    its smallest and largest (a band of :func:`count_palette` each); for the others the values'
-    own range."""
-    values = np.asarray(values)
-    if variable in RATIO_CENTRES:
-        finite = values[np.isfinite(values) & (values > 0)]
-        spread = float(np.percentile(np.abs(np.log10(finite)), 98)) if finite.size else 1.0
-        spread = max(spread, 0.05)
-        return 10**-spread, 10**spread
-    finite = values[np.isfinite(values)]
-    low, high = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
-    if variable in COUNTS:
-        return round(low) - 0.5, round(high) + 0.5  # (count_palette)
-    return low, high
-
-
-@functools.cache  # (a variable of a cube read once per server: about 120 000 values)
-def cube_colour_limits(name: str, variable: str) -> tuple[float, float]:
-    """The colour limits of a shipped cube's ``variable`` over all its eps: every slice of it
-    in the same colours, so that a colour means one value whatever eps is shown (each slice's
-    own had made the h2/h1 scale run 0.15-6.6 at eps 0.9 and 0.05-20 at 0.5)."""
-    return colour_limits(shown_cube(name)[variable].values, variable)
-
-
-def slice_image(
-    slice_: xr.Dataset, variable: str, limits: tuple[float, float] | None = None
-) -> tuple[tuple, tuple[float, float]]:
-    """The slice's ``variable`` on the map's log grid (log10 mu, log10 tau_ratio, the values
-    with rows tau_ratio and columns mu: :func:`on_log_grid`; a ratio's without a value, an
-    apex below 0, NaN), and its colour limits: ``limits`` (a shipped cube's, the same for all
-    its slices: :func:`cube_colour_limits`), else the slice's own (:func:`colour_limits`)."""
-    values = slice_[variable].transpose("tau_ratio", "mu").values
-    shown = on_log_grid(slice_, values)
-    if variable in RATIO_CENTRES:  # (a ratio with an apex below 0 is none: NO_RATIO)
-        shown = (*shown[:2], np.where(shown[2] > 0, shown[2], np.nan))
-    return shown, limits or colour_limits(values, variable)
-
-
 def count_palette(low: float, high: float) -> list[str]:
     """One colour for each whole number from ``low + 0.5`` to ``high - 0.5`` (a count's colour
     limits, :func:`colour_limits`): each count a band of its own, centred on its tick."""
@@ -309,54 +166,6 @@ def count_ticker() -> BasicTicker:
     """A count's colour-bar ticks: whole numbers only, each count's up to a dozen (a new model
     each time, as :func:`ratio_colorbar`)."""
     return BasicTicker(min_interval=1, desired_num_ticks=12)
-
-
-# a cell whose delayed-rebound flag disagrees with the sign of log10(h2/h1) (a patch too small
-# to outline, :func:`outlined`, or a ratio missing) counts as this far on the flag's side
-FLAG_SIDE = 0.05
-
-
-def rebound_field(flags: xr.DataArray, ratio: xr.DataArray) -> np.ndarray:
-    """log10(h2/h1) over (tau_ratio, mu), > 0 exactly where :func:`outlined` keeps a delayed
-    rebound: its zero level is the outline, found between cells by interpolation."""
-    kept = outlined(flags.transpose("tau_ratio", "mu").values)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        field = np.log10(ratio.transpose("tau_ratio", "mu").values.astype(float))
-    agrees = np.isfinite(field) & ((field > 0) == kept)
-    return np.where(agrees, field, np.where(kept, FLAG_SIDE, -FLAG_SIDE))
-
-
-def outline_path(flags: xr.DataArray, ratio: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
-    """The outline of delayed rebounds (``flags``: h2 > h1 over mu and tau_ratio; ``ratio``:
-    h2/h1) on the map's log axes: log10 mu and log10 tau_ratio of its vertices, the paths
-    separated by NaN (one line of the figure's MultiLine).
-
-    Marching squares (contourpy, Bokeh's own dependency) on the cube's own points, each at its
-    cell's centre (log10 mu, log10 tau_ratio), on log10(h2/h1) (:func:`rebound_field`): each
-    vertex lies where the ratio, interpolated between two neighbouring points, crosses 1.
-    Drawn on the image's pixels, the Hertz cubes' (cells evenly spaced in mu, so several
-    pixels wide on a log axis) outlines followed the cells' edges, staircases of right angles;
-    and the flags alone, 0 or 1, put every vertex half-way between two points."""
-    field = rebound_field(flags, ratio)
-    log_mu, log_tau = np.log10(flags["mu"].values), np.log10(flags["tau_ratio"].values)
-    generator = contour_generator(log_mu, log_tau, field, line_type=LineType.ChunkCombinedNan)
-    ((points,),) = generator.lines(0.0)  # (one chunk: None where nothing crosses 1)
-    if points is None:
-        return np.zeros(0), np.zeros(0)
-    return points[:, 0].copy(), points[:, 1].copy()
-
-
-@functools.lru_cache(maxsize=256)  # shared by every session, as the slices are
-def outline_of(
-    name: str, eps: float, drop: tuple[float, float | None] | None
-) -> tuple[np.ndarray, np.ndarray]:
-    """The outline of the slice at ``eps`` of the cube ``name``, or (``drop``: its H and eps12)
-    of the slice computed for that drop (every session moving eps asks for the same few)."""
-    if drop is None:
-        shown = shown_cube(name)[["delayed_rebound", "h2_over_h1"]].sel(eps=eps)
-    else:
-        shown = computed_slice(eps, *drop)
-    return outline_path(shown["delayed_rebound"], shown["h2_over_h1"])
 
 
 def _log_ticks(cube: xr.Dataset) -> dict[str, list[float]]:
@@ -540,8 +349,8 @@ class MapScene(Scene):
             fig.styles = FIT_STYLES
         fig.grid.grid_line_color = None
         ticks = _log_ticks(cube)
-        for axis, name in ((fig.xaxis, "mu"), (fig.yaxis, "tau_ratio")):
-            axis.ticker = FixedTicker(ticks=ticks[name])
+        for axis, along in ((fig.xaxis, "mu"), (fig.yaxis, "tau_ratio")):
+            axis.ticker = FixedTicker(ticks=ticks[along])
             axis.formatter = CustomJSTickFormatter(code=LOG_TICK_JS)
             axis.major_label_policy = NoOverlap()
         mapper = colour_mapper(variable, clim)

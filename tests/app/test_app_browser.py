@@ -110,7 +110,7 @@ def test_a_map_click_moves_the_sliders(browser, app_server, artifacts):
         query = page_query(page)
         assert float(query["mu"]) != 0.05 and float(query["tau_ratio"]) != 0.3
         # a computed cell of the map: the other tabs' drop is the one the map shows there
-        from app.delayed_map import map_cube
+        from app.map_slices import map_cube
 
         for name in ("mu", "tau_ratio"):
             assert np.isclose(map_cube()[name].values, float(query[name]), rtol=1e-11).any(), query

@@ -638,7 +638,7 @@ def test_the_map_hover_says_mu_and_tau_ratio_not_their_logarithms(browser, app_s
         mu, tau_ratio = float(tooltip[0]), float(tooltip[1])
         assert 0.003 < mu < 0.3 and 0.003 < tau_ratio < 1, tooltip  # the values, not log10
         # the computed cell's mu and tau_d/tau_f (to three digits), and that cell's value
-        from app.delayed_map import map_cube
+        from app.map_slices import map_cube
 
         cube = map_cube()
         cells = {}

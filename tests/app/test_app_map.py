@@ -16,8 +16,9 @@ from bokeh.models import ColorBar, ColorMapper, GlyphRenderer, MultiLine
 from bokeh.palettes import viridis
 
 import twoball
-from app.delayed_map import MapScene, map_cube, nearest_eps, shown_cube
+from app.delayed_map import MapScene
 from app.explorer import Explorer
+from app.map_slices import map_cube, nearest_eps, shown_cube
 
 
 def rendered(query: dict) -> Explorer:
@@ -101,7 +102,7 @@ def assert_outline_crosses_one(scene: MapScene) -> None:
     """The outline on screen is the current slice's: each of its vertices lies on the segment
     between two neighbouring grid points where log10(h2/h1), interpolated linearly between
     them, is 0 (as flagged: :func:`rebound_field`), to float32."""
-    from app.delayed_map import rebound_field
+    from app.map_slices import rebound_field
 
     source = scene._outline_source.data
     slice_ = scene.slice if scene.computed else None
@@ -128,7 +129,8 @@ def assert_outline_crosses_one(scene: MapScene) -> None:
 
 def expected(scene: MapScene) -> dict:
     """What the figure should hold for the scene's slice, worked out from the cube."""
-    from app.delayed_map import RATIO_PALETTE, computed_slice, count_palette
+    from app.delayed_map import RATIO_PALETTE, count_palette
+    from app.map_slices import computed_slice
 
     variable = scene.variable
     cube = shown_cube(scene.slice_cube)
@@ -334,7 +336,7 @@ def test_the_delayed_rebound_outline_is_smooth(cube):
     Contoured on the cube's own points through log10(h2/h1), an outline bends a little at
     each vertex (a median under 10 degrees), and its vertices lie where the ratio crosses 1
     between two points, not half-way between them."""
-    from app.delayed_map import nearest_eps, outline_of, shown_cube
+    from app.map_slices import nearest_eps, outline_of, shown_cube
 
     eps = nearest_eps(0.9, cube)
     path = outline_of(cube, eps, None)
@@ -359,7 +361,7 @@ def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
     """The map's Hertz force: a slice of hertz-h1e4 (or h1e2, whichever H is nearer the drop's)
     at the eps nearest the drop's, each cell the library's Hertz two-ball drop; the note says
     H is in the Hertz unit and tau_ratio counts the Hertz floor contact; the URL carries it."""
-    from app.delayed_map import shown_cube
+    from app.map_slices import shown_cube
     from app.state import read_query, url_query
 
     explorer = rendered({"eps": "0.83", "scene": "map", "map_force": "hertz"})
@@ -436,7 +438,7 @@ def test_the_map_s_colour_travels_in_a_link():
 def test_the_map_s_labels_say_what_a_class_reads_not_the_library_s_names():
     """A variable's label is the cube's long name without the library's name for it in
     parentheses (the count's colour bar read "... (Result.contacts_first[1])")."""
-    from app.delayed_map import MAP_COLOURS, map_cube, variable_label
+    from app.map_slices import MAP_COLOURS, map_cube, variable_label
 
     long_name = map_cube()["contacts_first"].attrs["long_name"]
     assert "(Result." in long_name  # (the cube's own, for the library's users)
@@ -449,7 +451,7 @@ def test_the_map_s_labels_say_what_a_class_reads_not_the_library_s_names():
 def test_the_choice_and_the_colour_bar_name_a_variable_alike():
     """A new user met "h1 / h_ICM" and "X2(0)", and a count named one way in the choice and
     another on the bar: one label, in words, for both."""
-    from app.delayed_map import MAP_COLOURS, shown_label
+    from app.map_slices import MAP_COLOURS, shown_label
 
     explorer, scene = map_on_screen({})
     for variable in MAP_COLOURS:

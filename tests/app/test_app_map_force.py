@@ -19,7 +19,8 @@ from appdriver import (
 )
 from playwright.sync_api import expect
 
-from app.delayed_map import cube_colour_limits, eps_slice, nearest_eps, on_screen, slice_image
+from app.map_slices import cube_colour_limits, eps_slice, nearest_eps, slice_image
+from app.scene import on_screen
 
 pytestmark = pytest.mark.browser
 # the map's image (its values, flattened) and its colour mapper's range, in the browser

@@ -16,9 +16,9 @@ from bokeh.document import Document
 
 import twoball
 from app.collisions import collisions
-from app.delayed_map import map_cube
 from app.drop import TRAILS
 from app.explorer import Explorer
+from app.map_slices import map_cube
 from app.scenes import SCENE_REGISTRY, SCENES
 from app.state import ExplorerState, metres_text, url_query
 from twoball import ParameterError, presets

@@ -10,8 +10,8 @@ import pytest
 from bokeh.document import Document
 
 import twoball
-from app.delayed_map import map_cube
 from app.explorer import Explorer
+from app.map_slices import map_cube
 from twoball import presets
 
 
