@@ -165,7 +165,10 @@ class CloseUpScene(Scene):
         else:
             where = "in the first collision" if alone else "up to the balls' first contact"
             intro = f"{counted} before the first apex, all {where}, shown above."
-        lines = [intro, "", "| contact | starts | ends | lasts |", "| --- | --- | --- | --- |"]
+        # the times' unit in the columns' heads ("time [s]" gives "[s]"; dimensionless, tau)
+        unit = "[s]" if "[s]" in units.time_label else "(tau)"
+        heads = f"| contact | starts {unit} | ends {unit} | lasts {unit} |"
+        lines = [intro, "", heads, "| --- | --- | --- | --- |"]
         numbers = {}  # each contact's number among those of its kind, in time order
         for kind in (BALLS, FLOOR):
             ordered = sorted((c for c in r.contacts if c.contact == kind), key=lambda c: c.start)

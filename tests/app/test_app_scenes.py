@@ -224,6 +224,26 @@ def test_closeup_shows_the_four_contacts_and_forces_only_inside_them():
     assert all(floor[0].start < c.start and c.end < floor[0].end for c in ball)
 
 
+def test_closeup_s_table_names_its_time_unit():
+    """The contacts' table had no unit: in SI its times are seconds, said in its heads, and
+    are the solver's dimensionless times scaled by the preset's time scale."""
+    from twoball import presets
+
+    explorer = rendered({**PAPER, "scene": "closeup", "units": "SI"})
+    text = explorer.scenes["closeup"].table.object
+    assert "| contact | starts [s] | ends [s] | lasts [s] |" in text
+    s = explorer.state
+    solved = twoball.simulate(s.eps, s.mu, s.tau_ratio, height=s.height, until="first")
+    first = min(solved.contacts, key=lambda c: c.start)
+    name = "ball" if first.contact == BALLS else "floor"
+    (row,) = [line for line in text.splitlines() if line.startswith(f"| {name} 1 |")]
+    assert float(row.split("|")[2]) == pytest.approx(first.start * presets.time_scale(), 1e-5)
+    explorer.state.units = "dimensionless"
+    assert "| contact | starts (tau) | ends (tau) | lasts (tau) |" in (
+        explorer.scenes["closeup"].table.object
+    )
+
+
 @pytest.mark.parametrize(
     "query",
     [
