@@ -63,6 +63,7 @@ from .map_slices import (
     log_grid,
     map_cube,
     nearest_eps,
+    nearest_on_log_axis,
     outline_of,
     shown_cube,
     shown_label,
@@ -486,7 +487,7 @@ class MapScene(Scene):
             at = getattr(self.state, name)
             if not values.min() <= at <= values.max():
                 return ""
-            cell[name] = int(np.abs(np.log10(values) - math.log10(at)).argmin())
+            cell[name] = nearest_on_log_axis(values, math.log10(at))
         value = float(self.slice[self.variable].isel(cell))
         if self.variable in RATIO_CENTRES and not value > 0:
             shown = "none (an apex below 0, or missing)"
@@ -515,24 +516,18 @@ class MapScene(Scene):
         try:
             name = self.slice_cube = self.cube_name()
             self.slice_eps = nearest_eps(s.eps, name)
-            self.download.filename = f"map-{name}-{self.variable}-eps{self.slice_eps:g}.csv"
-            if name != CUBE:  # a shipped Hertz cube, never computed here
-                self.computed = False
-                self.slice = eps_slice(self.slice_eps, self.variable, name)
-                self.error = None
-                return
-            self.computed = self._computable()
+            # (a shipped Hertz cube is never computed here)
+            self.computed = name == CUBE and self._computable()
             if self.computed and self._eps_outside():  # (a shared slice near the drop's eps)
                 rounded = round(s.eps / COMPUTED_EPS_STEP) * COMPUTED_EPS_STEP
                 self.slice_eps = round(max(rounded, COMPUTED_EPS_STEP), 6)
-                self.download.filename = f"map-computed-{self.variable}-eps{self.slice_eps:g}.csv"
-            elif self.computed:
-                self.download.filename = f"map-computed-{self.variable}-eps{self.slice_eps:g}.csv"
             if self.computed:
                 whole = computed_slice(self.slice_eps, s.height, s.eps12)
                 self.slice = whole[[self.variable, "delayed_rebound"]]
             else:
-                self.slice = eps_slice(self.slice_eps, self.variable)
+                self.slice = eps_slice(self.slice_eps, self.variable, name)
+            source = "computed" if self.computed else name
+            self.download.filename = f"map-{source}-{self.variable}-eps{self.slice_eps:g}.csv"
             self.error = None
         except (OSError, ValueError, KeyError) as error:
             self.slice, self.error = None, f"The map cube could not be read: {error}"
@@ -668,7 +663,7 @@ class MapScene(Scene):
         chosen = {}
         for name, at in (("mu", event.x), ("tau_ratio", event.y)):
             values = cube[name].values
-            nearest = float(values[np.abs(np.log10(values) - at).argmin()])
+            nearest = float(values[nearest_on_log_axis(values, at)])
             chosen[name], _ = validate(name, nearest, getattr(self.state, name))
         self.state.param.update(**chosen)
 

@@ -126,6 +126,12 @@ def computed_slice(eps: float, height: float, eps12: float | None) -> xr.Dataset
     return xr.Dataset(variables, coords={"mu": mu, "tau_ratio": tau_ratio, "eps": eps})
 
 
+def nearest_on_log_axis(values: np.ndarray, log_value: float) -> int:
+    """The index of the axis value (mu or tau_ratio) nearest ``log_value`` on the map's log10
+    axis: the computed cell a pixel, a click or the star is in."""
+    return int(np.abs(np.log10(values) - log_value).argmin())
+
+
 def nearest_eps(eps: float, name: str = CUBE) -> float:
     """The eps of the cube ``name`` nearest to ``eps``."""
     values = shown_cube(name)["eps"].values
