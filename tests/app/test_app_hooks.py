@@ -395,3 +395,77 @@ def test_panel_makes_no_debug_record_its_handlers_would_drop(monkeypatch):
         assert logger.level == logging.DEBUG
     finally:
         logger.removeHandler(handler)
+
+
+def test_a_page_kinds_html_is_panels_own_with_its_resources_worked_out_once(monkeypatch):
+    """app_hooks.page_resources_worked_out_once_per_page_kind: the HTML of a kept session's
+    page, asked for again and again, is the HTML Panel's own functions give (its scripts, style
+    sheets and variables; only the ids Bokeh makes for each rendering differ), for each scene
+    and for a presented page; and the resources are worked out once per document."""
+    import re
+
+    import panel.io.server as server
+    from bokeh.document import Document
+    from bokeh.models import ImportedStyleSheet
+    from bokeh.resources import Resources as BokehResources
+    from panel.io.resources import Resources
+    from panel.io.state import set_curdoc
+
+    from app.app_hooks import page_resources_worked_out_once_per_page_kind
+    from app.explorer import Explorer
+
+    own_bundle = getattr(server.bundle_resources, "__wrapped__", server.bundle_resources)
+    own_patch = getattr(server.patch_model_css, "__wrapped__", server.patch_model_css)
+    counted = []
+
+    def counting_bundle(*args, **kwargs):
+        counted.append(args)
+        return own_bundle(*args, **kwargs)
+
+    monkeypatch.setattr(server, "bundle_resources", counting_bundle)  # restored after the test
+    monkeypatch.setattr(server, "patch_model_css", own_patch)
+
+    def kept_session(query: dict) -> types.SimpleNamespace:
+        document = Document()
+        with set_curdoc(document):
+            Explorer(query).page().server_doc(document)
+        return types.SimpleNamespace(document=document, token="kept")
+
+    def html(session, token: str, mode: str = "server") -> str:
+        document = session.document
+        with set_curdoc(document):
+            page = server.server_html_page_for_session(
+                session,
+                resources=Resources.from_bokeh(BokehResources(mode=mode)),
+                title=document.title,
+                token=token,
+                template=document.template,
+                template_variables=document.template_variables,
+            )
+        page = re.sub(r"[0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{12}", "UUID", page)
+        return re.sub(r"""(["'=])p\d+\b""", r"\1ID", page)
+
+    def style_sheet_addresses(session) -> list[str]:
+        return sorted(
+            model.url for model in session.document.models if isinstance(model, ImportedStyleSheet)
+        )
+
+    queries = [{"scene": "drop"}, {"scene": "map"}, {"scene": "stack", "present": "1"}]
+    expected, addresses = [], []
+    for i, query in enumerate(queries):
+        session = kept_session(query)
+        expected.append([html(session, f"token-{i}", mode) for mode in ("server", "cdn")])
+        addresses.append(style_sheet_addresses(session))
+    page_resources_worked_out_once_per_page_kind()
+    page_resources_worked_out_once_per_page_kind()  # (idempotent)
+    assert server.bundle_resources.__wrapped__ is counting_bundle
+    assert server.patch_model_css.__wrapped__ is own_patch
+    assert "bokeh" in expected[0][0] and "<script" in expected[0][0]
+    assert expected[0][0] != expected[0][1]  # (the two modes differ: each is checked)
+    counted.clear()
+    for i, query in enumerate(queries):
+        session = kept_session(query)
+        for _ in range(3):
+            assert [html(session, f"token-{i}", mode) for mode in ("server", "cdn")] == expected[i]
+        assert style_sheet_addresses(session) == addresses[i], query
+    assert len(counted) == 2 * len(queries)  # once per document and mode, not per request
