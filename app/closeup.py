@@ -202,8 +202,15 @@ class CloseUpScene(Scene):
         # window), wrapped one above the other on a phone
         self.positions.styles = BESIDE_STYLES
         forces = pn.Column(*panes[1:], styles=BESIDE_STYLES, sizing_mode="stretch_width")
-        plots = wrapping_row(panes[0], forces, sizing_mode="stretch_width")
-        # on a phone the two-ball sliders right under the plots, as on the Drop (the sidebar's
-        # lay at the page's foot, under the contacts' table: a teacher's trial)
-        phone = [PhoneSliders(state=self.state)] if on_a_phone() else []
-        return pn.Column(plots, *phone, self.table, sizing_mode="stretch_width")
+        # on a phone the two-ball sliders right under the positions, the first plot, as on the
+        # Drop: the sidebar's lay at the page's foot, and then under all three plots, 800 px
+        # down, a moved slider changed no plot in sight (teachers' trials). A line of their own
+        # in the row (a basis of 100 %): hidden at 768 px and wider (controls.PHONE_ONLY), the
+        # positions stand beside the forces there, on a phone turned sideways too
+        phone = []
+        if on_a_phone():
+            sliders = PhoneSliders(state=self.state).__panel__()
+            sliders.styles = {"flex": "1 1 100%"}
+            phone = [sliders]
+        plots = wrapping_row(panes[0], *phone, forces, sizing_mode="stretch_width")
+        return pn.Column(plots, self.table, sizing_mode="stretch_width")
