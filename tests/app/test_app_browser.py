@@ -89,6 +89,31 @@ def test_each_slider_changes_the_plotted_data(browser, app_server):
         context.close()
 
 
+def test_an_arrow_key_moves_a_slider_a_visible_step(browser, app_server):
+    """One key press moved eps by 0.001 and mu by 0.01 of a decade, nothing a plot showed (a
+    teacher's trial): eps moves by 0.01 and a log slider by a factor 10 ** 0.05. A link's
+    digits are kept until a slider moves (?eps=0.9137 is not the step's 0.91 or 0.92)."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?eps=0.9137&mu=0.0137")
+    try:
+        page.wait_for_timeout(800)
+        titles = slider_titles(page)
+        assert titles[0].endswith(": 0.914") and titles[1].endswith(": 0.0137"), titles
+        linked = page_query(page)
+        assert (linked["eps"], linked["mu"]) == ("0.9137", "0.0137"), linked
+        page.goto(f"{base}/app")
+        wait_for_plots(page)
+        for name in ("eps", "mu"):
+            assert press_slider(page, name) > 0, name
+        page.wait_for_timeout(800)
+        moved = page_query(page)
+        assert float(moved["eps"]) == 0.91, moved
+        assert np.isclose(float(moved["mu"]), 0.01 * 10**0.05, rtol=1e-9), moved
+        assert errors == []
+    finally:
+        context.close()
+
+
 def test_a_map_click_moves_the_sliders(browser, app_server, artifacts):
     base, _ = app_server
     context, page, errors = open_page(browser, f"{base}/app?scene=map")
