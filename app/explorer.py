@@ -95,11 +95,6 @@ class Explorer(Built):
         """The scene ``name``, built (and put into its tab) the first time it is asked for."""
         if name not in self.scenes:
             self.scenes[name] = SCENE_REGISTRY[name].viewer_class()(state=self.state)
-            # on screen before its tab gets it: its layout draws its data into its figures,
-            # which reach the browser with them (sent empty, a figure's auto ranges had
-            # nothing to fit: "could not set initial ranges" in the console, 9 on opening the
-            # Close-up, 3 on the Stack)
-            self.scenes[name].active = name == self.state.scene
             # on a projector the teacher says what the scene shows: its plots get the room
             caption = [] if self.state.presentation else [self._caption(name)]
             self._holders[name].extend([*caption, self.scenes[name]])
