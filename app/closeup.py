@@ -103,8 +103,11 @@ class CloseUpScene(Scene):
     @param.depends("revision", watch=True)
     def _draw(self, *events: param.parameterized.Event) -> None:
         """Send the current collision to the figures (only while on screen)."""
-        if not self.active:
-            return
+        if self.active:
+            self._fill()
+
+    def _fill(self) -> None:
+        """The current collision into the figures' data."""
         self.current()
         units = units_named(self.state.units)
         tr = self.result.trajectory
@@ -190,7 +193,11 @@ class CloseUpScene(Scene):
         return "\n".join(lines)
 
     def layout(self) -> pn.viewable.Viewable:
-        self._draw()
+        # built to be shown (a tab chosen): the figures reach the browser with their data, not
+        # still inactive and empty, when their auto ranges had nothing to fit and Bokeh warned
+        # "could not set initial ranges" 9 times (no text pane here is set by the update:
+        # the table follows ``active``, app.scene.Text)
+        self._fill()
         panes = [
             pn.pane.Bokeh(fig, sizing_mode="stretch_width")
             for fig in (self.positions, self.floor_force, self.ball_force)
@@ -202,8 +209,15 @@ class CloseUpScene(Scene):
         # window), wrapped one above the other on a phone
         self.positions.styles = BESIDE_STYLES
         forces = pn.Column(*panes[1:], styles=BESIDE_STYLES, sizing_mode="stretch_width")
-        plots = wrapping_row(panes[0], forces, sizing_mode="stretch_width")
-        # on a phone the two-ball sliders right under the plots, as on the Drop (the sidebar's
-        # lay at the page's foot, under the contacts' table: a teacher's trial)
-        phone = [PhoneSliders(state=self.state)] if on_a_phone() else []
-        return pn.Column(plots, *phone, self.table, sizing_mode="stretch_width")
+        # on a phone the two-ball sliders right under the positions, the first plot, as on the
+        # Drop: the sidebar's lay at the page's foot, and then under all three plots, 800 px
+        # down, a moved slider changed no plot in sight (teachers' trials). A line of their own
+        # in the row (a basis of 100 %): hidden at 768 px and wider (controls.PHONE_ONLY), the
+        # positions stand beside the forces there, on a phone turned sideways too
+        phone = []
+        if on_a_phone():
+            sliders = PhoneSliders(state=self.state).__panel__()
+            sliders.styles = {"flex": "1 1 100%"}
+            phone = [sliders]
+        plots = wrapping_row(panes[0], *phone, forces, sizing_mode="stretch_width")
+        return pn.Column(plots, self.table, sizing_mode="stretch_width")

@@ -23,6 +23,13 @@ from .state import ExplorerState, app_range, metres_text, preset_drop, typed_val
 
 # the slider holds log10 of the value and shows the value (a model per slider: one per session)
 POWER_OF_TEN = "return Number((10 ** tick).toPrecision(3)).toString()"
+# A slider's step, one press of an arrow key: about a hundredth of its range, a change the plot
+# shows (0.001 of eps and 0.01 of a decade, a thousandth and a five-hundredth, moved nothing in
+# sight: a teacher's trial); a log slider's is a step in log10, 0.05: a factor of 1.12. A value
+# typed or linked keeps its digits (?eps=0.9137): the step snaps only the handle drawn, from
+# which a key press moves on a step (0.92)
+EPS_STEP = 0.01
+LOG_STEP = 0.05
 LOG_SLIDERS = ("mu", "tau_ratio")
 MARKDOWN_SPECIALS = re.compile(r"([\\`*_{}\[\]()#+!|<>~])")
 LONG_WORD = re.compile(r"\S{41,}")  # a bad value quoted in a message is cut to 40 characters
@@ -134,8 +141,8 @@ def two_ball_sliders(state: ExplorerState, short: bool = False) -> dict[str, pn.
         "eps": ReleasedSlider.from_param(
             state.param.eps,
             name="eps" if short else "eps (restitution)",
-            step=0.001,
-            format="0.000",
+            step=EPS_STEP,
+            format="0.000",  # (a linked eps's third digit: 0.914)
             throttled=True,
         ),
         "mu": _log_slider("mu = m2/m1" if short else "mu = m2/m1 (log scale)", "mu"),
@@ -151,7 +158,7 @@ def _log_slider(label: str, name: str) -> pn.widgets.FloatSlider:
         label=label,
         start=math.log10(low),
         end=math.log10(high),
-        step=0.01,
+        step=LOG_STEP,
         format=CustomJSTickFormatter(code=POWER_OF_TEN),
     )
 

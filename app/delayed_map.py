@@ -602,13 +602,7 @@ class MapScene(Scene):
                 f"{high:g}): it shows eps = {self.slice_eps:g}, not this drop"
                 + self._why_not_computed(name)
             )
-        for name, what in (("mu", "mu"), ("tau_ratio", "tau_d/tau_f")):
-            low, high = float(cube[name].min()), float(cube[name].max())
-            if not low <= getattr(s, name) <= high:
-                lines.append(
-                    f"**The current {what} = {getattr(s, name):g} lies outside the map** "
-                    f"({low:g} to {high:g}): the star is off the map."
-                )
+        lines[:0] = self._off_the_map(cube)  # (first: under the rest, a phone showed it last)
         star = self._star_value()
         if star:
             lines.append(star)
@@ -624,6 +618,41 @@ class MapScene(Scene):
                 "until it is."
             )
         return "  \n".join(lines)
+
+    def _off_the_map(self, cube) -> list[str]:
+        """What a teacher reads where the current mu or tau_d/tau_f lies off the map: that the
+        star is not on it, past which edge and why (the slider's mu runs to 10, the map's to 1:
+        "the star is off the map" alone left a teacher looking for it), and how to bring it
+        back."""
+        s = self.state
+        lines = []
+        for key, what, edges in (
+            ("mu", "mu", ("left", "right")),
+            ("tau_ratio", "tau_d/tau_f", ("bottom", "top")),
+        ):
+            low, high = float(cube[key].min()), float(cube[key].max())
+            value = getattr(s, key)
+            if low <= value <= high:
+                continue
+            above = value > high
+            edge, back = edges[above], f"{high:g} or less" if above else f"{low:g} or more"
+            heavier = ""
+            if key == "mu" and value > 1 >= high:
+                heavier = (
+                    f", an upper ball at most as heavy as the lower one; this one is {value:g} "
+                    "times heavier"
+                )
+            if s.presentation:  # (the teacher says the rest: the note ran below 720 px)
+                lines.append(
+                    f"**No star: {what} = {value:g} is off the map** ({low:g} to {high:g})."
+                )
+                continue
+            lines.append(
+                f"**No star: {what} = {value:g} is off the map**, past its {edge} edge (the map "
+                f"shows {what} = {low:g} to {high:g}{heavier}). The other tabs show this drop; "
+                f"set {what} to {back} to see it on the map."
+            )
+        return lines
 
     def _outline_of_slice(self) -> tuple[np.ndarray, np.ndarray]:
         s = self.state

@@ -35,7 +35,9 @@ SCENE_REGISTRY = {
     "closeup": SceneEntry(
         "First collision",
         "The first collision, slowed down: the floor's push on the big ball and the push "
-        "between the balls. Each separate hump of the ball force is one contact.",
+        "between the balls. Each separate hump of the ball force is one contact. The floor "
+        "force starts with a jump, not from 0: in this spring-and-dashpot model the damping "
+        "pushes in proportion to the speed, largest at the moment of touching.",
         "closeup:CloseUpScene",
     ),
     "map": SceneEntry(

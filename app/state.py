@@ -226,6 +226,7 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
     """
     values: dict = {}
     messages = []
+    height_message = None  # (its index, the height used)
     for name, key in URL_KEYS.items():
         if key not in query:
             continue
@@ -233,6 +234,8 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
         values[name] = value
         if message:
             messages.append(f"URL {key}: {message}")
+            if name == "height":
+                height_message = (len(messages) - 1, value)
     if "preset" in query:
         found, message = _read_preset(query["preset"], values, defaults)
         values = found | values
@@ -284,6 +287,14 @@ def read_query(query: Mapping[str, str], defaults: Parameters) -> tuple[dict, li
                 f"URL scene: must be one of {', '.join(SCENES)}; got {query['scene']!r}. "
                 f"Using {defaults.scene}."
             )
+    # A page in metres (units=SI, a lesson's or a preset's link) says a limited H in metres
+    # too: "using 100,000,000" alone never said that the drop it shows, 9.95e+03 m, had been
+    # limited to about 9.9 km (a teacher's trial)
+    if height_message is not None and values.get("units", getattr(defaults, "units", "")) == "SI":
+        at, height = height_message
+        if values.get("height") == height:  # (not a lesson step's own drop)
+            metres = metres_text(presets.metres_from_height(height))
+            messages[at] += f" In metres: a drop from {metres}."
     return values, messages
 
 

@@ -3,6 +3,8 @@ model (``set_from_json``, as the server does with a PATCH-DOC), and Panel follow
 
 from __future__ import annotations
 
+import math
+
 import pytest
 from bokeh.document import Document
 from panel.io.state import set_curdoc
@@ -85,3 +87,17 @@ def test_eps12_is_offered_only_where_it_drives_the_drop():
     assert explorer.state.scene == "drop" and controls.eps12.visible
     explorer.tabs.active = list(explorer._holders).index("stack")
     assert not controls.eps12.visible
+
+
+def test_a_key_press_is_a_visible_step_and_a_link_keeps_its_digits():
+    """One press of an arrow key moved eps by 0.001 and mu or tau_d/tau_f by 0.01 of a decade,
+    a change no plot showed (a teacher's trial): each slider's step is a fiftieth to a
+    hundredth of its range (a log slider's in log10). A linked value keeps its digits: the
+    state and the slider hold ?eps=0.9137 and ?mu=0.0137, not the step's nearest."""
+    explorer = Explorer({"eps": "0.9137", "mu": "0.0137"})
+    sliders = explorer.controls.sliders
+    for name, slider in sliders.items():
+        assert 50 <= (slider.end - slider.start) / slider.step <= 100, name
+    assert explorer.state.eps == 0.9137 and sliders["eps"].value == 0.9137
+    assert explorer.state.mu == 0.0137
+    assert math.isclose(sliders["mu"].value, math.log10(0.0137), rel_tol=1e-12)

@@ -533,3 +533,20 @@ def test_the_note_gives_the_value_at_the_star():
     )
     explorer.state.mu = 5.0  # (beyond the map's mu: no value)
     assert "At the star" not in scene._note()
+
+
+def test_the_note_says_plainly_when_the_star_is_off_the_map():
+    """The mu slider runs to 10, the map to 1: at mu = 5 the star lay off the map and the note's
+    last line said only "lies outside the map (0.001 to 1): the star is off the map". The note
+    opens with it: no star, past which edge, what the map shows (an upper ball at most as
+    heavy as the lower one) and how to bring the star back; a drop on the map says none of it."""
+    explorer, scene = map_on_screen({"eps": "0.9", "mu": "5", "tau_ratio": "0.0002"})
+    note = scene._note()
+    first, second = note.split("  \n")[:2]
+    assert first.startswith("**No star: mu = 5 is off the map**, past its right edge")
+    assert "at most as heavy as the lower one; this one is 5 times heavier" in first
+    assert "set mu to 1 or less to see it on the map" in first
+    assert second.startswith("**No star: tau_d/tau_f = 0.0002 is off the map**, past its bottom")
+    assert "At the star" not in note
+    explorer.state.param.update(mu=0.01, tau_ratio=0.01)
+    assert "No star" not in scene._note() and "At the star" in scene._note()

@@ -10,6 +10,7 @@ import math
 import re
 
 import numpy as np
+import panel as pn
 import param
 import pytest
 from bokeh.document import Document
@@ -222,6 +223,24 @@ def test_closeup_shows_the_four_contacts_and_forces_only_inside_them():
     assert np.all(tr.f12[~inside_ball & ~edges] == 0)
     # all four ball contacts happen while the lower ball is on the floor (model.md)
     assert all(floor[0].start < c.start and c.end < floor[0].end for c in ball)
+
+
+def test_closeup_s_caption_says_why_the_floor_force_jumps():
+    """The floor force jumps at a contact's start (the dashpot's force, proportional to the
+    speed at first touch: docs/model.md), which a teacher took for a fault: the caption above
+    the plots says why."""
+    explorer = rendered({**PAPER, "scene": "closeup"})
+    scene = explorer.scenes["closeup"]
+    tr = scene.result.trajectory
+    floor = min((c for c in scene.result.contacts if c.contact == FLOOR), key=lambda c: c.start)
+    first = np.argmax(tr.t > floor.start + 1e-9)  # the first sample inside the contact
+    assert tr.f01[first] > 0.04 * tr.f01.max()  # a jump, not a rise from 0
+    holder = explorer._holders["closeup"]
+    (caption,) = [o for o in holder.objects if isinstance(o, pn.pane.Markdown)]
+    assert (
+        "The floor force starts with a jump, not from 0: in this spring-and-dashpot model the "
+        "damping pushes in proportion to the speed" in caption.object
+    )
 
 
 def test_closeup_s_table_names_its_time_unit():

@@ -83,6 +83,23 @@ def test_read_query_keeps_good_values_and_reports_each_bad_one():
     assert any(m.startswith("URL scene:") for m in messages)
 
 
+def test_a_link_s_height_limited_in_metres_is_said_in_metres():
+    """A link's H beyond the range was limited to 1e8 with a message in H alone ("using
+    100,000,000"): a page in metres, which shows the drop from 9.95e+03 m, never said it had
+    been limited to about 9.9 km. It says so in metres too; a page in H and a lesson step's own
+    drop do not."""
+    values, messages = read_query({"H": "2e8", "units": "SI"}, ExplorerState())
+    assert values["height"] == 1e8
+    (message,) = messages
+    assert message.startswith("URL H: height = 200,000,000 is outside the explorer's range")
+    assert message.endswith("using 100,000,000. In metres: a drop from about 9.9 km."), message
+    values, messages = read_query({"H": "abc", "units": "SI"}, ExplorerState())
+    assert messages[0].endswith("In metres: a drop from about 0.99 m."), messages
+    assert "metres" not in read_query({"H": "2e8"}, ExplorerState())[1][0]
+    values, messages = read_query({"H": "2e8", "step": "1"}, ExplorerState())
+    assert values["units"] == "SI" and "metres" not in messages[0]
+
+
 @pytest.mark.parametrize(
     "text, scene", [("Map", "map"), ("STACK", "stack"), (" CloseUp ", "closeup")]
 )
