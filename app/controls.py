@@ -291,6 +291,11 @@ class Controls(Built):
         )
         # a slider released, here or elsewhere (a phone's copies under the plot: PhoneSliders)
         self.state.param.watch(lambda event: self.show_messages([]), "slider_moved")
+        # on a phone the sidebar lies under the scenes, 1500 px down, where a student never saw
+        # that a link's value was refused: the URL's messages go above the scenes, into the
+        # layout the explorer gives (``messages_at``), which shows them when it is built
+        self.messages_above_scenes = on_a_phone()
+        self.messages_at: pn.layout.ListLike | None = None
         self._show_state()
         self.show_messages(messages or [])
         self.two_ball.extend([self.units, *self.sliders.values()])
@@ -349,7 +354,11 @@ class Controls(Built):
             box.object = "\n\n".join(plain(m) for m in shown)
             box.visible = bool(shown)
         if "message" in self.__dict__ and self.message.visible:
-            join(self._layout, self.message)
+            join(self.messages_at if self.messages_above_scenes else self._layout, self.message)
+
+    def url_message_shown(self) -> bool:
+        """Whether the URL's message box has something to say."""
+        return "message" in self.__dict__ and self.message.visible
 
     def _slider_moved(self, name: str, value: float) -> None:
         """A slider released by the user: the messages go, and a log slider sets its value
@@ -486,7 +495,11 @@ class Controls(Built):
         # (show_messages): empty in every page's first document, it cost 0.6 kB
         # (a scene's own controls join it when such a scene is first shown: show_scene_controls)
         layout = pn.Column(
-            *([self.message] if "message" in self.__dict__ and self.message.visible else []),
+            *(
+                [self.message]
+                if self.url_message_shown() and not self.messages_above_scenes
+                else []
+            ),
             self.two_ball,
             *([self.scene_controls] if self.scene_controls.objects else []),
             sizing_mode="stretch_width",

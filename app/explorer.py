@@ -198,7 +198,13 @@ class Explorer(Built):
         # the question joins the page when a step first covers the scene (_cover): empty, in
         # every page's first document, it cost a page opened without the lesson
         parts = [self.stage] if self.state.step else []
-        return pn.Column(*parts, self.tabs, sizing_mode="stretch_width")
+        controls = self.controls
+        if controls.messages_above_scenes and controls.url_message_shown():
+            parts.insert(0, controls.message)  # (a phone: Controls.messages_at)
+        layout = pn.Column(*parts, self.tabs, sizing_mode="stretch_width")
+        if controls.messages_above_scenes:
+            controls.messages_at = layout
+        return layout
 
     def page(self) -> ClassroomTemplate:
         """The served page: a template gives the viewport meta tag, a sidebar that folds away

@@ -977,6 +977,39 @@ def test_a_phone_drags_the_sliders_under_the_plot(browser, app_server, artifacts
         context.close()
 
 
+@pytest.mark.browser
+def test_a_phone_shows_a_links_refused_value_above_the_scenes(browser, app_server, artifacts):
+    """On a phone the sidebar lies under the scenes: the message saying that a link's value
+    was refused stood 1500 px down, and a student saw a drop that was not the link's with no
+    word of why. It stands above the scenes, on the first screen, and a slider moved clears
+    it; on a laptop it stays at the top of the sidebar."""
+    base, _ = app_server
+    context, page, errors = phone_page(browser)
+    try:
+        page.goto(f"{base}/app?eps=abc")
+        wait_for_plots(page)
+        message = page.get_by_text("URL eps: eps must be")
+        expect(message).to_be_visible()
+        box = message.bounding_box()
+        plot = min(plots_on(page), key=lambda c: c["top"])
+        assert box["y"] + box["height"] <= plot["top"], (box, plot)  # above the scenes
+        assert box["y"] < 844, box  # on the first screen
+        page.screenshot(path=artifacts / "phone-url-message.png")
+        assert press_slider(page, 0, "ArrowLeft") > 0
+        expect(message).to_be_hidden()  # a slider moved: the message goes
+        assert errors == []
+    finally:
+        context.close()
+    context, page, errors = open_page(browser, f"{base}/app?eps=abc")
+    try:
+        box = page.get_by_text("URL eps: eps must be").bounding_box()
+        sidebar = page.locator("#sidebar").bounding_box()
+        assert sidebar["x"] <= box["x"] < sidebar["x"] + sidebar["width"], (box, sidebar)
+        assert errors == []
+    finally:
+        context.close()
+
+
 # the Bokeh models of the page's phone copies of the sliders (controls.phone_only)
 PHONE_COPIES_JS = """() => [...Bokeh.documents[0].all_models]
   .filter((m) => (m.css_classes || []).includes("twoball-phone-sliders")).length"""
