@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 import math
 import re
+from collections.abc import Callable
 
 import panel as pn
 import param
@@ -173,6 +174,24 @@ def follow_log_sliders(sliders: dict[str, pn.widgets.Widget], state: ExplorerSta
             continue  # already there (a round trip through log10 is not exact)
         with param.edit_constant(slider):
             slider.param.update(value=shown, value_throttled=shown)
+
+
+def within_range(convert: Callable[[float], float], digits: int) -> Callable[[float], str]:
+    """A drop height H as text in the units ``convert`` gives, to ``digits`` significant digits
+    or as many more as it takes for the text, typed back, to be within the app's range: the
+    highest drop in metres, 9,948.975 m, showed as 9.95e+03, and that, typed back, was refused
+    as above the range (a helper's trial)."""
+    low, high = (convert(end) for end in app_range("height"))
+
+    def shown(height: float) -> str:
+        value = convert(height)
+        for more in range(digits, 18):
+            text = f"{value:.{more}g}"
+            if low <= float(text) <= high:
+                return text
+        return repr(value)
+
+    return shown
 
 
 def on_a_phone() -> bool:
@@ -466,8 +485,10 @@ class Controls(Built):
             # metres to three digits (the default H read 0.994898 m), H to six; a height typed
             # stays as typed while it is the drop's
             if not self._shows_height(height.value):
-                metres = presets.metres_from_height(s.height)
-                height.value = f"{metres:.3g}" if si else f"{s.height:.6g}"
+                shown = (
+                    within_range(presets.metres_from_height, 3) if si else within_range(float, 6)
+                )
+                height.value = shown(s.height)
         # set only when changed: param's update reads every parameter of the widget first
         # (0.3 ms at every slider move, for inputs that rarely change)
         text = "" if s.eps12 is None else f"{s.eps12:.6g}"

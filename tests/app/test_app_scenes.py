@@ -448,6 +448,29 @@ def test_a_drop_height_typed_in_metres_outside_the_range_is_clamped_and_used(typ
     assert message.visible and "outside the explorer's range" in message.object
 
 
+@pytest.mark.parametrize("units", ["SI", "dimensionless"])
+def test_a_clamped_height_shown_in_the_box_is_taken_back_without_a_message(units):
+    """A height clamped to an end of the range shows in the box as a number that, typed back,
+    lies within the range: the highest drop in metres showed as 9.95e+03 (above 9,948.975 m),
+    and typing it back was refused as outside the range."""
+    from app.state import app_range
+
+    explorer = rendered({"units": units})
+    controls, state = explorer.controls, explorer.state
+    message = controls.typed_message
+    to_units = presets.metres_from_height if units == "SI" else float
+    for typed, end in (("1e20", max(app_range("height"))), ("-5", min(app_range("height")))):
+        controls.height.value = typed
+        assert state.height == pytest.approx(end, rel=1e-12) and message.visible
+        shown = controls.height.value
+        low, high = (to_units(h) for h in app_range("height"))
+        assert low <= float(shown) <= high, shown
+        state.height = 2e4  # (another drop, then the shown number typed back)
+        controls.height.value = shown
+        assert not message.visible, (shown, message.object)
+        assert state.height == pytest.approx(end, rel=1e-3), shown  # (three digits)
+
+
 def test_a_preset_sets_the_parameters_and_the_sliders():
     explorer = rendered()
     explorer.controls.preset.value = "ping-pong"
