@@ -133,17 +133,15 @@ VALUE_JS = """
 if (Number.isNaN(value)) return "none: an apex below 0, or missing";
 return Math.abs(value) >= 0.01 ? value.toFixed(3) : value.toPrecision(3);
 """
-# a cell's mu or tau_d/tau_f, as a number
-AXIS_VALUE_JS = "return value.toPrecision(3);"
-# the computed cell nearest the pointer on an axis of the image (log10 values ``logs``)
-CELL_JS = (
-    """
+# the computed cell nearest the pointer on an axis of the image (log10 values ``logs``), as a
+# number
+CELL_JS = """
 let best = logs[0];
 for (const log of logs) if (Math.abs(log - value) < Math.abs(best - value)) best = log;
-value = 10 ** best;
+return (10 ** best).toPrecision(3);
 """
-    + AXIS_VALUE_JS
-)
+# a rectangle's own mu or tau_d/tau_f (the Hertz cubes': drawn_as_cells), as CELL_JS gives it
+AXIS_VALUE_JS = "return value.toPrecision(3);"
 
 
 def values_hover(label: str, cube: xr.Dataset, cells: bool = False) -> HoverTool:
@@ -176,7 +174,7 @@ def values_hover(label: str, cube: xr.Dataset, cells: bool = False) -> HoverTool
         ],
         formatters={**formatters, fields["value"]: CustomJSHover(code=VALUE_JS)},
         # (over a rectangle the tooltip follows the pointer, as over the image)
-        point_policy="follow_mouse" if cells else "snap_to_data",
+        **({"point_policy": "follow_mouse"} if cells else {}),
     )
 
 
@@ -406,7 +404,8 @@ class MapScene(Scene):
             glyph = Image(image="image", x="x", y="y", dw="dw", dh="dh", color_mapper=mapper)
         self._image_source, self._cell_source = (None, source) if cells else (source, None)
         values = draw(fig, glyph, source)
-        values.nonselection_glyph = glyph  # (a click picks a cell; the others stay as they are)
+        if cells:  # (a click selects the rectangle it lands in: the others not faded)
+            values.nonselection_glyph = glyph
         hover.renderers = [values]  # (the outline and the star have no value)
         self._outline_source = ColumnDataSource(outline_data(xs, ys))
         width = PROJECTOR_LINE_WIDTH if presentation else 1.5
