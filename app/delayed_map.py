@@ -11,10 +11,12 @@ cube whose H is nearer the drop's; nothing is computed (a Hertz drop costs about
 millisecond, a slice seconds), and the note says that H is in the Hertz length unit and that
 tau_ratio counts the Hertz floor contact.
 
-The map is one image on log10 coordinates (the cube's mu and tau_ratio are evenly spaced in
-log10), not a mesh of ~6000 cells: the browser repaints the whole plot whenever the marker
+The map cube's map is one image on log10 coordinates (its mu and tau_ratio are evenly spaced
+in log10), not a mesh of ~6000 cells: the browser repaints the whole plot whenever the marker
 moves, and one image repaints in a fraction of the time (a slider move took ~320 ms with the
-mesh).
+mesh). The Hertz cubes' (evenly spaced in the values) is one rectangle per cell, 2500 of them
+(:func:`map_slices.drawn_as_cells`): as an image it needed 177 x 227 pixels, all sent again on
+every eps move (160 kB a browser), where the cells' values are 10 kB.
 """
 
 from __future__ import annotations
@@ -42,11 +44,13 @@ from bokeh.models import (
     LogColorMapper,
     MultiLine,
     NoOverlap,
+    Quad,
     Range1d,
     Scatter,
 )
 from bokeh.palettes import RdBu, interp_palette, viridis
 from bokeh.plotting import figure
+from bokeh.transform import transform
 
 from twoball import jit
 
@@ -56,8 +60,11 @@ from .map_slices import (
     CUBE,
     HERTZ_CUBES,
     RATIO_CENTRES,
+    cell_edges,
+    cell_frame,
     computed_slice,
     cube_colour_limits,
+    drawn_as_cells,
     eps_slice,
     hertz_cube_name,
     log_grid,
@@ -67,6 +74,7 @@ from .map_slices import (
     outline_of,
     shown_cube,
     shown_label,
+    slice_cells,
     slice_image,
     variable_label,
 )
@@ -125,35 +133,48 @@ VALUE_JS = """
 if (Number.isNaN(value)) return "none: an apex below 0, or missing";
 return Math.abs(value) >= 0.01 ? value.toFixed(3) : value.toPrecision(3);
 """
-# the computed cell nearest the pointer on an axis (log10 values ``logs``), as a number
+# the computed cell nearest the pointer on an axis of the image (log10 values ``logs``), as a
+# number
 CELL_JS = """
 let best = logs[0];
 for (const log of logs) if (Math.abs(log - value) < Math.abs(best - value)) best = log;
 return (10 ** best).toPrecision(3);
 """
+# a rectangle's own mu or tau_d/tau_f (the Hertz cubes': drawn_as_cells), as CELL_JS gives it
+AXIS_VALUE_JS = "return value.toPrecision(3);"
 
 
-def values_hover(label: str, cube: xr.Dataset) -> HoverTool:
+def values_hover(label: str, cube: xr.Dataset, cells: bool = False) -> HoverTool:
     """The map's hover: the mu and tau_d/tau_f of the computed cell under the pointer (what a
     click chooses, :meth:`MapScene._tapped`) as numbers, not the log10 the image is drawn in,
     and its value (a new model each time, as :func:`ratio_colorbar`). The pointer's own
     coordinates had given a value that was not that point's: the map read 1.973 where the
-    Drop, at the clicked point, gave 2.014."""
-    axes = {
-        axis: CustomJSHover(args={"logs": on_screen(np.log10(cube[axis].values))}, code=CELL_JS)
-        for axis in ("mu", "tau_ratio")
-    }
+    Drop, at the clicked point, gave 2.014.
+
+    On the image the cell is looked for in the browser (:data:`CELL_JS`); drawn as
+    rectangles (``cells``: :meth:`MapScene._map_figure`), the pointer is on the cell itself,
+    whose mu, tau_ratio and value its columns hold."""
+    if cells:
+        number = CustomJSHover(code=AXIS_VALUE_JS)
+        fields = {"mu": "@mu", "tau_ratio": "@tau_ratio", "value": "@value"}
+        formatters = {"@mu": number, "@tau_ratio": number}
+    else:
+        fields = {"mu": "$x", "tau_ratio": "$y", "value": "@image"}
+        formatters = {
+            fields[axis]: CustomJSHover(
+                args={"logs": on_screen(np.log10(cube[axis].values))}, code=CELL_JS
+            )
+            for axis in ("mu", "tau_ratio")
+        }
     return HoverTool(
         tooltips=[
-            ("mu", "$x{custom}"),
-            ("tau_d/tau_f", "$y{custom}"),
-            (label, "@image{custom}"),
+            ("mu", fields["mu"] + "{custom}"),
+            ("tau_d/tau_f", fields["tau_ratio"] + "{custom}"),
+            (label, fields["value"] + "{custom}"),
         ],
-        formatters={
-            "$x": axes["mu"],
-            "$y": axes["tau_ratio"],
-            "@image": CustomJSHover(code=VALUE_JS),
-        },
+        formatters={**formatters, fields["value"]: CustomJSHover(code=VALUE_JS)},
+        # (over a rectangle the tooltip follows the pointer, as over the image)
+        **({"point_policy": "follow_mouse"} if cells else {}),
     )
 
 
@@ -201,6 +222,17 @@ def image_frame(log_mu: np.ndarray, log_tau: np.ndarray) -> dict[str, list[float
         frame[corner] = [float(centres[0] - pixel / 2)]
         frame[size] = [float(centres[-1] - centres[0] + pixel)]
     return frame
+
+
+def blank(cube: xr.Dataset, cells: bool) -> dict:
+    """The figure's values before a slice is shown (the map off screen): an image without a
+    value on the cube's grid and where it lies, or the cells' values, none (:func:`cell_frame`
+    gives the cells' edges)."""
+    if cells:
+        return {"value": on_screen(np.full(cube.sizes["mu"] * cube.sizes["tau_ratio"], np.nan))}
+    log_mu, log_tau = log_grid(cube["mu"].values)[0], log_grid(cube["tau_ratio"].values)[0]
+    shown = np.full((log_tau.size, log_mu.size), np.nan)
+    return {**image_frame(log_mu, log_tau), "image": [on_screen(shown)]}
 
 
 def outline_data(xs: np.ndarray, ys: np.ndarray) -> dict[str, list[np.ndarray]]:
@@ -292,6 +324,7 @@ class MapScene(Scene):
         # the Bokeh models of the figure on screen that a new slice changes (_push_slice), and
         # what that figure was drawn for (its variable and cube)
         self._image_source: ColumnDataSource | None = None
+        self._cell_source: ColumnDataSource | None = None  # (the Hertz cubes': drawn_as_cells)
         self._colour_mapper: ColorMapper | None = None
         self._outline_source: ColumnDataSource | None = None
         self._drawn_for: tuple[str, str] | None = None
@@ -318,21 +351,28 @@ class MapScene(Scene):
         document 62 kB; the drop's, drawn so, 110 ms and 36 kB (benchmarks/app_open.py)."""
         variable, name = self.variable, self.cube_name()
         cube = shown_cube(name)
+        cells = drawn_as_cells(cube)  # (the Hertz cubes': one rectangle per cell)
         if self.active:
             self.current()
         if self.active and self.slice is not None:
-            (log_mu, log_tau, shown), clim = slice_image(self.slice, variable, self._limits())
+            data, clim = self._shown(cells)
             xs, ys = self._outline_of_slice()
         else:  # (the plot keeps its frame: a later slice fills it, _push_slice)
-            log_mu, log_tau = log_grid(cube["mu"].values)[0], log_grid(cube["tau_ratio"].values)[0]
-            shown, clim = np.full((log_tau.size, log_mu.size), np.nan), None
+            data, clim = blank(cube, cells), None
             xs = ys = np.zeros(0)
-        frame = image_frame(log_mu, log_tau)
+        if cells:  # (the cells' edges and axis values: sent with the figure only)
+            data = {**{k: on_screen(v) for k, v in cell_frame(cube).items()}, **data}
+            spans = [cell_edges(cube[axis].values)[[0, -1]] for axis in ("mu", "tau_ratio")]
+        else:
+            spans = [
+                (data[at][0], data[at][0] + data[size][0])
+                for at, size in (("x", "dw"), ("y", "dh"))
+            ]
         presentation = self.state.presentation
-        hover = values_hover(shown_label(variable), cube)
+        hover = values_hover(shown_label(variable), cube, cells)
         fig = figure(
-            x_range=Range1d(frame["x"][0], frame["x"][0] + frame["dw"][0]),
-            y_range=Range1d(frame["y"][0], frame["y"][0] + frame["dh"][0]),
+            x_range=Range1d(*map(float, spans[0])),
+            y_range=Range1d(*map(float, spans[1])),
             x_axis_label="mu = m2/m1 (log scale)",
             y_axis_label="tau_d/tau_f (log scale)",
             tools=[hover, "wheel_zoom", "save", "pan", "box_zoom", "reset", "tap"],
@@ -355,13 +395,18 @@ class MapScene(Scene):
             axis.formatter = CustomJSTickFormatter(code=LOG_TICK_JS)
             axis.major_label_policy = NoOverlap()
         mapper = colour_mapper(variable, clim)
-        self._image_source = ColumnDataSource({**frame, "image": [on_screen(shown)]})
-        image = draw(
-            fig,
-            Image(image="image", x="x", y="y", dw="dw", dh="dh", color_mapper=mapper),
-            self._image_source,
-        )
-        hover.renderers = [image]  # (the outline and the star have no value)
+        source = ColumnDataSource(data)
+        if cells:  # (edged in their own colour: unedged, light seams showed between cells)
+            colour = transform("value", mapper)
+            glyph = Quad(left="left", right="right", bottom="bottom", top="top",
+                         fill_color=colour, line_color=colour, line_width=1)  # fmt: skip
+        else:
+            glyph = Image(image="image", x="x", y="y", dw="dw", dh="dh", color_mapper=mapper)
+        self._image_source, self._cell_source = (None, source) if cells else (source, None)
+        values = draw(fig, glyph, source)
+        if cells:  # (a click selects the rectangle it lands in: the others not faded)
+            values.nonselection_glyph = glyph
+        hover.renderers = [values]  # (the outline and the star have no value)
         self._outline_source = ColumnDataSource(outline_data(xs, ys))
         width = PROJECTOR_LINE_WIDTH if presentation else 1.5
         draw(
@@ -427,7 +472,7 @@ class MapScene(Scene):
 
         The figure's frame (axes, ranges, colour bar, hover, tap) does not change with the
         slice, only these three models' values do: an eps move sends them alone."""
-        source, mapper = self._image_source, self._colour_mapper
+        source, mapper = self._image_source or self._cell_source, self._colour_mapper
         if source is None or mapper is None or self._outline_source is None:
             return False
         if self._drawn_for != (self.variable, self.cube_name()):
@@ -435,17 +480,34 @@ class MapScene(Scene):
         self.current()
         if self.slice is None:
             return False
-        (log_mu, log_tau, shown), clim = slice_image(self.slice, self.variable, self._limits())
-        frame = image_frame(log_mu, log_tau)
-        (drawn,) = source.data["image"]
-        if drawn.shape != shown.shape or any(source.data[k] != v for k, v in frame.items()):
-            return False
-        source.data = {**frame, "image": [on_screen(shown)]}
+        cells = source is self._cell_source
+        data, clim = self._shown(cells)
+        if cells:  # the cells' values alone (their edges stay): 10 kB, not an image's 160
+            if len(source.data["value"]) != len(data["value"]):
+                return False
+            source.data["value"] = data["value"]
+        else:
+            (drawn,) = source.data["image"]
+            (shown,) = data["image"]
+            if drawn.shape != shown.shape or any(
+                source.data[k] != data[k] for k in ("x", "y", "dw", "dh")
+            ):
+                return False
+            source.data = data
         # (a count's bands, one a count: their number follows the slice's)
         bands = {"palette": count_palette(*clim)} if self.variable in COUNTS else {}
         mapper.update(low=clim[0], high=clim[1], **bands)
         self._outline_source.data = outline_data(*self._outline_of_slice())
         return True
+
+    def _shown(self, cells: bool) -> tuple[dict, tuple[float, float]]:
+        """The current slice as the data of the figure's values (the image and where it lies,
+        or the cells' values alone: :func:`slice_cells`), and its colour limits."""
+        if cells:
+            values, clim = slice_cells(self.slice, self.variable, self._limits())
+            return {"value": on_screen(values)}, clim
+        (log_mu, log_tau, shown), clim = slice_image(self.slice, self.variable, self._limits())
+        return {**image_frame(log_mu, log_tau), "image": [on_screen(shown)]}, clim
 
     def inputs(self) -> tuple:
         """What the slice depends on: the drop's eps, H and eps12, the cube (force), the

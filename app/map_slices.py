@@ -10,8 +10,9 @@ the slice is computed on the cube's axes with the sweep's batch path (:func:`com
 The Hertz cubes (``hertz-h1e2``, ``hertz-h1e4``: the paper's linear grid, 50 values per axis)
 have their H in the Hertz length unit, and their tau_ratio counts the Hertz floor contact
 (twoball/precomputed/README.md). Their axes are evenly spaced in mu and tau_ratio, not in
-log10: the image on the map's log axes repeats each cell over the pixels nearest it
-(:func:`log_grid`), no value interpolated.
+log10: the map draws them as one rectangle per cell (:func:`drawn_as_cells`, :func:`cell_edges`,
+:func:`slice_cells`), an eps move sending the cells' values alone; the map cube's slices are
+one image (:func:`slice_image`).
 """
 
 from __future__ import annotations
@@ -88,6 +89,31 @@ def eps_slice(eps: float, variable: str, name: str = CUBE) -> xr.Dataset:
     return shown_cube(name)[[variable, "delayed_rebound"]].sel(eps=eps).load()
 
 
+def evenly_logged(values: np.ndarray) -> bool:
+    """Whether an axis (mu or tau_ratio) is evenly spaced in log10 (the map cube's)."""
+    steps = np.diff(np.log10(np.asarray(values, dtype=float)))
+    return steps.size == 0 or bool(np.allclose(steps, steps[0], rtol=1e-6, atol=0.0))
+
+
+def drawn_as_cells(cube: xr.Dataset) -> bool:
+    """Whether the map draws a cube's slices as one rectangle per cell (:func:`cell_edges`),
+    not one image: an axis not evenly spaced in log10 (the Hertz cubes'). On an image such an
+    axis needed a pixel for its narrowest cell (:func:`log_grid`): 177 x 227 float32 pixels for
+    2500 cells, 160 kB sent to every browser on every eps move, where the cells' values alone
+    are 10 kB."""
+    return not (evenly_logged(cube["mu"].values) and evenly_logged(cube["tau_ratio"].values))
+
+
+def cell_edges(values: np.ndarray) -> np.ndarray:
+    """The log10 edges of an axis's cells (``values.size + 1``): half-way between neighbouring
+    values in log10, the outer edges the outer values (the cube's range, no more, as the
+    image was drawn: a half cell beyond would widen the Hertz map's axes by a quarter of a
+    decade). Every point of a cell is nearer its own value in log10 than any other: a click or
+    a hover in a cell is that cell's (:func:`nearest_on_log_axis`)."""
+    logs = np.log10(np.asarray(values, dtype=float))
+    return np.concatenate([logs[:1], (logs[1:] + logs[:-1]) / 2, logs[-1:]])
+
+
 def log_grid(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Evenly spaced log10 pixel centres over an axis, and the index of the axis value each
     pixel shows (the nearest in log10).
@@ -96,9 +122,9 @@ def log_grid(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     evenly spaced in the value) gets enough pixels for its narrowest cell to have one, at most
     :data:`MOST_PIXELS`: each pixel shows a computed cell, none is interpolated."""
     logs = np.log10(np.asarray(values, dtype=float))
-    steps = np.diff(logs)
-    if steps.size == 0 or np.allclose(steps, steps[0], rtol=1e-6, atol=0.0):
+    if evenly_logged(values):
         return logs, np.arange(logs.size)
+    steps = np.diff(logs)
     count = min(MOST_PIXELS, int(math.ceil((logs[-1] - logs[0]) / steps.min())) + 1)
     grid = np.linspace(logs[0], logs[-1], count)
     return grid, np.searchsorted((logs[1:] + logs[:-1]) / 2, grid)
@@ -185,10 +211,40 @@ def slice_image(
     apex below 0, NaN), and its colour limits: ``limits`` (a shipped cube's, the same for all
     its slices: :func:`cube_colour_limits`), else the slice's own (:func:`colour_limits`)."""
     values = slice_[variable].transpose("tau_ratio", "mu").values
-    shown = on_log_grid(slice_, values)
-    if variable in RATIO_CENTRES:  # (a ratio with an apex below 0 is none: NO_RATIO)
-        shown = (*shown[:2], np.where(shown[2] > 0, shown[2], np.nan))
+    shown = on_log_grid(slice_, shown_values(slice_, variable))
     return shown, limits or colour_limits(values, variable)
+
+
+def shown_values(slice_: xr.Dataset, variable: str) -> np.ndarray:
+    """The slice's ``variable`` as the map colours it: rows tau_ratio, columns mu; a ratio's
+    without a value (an apex below 0: grey, NO_RATIO) NaN."""
+    values = slice_[variable].transpose("tau_ratio", "mu").values
+    if variable in RATIO_CENTRES:  # (a ratio with an apex below 0 is none: NO_RATIO)
+        return np.where(values > 0, values, np.nan)
+    return values
+
+
+def slice_cells(
+    slice_: xr.Dataset, variable: str, limits: tuple[float, float] | None = None
+) -> tuple[np.ndarray, tuple[float, float]]:
+    """The slice's ``variable`` one value per cell, in the order of :func:`cell_frame` (rows
+    tau_ratio, columns mu, flattened), and its colour limits as :func:`slice_image`'s."""
+    values = slice_[variable].transpose("tau_ratio", "mu").values
+    return shown_values(slice_, variable).ravel(), limits or colour_limits(values, variable)
+
+
+def cell_frame(cube: xr.Dataset) -> dict[str, np.ndarray]:
+    """Every cell of a cube's (mu, tau_ratio) grid as a rectangle on the map's log axes: its
+    edges (``left``, ``right``, ``bottom``, ``top``: :func:`cell_edges`) and its own ``mu`` and
+    ``tau_ratio`` (for the hover); rows tau_ratio, columns mu, flattened (:func:`slice_cells`)."""
+    mu, tau = cube["mu"].values, cube["tau_ratio"].values
+    x, y = cell_edges(mu), cell_edges(tau)
+    shape = (tau.size, mu.size)
+    along_mu = {"left": x[:-1], "right": x[1:], "mu": mu}
+    along_tau = {"bottom": y[:-1], "top": y[1:], "tau_ratio": tau}
+    frame = {k: np.broadcast_to(v, shape).ravel() for k, v in along_mu.items()}
+    frame |= {k: np.broadcast_to(v[:, None], shape).ravel() for k, v in along_tau.items()}
+    return frame
 
 
 # a cell whose delayed-rebound flag disagrees with the sign of log10(h2/h1) (a patch too small

@@ -40,16 +40,20 @@ MOVES = {
     "closeup": ("mu", np.linspace(0.01, 0.2, 7)),
     "map (star)": ("mu", np.linspace(0.01, 0.2, 7)),
     "map (eps slice)": ("eps", np.linspace(0.5, 0.95, 7)),
+    "map hertz (eps slice)": ("eps", np.linspace(0.5, 0.95, 7)),
     "stack": ("stack_ratio", np.linspace(0.1, 0.5, 7)),
     "stack (eps)": ("stack_eps", np.round(0.3 + 0.7 * (0.3 + 0.06 * np.arange(10)), 2)),
 }
+# a scene's page query besides its name (the Hertz map: a slice of a shipped Hertz cube)
+QUERIES = {"map hertz (eps slice)": {"map_force": "hertz"}}
 
 
 def timed_moves(document: Document, move, count: int) -> tuple[list[float], int]:
-    """Milliseconds per move (the change and its serialised patch), and the patch's bytes."""
+    """Milliseconds per move (the change and its serialised patch), and the patch's bytes (the
+    median over the moves: an eps move's outline, and with it its patch, differs by slice)."""
     events: list = []
     document.on_change(events.append)
-    times, size = [], 0
+    times, sizes = [], []
     for i in range(count + 2):
         events.clear()
         start = time.perf_counter()
@@ -60,7 +64,8 @@ def timed_moves(document: Document, move, count: int) -> tuple[list[float], int]
         size = len(message.content_json) + sum(len(b.to_bytes()) for b in message._buffers)
         if i >= 2:
             times.append(1e3 * (time.perf_counter() - start))
-    return times, size
+            sizes.append(size)
+    return times, round(statistics.median(sizes))
 
 
 def scene_moves(scene: str, count: int, stack: dict[str, str]) -> tuple[list[float], int]:
@@ -68,7 +73,7 @@ def scene_moves(scene: str, count: int, stack: dict[str, str]) -> tuple[list[flo
 
     document = Document()
     with set_curdoc(document):
-        explorer = Explorer({"scene": scene.split()[0], **stack})
+        explorer = Explorer({"scene": scene.split()[0], **stack, **QUERIES.get(scene, {})})
         explorer.page().server_doc(document)
     name, values = MOVES[scene]
 
@@ -113,7 +118,7 @@ def main() -> None:
     rows = [("baseline (10-point line)", *baseline_moves(args.moves))]
     stack = {"N": str(args.balls), "force": args.force}
     rows += [(scene, *scene_moves(scene, args.moves, stack)) for scene in args.scenes]
-    print(f"server CPU per slider move, median of {args.moves} (ms), and the patch sent (bytes)")
+    print(f"server CPU per slider move and the patch sent, medians of {args.moves} (ms, bytes)")
     for label, times, size in rows:
         print(f"{label:26s} {statistics.median(times):7.1f} ms {size:9d} B")
 

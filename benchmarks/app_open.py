@@ -7,6 +7,7 @@ is a page with one slider and a 10-point line. Medians of ``--pages`` pages afte
 pages; CPU time of the process (``time.process_time``).
 
     .venv/bin/python benchmarks/app_open.py [--pages 10] [--scene drop closeup] [--profile drop]
+        [--query map_force=hertz]
 
 Bokeh is set up as the server sets it up (``app_hooks.bokeh_as_served``: its defaults cached per
 class, no per-session diagnostics) unless ``--bokeh-as-shipped``.
@@ -163,6 +164,9 @@ def main() -> None:
     parser.add_argument("--pages", type=int, default=10)
     parser.add_argument("--scene", nargs="*", default=list(SCENES))
     parser.add_argument("--present", action="store_true", help="presentation mode (?present=1)")
+    parser.add_argument(
+        "--query", nargs="*", default=[], help="more of the URL query, as key=value"
+    )
     parser.add_argument("--profile", help="profile the pages of this scene instead")
     parser.add_argument("--served", action="store_true", help="from twoball serve, one by one")
     parser.add_argument(
@@ -189,6 +193,7 @@ def main() -> None:
     warmup.warm_up()  # compiled kernels, as a running server has them
     exempt_the_server_from_collection()  # as the server does after start-up
     extra = {"present": "1"} if args.present else {}
+    extra.update(item.split("=", 1) for item in args.query)
     if args.profile:
         query = {"scene": args.profile, **extra}
         measure(explorer_page, query, 1)

@@ -65,23 +65,24 @@ def on_screen(scene: MapScene):
 
 def pixels_of(cube, eps: float, variable: str, drop=None) -> np.ndarray:
     """The slice's ``variable`` as the map should show it, found here again: rows tau_ratio,
-    columns mu, each pixel the cell nearest its centre in log10 (the map cube's axes are
-    evenly spaced in log10, one pixel a cell; the Hertz cubes' are not, and get more)."""
+    columns mu; the map cube's axes are evenly spaced in log10, one pixel a cell; the Hertz
+    cubes' are not, and are drawn one rectangle a cell: their values flattened, rows
+    tau_ratio (tests/app/test_app_map_cells.py checks where each rectangle lies)."""
     shown = cube[variable].sel(eps=eps) if drop is None else drop[variable]
     if variable in ("h2_over_h1", "h1_over_icm"):  # (no ratio where an apex is below 0)
         shown = shown.where(shown > 0)
-    centres = {}
-    for axis in ("mu", "tau_ratio"):
-        logs = np.log10(cube[axis].values)
-        steps = np.diff(logs)
-        if np.allclose(steps, steps[0], rtol=1e-6):
-            centres[axis] = logs
-        else:
-            count = min(400, int(np.ceil((logs[-1] - logs[0]) / steps.min())) + 1)
-            centres[axis] = np.linspace(logs[0], logs[-1], count)
-        nearest = np.abs(np.subtract.outer(centres[axis], logs)).argmin(axis=1)
-        shown = shown.isel({axis: nearest})
-    return shown.transpose("tau_ratio", "mu").values.astype(np.float32)
+    shown = shown.transpose("tau_ratio", "mu").values.astype(np.float32)
+    logs = [np.log10(cube[axis].values) for axis in ("mu", "tau_ratio")]
+    if all(np.allclose(np.diff(v), np.diff(v)[0], rtol=1e-6) for v in logs):
+        return shown
+    return shown.ravel()
+
+
+def values_on_screen(scene: MapScene) -> np.ndarray:
+    """The values the map's figure holds: its image, or its cells' (the Hertz cubes')."""
+    if scene._cell_source is not None:
+        return scene._cell_source.data["value"]
+    return scene._image_source.data["image"][0]
 
 
 def colour_range(values: np.ndarray, variable: str) -> tuple[float, float]:
@@ -163,7 +164,7 @@ def sent(scene: MapScene) -> dict:
     """What the figure on screen holds now."""
     return {
         "looks": looks(on_screen(scene)),
-        "image": scene._image_source.data["image"][0],
+        "image": values_on_screen(scene),
         "range": (scene._colour_mapper.low, scene._colour_mapper.high),
     }
 
@@ -206,8 +207,9 @@ def test_the_hertz_map_takes_its_slices_the_same_way():
 
 def test_another_cube_s_grid_gets_a_figure_of_its_own():
     """The Hertz cubes' axes are not the map cube's: the linear map's figure cannot take their
-    slice, and a new figure spans their grid, its image placed half a pixel beyond the outer
-    cells' centres."""
+    slice, and a new figure spans their grid, from the outer cells' values (as the image was
+    drawn, half a pixel beyond them); the linear map's image again lies half a cell beyond
+    its outer cells' centres."""
     explorer, scene = map_on_screen({"eps": "0.6"})
     linear = on_screen(scene)
     explorer.state.map_force = "hertz"
@@ -215,11 +217,16 @@ def test_another_cube_s_grid_gets_a_figure_of_its_own():
     assert hertz is not linear
     assert_shows_its_slice(scene)
     cube = shown_cube(scene.slice_cube)
-    for axis, corner, size, span in (("mu", "x", "dw", hertz.x_range),
-                                     ("tau_ratio", "y", "dh", hertz.y_range)):  # fmt: skip
+    for axis, span in (("mu", hertz.x_range), ("tau_ratio", hertz.y_range)):
         logs = np.log10(cube[axis].values)
-        pixels = scene._image_source.data["image"][0].shape[1 if axis == "mu" else 0]
-        half = (logs[-1] - logs[0]) / (pixels - 1) / 2
+        assert (span.start, span.end) == pytest.approx((logs[0], logs[-1]))
+    explorer.state.map_force = "linear"
+    back = on_screen(scene)
+    assert back is not hertz and scene._cell_source is None
+    for axis, corner, size, span in (("mu", "x", "dw", back.x_range),
+                                     ("tau_ratio", "y", "dh", back.y_range)):  # fmt: skip
+        logs = np.log10(map_cube()[axis].values)
+        half = (logs[1] - logs[0]) / 2
         (start,), (width,) = (scene._image_source.data[k] for k in (corner, size))
         assert start == pytest.approx(logs[0] - half) and width == pytest.approx(
             logs[-1] - logs[0] + 2 * half)  # fmt: skip
@@ -385,9 +392,9 @@ def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
     assert "linear" not in scene._note() or scene.state.map_force == "hertz"
     assert url_query(explorer.state)["map_force"] == "hertz"
     assert read_query(url_query(explorer.state), explorer.state)[0]["map_force"] == "hertz"
-    # every pixel of the image is one of the slice's cells (none interpolated)
-    shown = scene._image_source.data["image"][0]
-    assert np.isin(shown[np.isfinite(shown)], values.values).all()
+    # every rectangle is one of the slice's cells (none interpolated)
+    shown = scene._cell_source.data["value"]
+    assert shown.size == values.size and np.isin(shown, values.values.astype(np.float32)).all()
     # a drop nearer H = 100: the other cube; a click still sets mu and tau_ratio
     explorer.state.height = 300.0
     scene.current()

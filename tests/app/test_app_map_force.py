@@ -10,6 +10,7 @@ import re
 import numpy as np
 import pytest
 from appdriver import (
+    deep_query,
     fingerprint,
     open_page,
     page_query,
@@ -162,6 +163,54 @@ def test_the_map_s_axes_label_decades_and_zoomed_1_2_5(browser, app_server):
         assert labels == ["0.001", "", "", "0.01", "", "", "0.1", "", "", "1"], labels
         zoomed = [math.log10(v) for v in (0.01, 0.02, 0.05, 0.1, 0.2)]
         assert page.evaluate(TICK_LABELS_JS, zoomed) == ["0.01", "0.02", "0.05", "0.1", "0.2"]
+        assert errors == []
+    finally:
+        context.close()
+
+
+# where a point of the Hertz map (log10 mu, log10 tau_ratio) lies in the page, in px
+CELL_POINT_JS = """([x, y]) => {
+  const view = [...Bokeh.index.all_views()].find((v) => v.model.constructor.__name__ === "Figure"
+    && v.model.renderers.some((r) => r.glyph && r.glyph.constructor.__name__ === "Quad"));
+  const box = view.el.getBoundingClientRect();
+  return [box.left + view.frame.x_scale.compute(x), box.top + view.frame.y_scale.compute(y)];
+}"""
+
+
+def test_the_hertz_map_s_cells_take_an_eps_move_and_hover(browser, app_server, artifacts):
+    """The Hertz map's rectangles (one a cell, app/map_slices.py ``drawn_as_cells``): an eps
+    move gives them the new slice's values, read here from the cube, their edges kept; the
+    hover over a cell gives its mu, tau_d/tau_f and value."""
+    import math
+
+    import twoball
+
+    base, _ = app_server
+    folder = artifacts / "map_force"
+    folder.mkdir(exist_ok=True)
+    context, page, errors = open_page(browser, f"{base}/app?scene=map&map_force=hertz&eps=0.6")
+    cube = twoball.load_cube("hertz-h1e4")
+    try:
+        expect(page.get_by_text("Hertz length unit").first).to_be_visible(timeout=60_000)
+        (before,) = sources_with(page, "left", "right", "bottom", "top", "value")
+        assert press_slider(page, "eps", key="End") > 0
+        eps = nearest_eps(float(page.locator(".bk-slider-value").first.inner_text()), "hertz-h1e4")
+        expect(page.get_by_text(f"at eps = {eps:g} (nearest").first).to_be_visible()
+        page.wait_for_timeout(500)
+        (after,) = sources_with(page, "left", "right", "bottom", "top", "value")
+        for edge in ("left", "right", "bottom", "top"):
+            assert after[edge] == before[edge]
+        want = cube["h2_over_h1"].sel(eps=eps).transpose("tau_ratio", "mu").values.ravel()
+        want = np.where(want > 0, want, np.nan).astype(np.float32)
+        np.testing.assert_array_equal(np.array(after["value"], dtype=np.float32), want)
+        mu, tau = float(cube["mu"][7]), float(cube["tau_ratio"][12])
+        page.mouse.move(*page.evaluate(CELL_POINT_JS, [math.log10(mu), math.log10(tau)]))
+        value = float(cube["h2_over_h1"].sel(eps=eps, mu=mu, tau_ratio=tau))
+        tip = f"mu:\t{mu:.3g}\ntau_d/tau_f:\t{tau:.3g}\nh2 / h1:\t{value:.3f}"
+        page.wait_for_timeout(800)
+        tips = [t["text"] for t in deep_query(page, "[class*=tooltip]") if t["visible"]]
+        assert tip in tips, tips
+        page.screenshot(path=folder / "map_hertz_cells_hover.png")
         assert errors == []
     finally:
         context.close()
