@@ -176,22 +176,18 @@ def follow_log_sliders(sliders: dict[str, pn.widgets.Widget], state: ExplorerSta
             slider.param.update(value=shown, value_throttled=shown)
 
 
-def within_range(convert: Callable[[float], float], digits: int) -> Callable[[float], str]:
-    """A drop height H as text in the units ``convert`` gives, to ``digits`` significant digits
-    or as many more as it takes for the text, typed back, to be within the app's range: the
-    highest drop in metres, 9,948.975 m, showed as 9.95e+03, and that, typed back, was refused
-    as above the range (a helper's trial)."""
+def height_within_range(height: float, convert: Callable[[float], float], digits: int) -> str:
+    """The drop height H as text in the units ``convert`` gives, to ``digits`` significant
+    digits or as many more as it takes for the text, typed back, to be within the app's range:
+    the highest drop in metres, 9,948.975 m, showed as 9.95e+03, and that, typed back, was
+    refused as above the range (a helper's trial)."""
     low, high = (convert(end) for end in app_range("height"))
-
-    def shown(height: float) -> str:
-        value = convert(height)
-        for more in range(digits, 18):
-            text = f"{value:.{more}g}"
-            if low <= float(text) <= high:
-                return text
-        return repr(value)
-
-    return shown
+    value = convert(height)
+    for more in range(digits, 18):
+        text = f"{value:.{more}g}"
+        if low <= float(text) <= high:
+            return text
+    return repr(value)
 
 
 def on_a_phone() -> bool:
@@ -485,10 +481,8 @@ class Controls(Built):
             # metres to three digits (the default H read 0.994898 m), H to six; a height typed
             # stays as typed while it is the drop's
             if not self._shows_height(height.value):
-                shown = (
-                    within_range(presets.metres_from_height, 3) if si else within_range(float, 6)
-                )
-                height.value = shown(s.height)
+                convert, digits = (presets.metres_from_height, 3) if si else (float, 6)
+                height.value = height_within_range(s.height, convert, digits)
         # set only when changed: param's update reads every parameter of the widget first
         # (0.3 ms at every slider move, for inputs that rarely change)
         text = "" if s.eps12 is None else f"{s.eps12:.6g}"

@@ -211,14 +211,13 @@ def slice_image(
     apex below 0, NaN), and its colour limits: ``limits`` (a shipped cube's, the same for all
     its slices: :func:`cube_colour_limits`), else the slice's own (:func:`colour_limits`)."""
     values = slice_[variable].transpose("tau_ratio", "mu").values
-    shown = on_log_grid(slice_, shown_values(slice_, variable))
+    shown = on_log_grid(slice_, shown_values(values, variable))
     return shown, limits or colour_limits(values, variable)
 
 
-def shown_values(slice_: xr.Dataset, variable: str) -> np.ndarray:
-    """The slice's ``variable`` as the map colours it: rows tau_ratio, columns mu; a ratio's
-    without a value (an apex below 0: grey, NO_RATIO) NaN."""
-    values = slice_[variable].transpose("tau_ratio", "mu").values
+def shown_values(values: np.ndarray, variable: str) -> np.ndarray:
+    """A slice's ``variable`` (``values``: rows tau_ratio, columns mu) as the map colours it: a
+    ratio's without a value (an apex below 0: grey, NO_RATIO) NaN."""
     if variable in RATIO_CENTRES:  # (a ratio with an apex below 0 is none: NO_RATIO)
         return np.where(values > 0, values, np.nan)
     return values
@@ -230,7 +229,7 @@ def slice_cells(
     """The slice's ``variable`` one value per cell, in the order of :func:`cell_frame` (rows
     tau_ratio, columns mu, flattened), and its colour limits as :func:`slice_image`'s."""
     values = slice_[variable].transpose("tau_ratio", "mu").values
-    return shown_values(slice_, variable).ravel(), limits or colour_limits(values, variable)
+    return shown_values(values, variable).ravel(), limits or colour_limits(values, variable)
 
 
 def cell_frame(cube: xr.Dataset) -> dict[str, np.ndarray]:
