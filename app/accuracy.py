@@ -185,7 +185,7 @@ class AccuracyScene(Scene):
         if request != self._request:
             return  # superseded by a newer drop
         self.rows = rows
-        self.param.trigger("revision")
+        self.revision = True
         self.status.object = ""
         self._dim({"opacity": "1"})
 

@@ -218,7 +218,7 @@ def announce_moves(slider: pn.widgets.Widget, state: ExplorerState) -> None:
     value go (:class:`Controls`), as at a release of the sidebar's two-ball sliders. (A
     slider made by ``from_param`` is also released when the state moves it: as the sidebar's
     eps, which always cleared them then.)"""
-    slider.param.watch(lambda event: state.param.trigger("slider_moved"), "value_throttled")
+    slider.param.watch(lambda event: setattr(state, "slider_moved", True), "value_throttled")
 
 
 class PhoneSliders(Built):
@@ -245,8 +245,8 @@ class PhoneSliders(Built):
 
     def _moved(self, name: str, value: float | None) -> None:
         if not self._syncing and value is not None:
-            self.state.param.trigger("slider_moved")
-            self.state.param.update(**{name: 10.0**value})
+            self.state.slider_moved = True
+            setattr(self.state, name, 10.0**value)
 
     def _follow(self, *events: param.parameterized.Event) -> None:
         self._syncing = True
@@ -381,9 +381,9 @@ class Controls(Built):
         changes nothing."""
         if self._syncing or value is None:
             return
-        self.state.param.trigger("slider_moved")  # (the messages go)
+        self.state.slider_moved = True  # (the messages go)
         if name in LOG_SLIDERS:
-            self.state.param.update(**{name: 10.0**value})
+            setattr(self.state, name, 10.0**value)
 
     def _apply_preset(self, event: param.parameterized.Event) -> None:
         """A preset chosen (its drop set, in metres), or shown for a link that names it

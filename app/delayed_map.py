@@ -456,7 +456,7 @@ class MapScene(Scene):
         position = self._star_position()
         if self.star is not None and dict(self.star.data) != position:
             self.star.data = position
-        self.param.trigger("moved")
+        self.moved = True
 
     @param.depends("revision", "variable", watch=True)
     def _draw_slice(self) -> None:

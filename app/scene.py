@@ -171,7 +171,7 @@ class Scene(Built):
         """Fire ``revision``, every change it makes to the page sent as one message (each
         change was a message of its own: 16 for a move of the drop scene)."""
         with pn.io.hold():
-            self.param.trigger("revision")
+            self.revision = True
 
     def current(self) -> None:
         """Recompute what the scene shows if its inputs changed since the last update; every
