@@ -33,6 +33,7 @@ from twoball import warmup
 
 from .accuracy import measure_ahead
 from .bokeh_defaults import cache_property_defaults, themed_values_read_directly
+from .bokeh_messages import references_made_when_sent, small_arrays_sent_inline
 from .map_slices import map_cube
 from .scenes import SCENE_REGISTRY
 
@@ -150,6 +151,8 @@ def bokeh_as_served() -> None:
     synced_parameters_listed_once()
     loading_style_sent_once_per_page()
     panel_debug_messages_not_made()
+    small_arrays_sent_inline()
+    references_made_when_sent()
 
 
 def panel_debug_messages_not_made() -> None:

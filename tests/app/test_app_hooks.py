@@ -469,3 +469,81 @@ def test_a_page_kinds_html_is_panels_own_with_its_resources_worked_out_once(monk
             assert [html(session, f"token-{i}", mode) for mode in ("server", "cdn")] == expected[i]
         assert style_sheet_addresses(session) == addresses[i], query
     assert len(counted) == 2 * len(queries)  # once per document and mode, not per request
+
+
+def test_small_arrays_go_inline_and_decode_as_bokehs_own_buffers(monkeypatch):
+    """app/bokeh_messages.small_arrays_sent_inline: an array of at most INLINE_BYTES goes in
+    the message's JSON, a larger one as a buffer; Bokeh's own reader gives back both arrays,
+    values and dtypes, as it does from Bokeh's own message (every array a buffer)."""
+    import numpy as np
+    from bokeh.core.serialization import Deserializer, Serializer
+
+    from app.bokeh_messages import INLINE_BYTES, small_arrays_sent_inline
+
+    monkeypatch.setattr(Serializer, "_encode_ndarray", Serializer._encode_ndarray)  # restored
+    rng = np.random.default_rng(3)
+    data = {
+        "apex_t": rng.random(3),
+        "edge": rng.random(INLINE_BYTES // 8),  # (exactly the limit: inline)
+        "counts": np.arange(5, dtype=np.int32),
+        "curve": rng.random(INLINE_BYTES // 8 + 1),  # (one more: a buffer)
+        "image": rng.random((40, 30)).astype(np.float32),
+    }
+    own = Serializer().serialize(data)
+    assert len(own.buffers) == len(data)
+    small_arrays_sent_inline()
+    small_arrays_sent_inline()  # (idempotent)
+    sent = Serializer().serialize(data)
+    assert len(sent.buffers) == 2  # the curve and the image
+    assert all(isinstance(sent.content["entries"][i][1]["array"]["data"], str) for i in (0, 1, 2))
+    for message in (own, sent):
+        decoded = Deserializer().deserialize(message)
+        for name, array in data.items():
+            assert decoded[name].dtype == array.dtype and decoded[name].shape == array.shape
+            np.testing.assert_array_equal(decoded[name], array)
+    # a serializer asked for no buffers (a standalone file) still gets none
+    assert Serializer(deferred=False).serialize(data).buffers == []
+
+
+def test_references_made_when_sent_give_bokehs_own_patch(monkeypatch):
+    """app/bokeh_messages.references_made_when_sent: a patch that changes a model the page has,
+    adds a new one and refers to an old one from it is Bokeh's own message, and leaves the same
+    models counted as new (not yet sent) in the document."""
+    import json
+
+    from bokeh.core.serialization import Serializer
+    from bokeh.document import Document
+    from bokeh.models import ColumnDataSource, Range1d, Title
+    from bokeh.plotting import figure
+    from bokeh.protocol import Protocol
+
+    from app.bokeh_messages import references_made_when_sent
+
+    for name in ("__init__", "has_ref", "get_ref", "add_ref"):
+        monkeypatch.setattr(Serializer, name, getattr(Serializer, name))  # restored after
+    document = Document()
+    plot = figure(x_range=Range1d(0, 1))
+    source = ColumnDataSource({"x": [0.0, 1.0], "y": [1.0, 2.0]})
+    plot.line("x", "y", source=source)
+    document.add_root(plot)
+    document.models.flush_synced()  # (the page has them all)
+    events = []
+    document.on_change(lambda event: events.append(event))
+    plot.x_range.end = 2.0
+    source.data = {"x": [0.0, 2.0], "y": [3.0, 4.0]}
+    plot.title = Title(text="new")  # a new model
+    plot.extra_y_ranges = {"right": plot.x_range}  # an old one named again
+    new_before = set(document.models._new_models)
+    assert new_before  # (the title)
+
+    def patch() -> tuple[dict, set]:
+        document.models._new_models = set(new_before)
+        message = Protocol().create("PATCH-DOC", events)
+        return json.loads(message.content_json), set(document.models._new_models)
+
+    own = patch()
+    references_made_when_sent()
+    references_made_when_sent()  # (idempotent)
+    assert Serializer.__init__.__wrapped__ is not None
+    assert patch() == own
+    assert plot.x_range.id in json.dumps(own[0])
