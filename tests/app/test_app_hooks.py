@@ -547,3 +547,53 @@ def test_references_made_when_sent_give_bokehs_own_patch(monkeypatch):
     assert Serializer.__init__.__wrapped__ is not None
     assert patch() == own
     assert plot.x_range.id in json.dumps(own[0])
+
+
+def test_read_only_lifted_where_set_behaves_as_panels_own(monkeypatch):
+    """app_hooks.read_only_lifted_where_set: a browser's change to a slider (value and the
+    constant value_throttled) is applied, value_throttled is constant again after, and a
+    watcher of a parameter's ``constant`` sees the same events as under Panel's own
+    ``edit_readonly``."""
+    import panel.reactive
+    import panel.widgets.slider
+    import param
+
+    from app.app_hooks import read_only_lifted_where_set
+
+    monkeypatch.setattr(panel.reactive, "edit_readonly", panel.reactive.edit_readonly)
+    monkeypatch.setattr(panel.widgets.slider, "edit_readonly", panel.widgets.slider.edit_readonly)
+
+    class Watched(param.Parameterized):
+        fixed = param.Number(1.0, constant=True)
+        free = param.Number(2.0)
+        free_watched = param.Number(3.0)
+        only_read = param.Number(4.0, readonly=True)
+
+    def run() -> tuple:
+        slider = pn.widgets.FloatSlider(start=0, end=1, value=0.5)
+        slider._process_events({"value": 0.25, "value_throttled": 0.25})
+        seen = []
+        watched = Watched()
+        watched.param.watch(seen.append, ["free_watched", "fixed"], what="constant")
+        with panel.reactive.edit_readonly(watched):
+            watched.fixed, watched.only_read, watched.free = 5.0, 6.0, 7.0
+        events = [(e.name, e.what, e.old, e.new) for e in seen]
+        constant = {p.name: (p.constant, p.readonly) for p in watched.param.objects().values()}
+        with pytest.raises(TypeError):
+            watched.fixed = 8.0
+        throttled = slider.param["value_throttled"].constant
+        return (
+            slider.value,
+            slider.value_throttled,
+            throttled,
+            {k: v for k, v in watched.param.values().items() if k != "name"},
+            events,
+            constant,
+        )
+
+    own = run()
+    read_only_lifted_where_set()
+    read_only_lifted_where_set()  # (idempotent)
+    assert panel.reactive.edit_readonly.where_set
+    assert run() == own
+    assert own[:2] == (0.25, 0.25) and own[4]  # (a constant watcher saw the lift)
