@@ -13,7 +13,7 @@ from twoball import jit
 
 from .controls import Controls
 from .lesson import Lesson
-from .scene import MODEL_PARAMETERS, Built, Scene, alert, join
+from .scene import MODEL_PARAMETERS, PAGE_DESIGN, Built, Scene, alert, join
 from .scenes import SCENE_REGISTRY, SCENES
 from .state import ExplorerState, read_query, url_query
 
@@ -213,6 +213,7 @@ class Explorer(Built):
         from Google, and the app must not reach the network."""
         template = ClassroomTemplate(
             title="Two-ball bounce explorer",
+            design=PAGE_DESIGN,  # (a text pane's own: app.scene.Text)
             sidebar=[self.sidebar()],
             main=[self],
             sidebar_width=330,
