@@ -103,11 +103,8 @@ class CloseUpScene(Scene):
     @param.depends("revision", watch=True)
     def _draw(self, *events: param.parameterized.Event) -> None:
         """Send the current collision to the figures (only while on screen)."""
-        if self.active:
-            self._fill()
-
-    def _fill(self) -> None:
-        """The current collision into the figures' data."""
+        if not self.active:
+            return
         self.current()
         units = units_named(self.state.units)
         tr = self.result.trajectory
@@ -193,11 +190,7 @@ class CloseUpScene(Scene):
         return "\n".join(lines)
 
     def layout(self) -> pn.viewable.Viewable:
-        # built to be shown (a tab chosen): the figures reach the browser with their data, not
-        # still inactive and empty, when their auto ranges had nothing to fit and Bokeh warned
-        # "could not set initial ranges" 9 times (no text pane here is set by the update:
-        # the table follows ``active``, app.scene.Text)
-        self._fill()
+        self._draw()  # (on screen already: Explorer.scene)
         panes = [
             pn.pane.Bokeh(fig, sizing_mode="stretch_width")
             for fig in (self.positions, self.floor_force, self.ball_force)

@@ -13,7 +13,7 @@ from twoball import jit
 
 from .controls import Controls
 from .lesson import Lesson
-from .scene import MODEL_PARAMETERS, Built, Scene, alert, join
+from .scene import MODEL_PARAMETERS, PAGE_DESIGN, Built, Scene, alert, join
 from .scenes import SCENE_REGISTRY, SCENES
 from .state import ExplorerState, read_query, url_query
 
@@ -87,14 +87,18 @@ class Explorer(Built):
         self.tabs.param.watch(self._tab_chosen, "active")
         self.stage = self.lesson.stage()  # a step's question, in place of its covered scene
         self._cover()
-        shown = self.scene(self.state.scene)
+        shown = self.scene(self.state.scene)  # (on screen: Explorer.scene)
         self.controls.show_scene_controls(shown.own_controls())
-        shown.active = True
 
     def scene(self, name: str) -> Scene:
         """The scene ``name``, built (and put into its tab) the first time it is asked for."""
         if name not in self.scenes:
             self.scenes[name] = SCENE_REGISTRY[name].viewer_class()(state=self.state)
+            # on screen before its tab gets it: its layout draws its data into its figures,
+            # which reach the browser with them (sent empty, a figure's auto ranges had nothing
+            # to fit: "could not set initial ranges" in the console, 3 on opening the Drop or
+            # the Stack from its tab); its text panes are styled from the start (app.scene.Text)
+            self.scenes[name].active = name == self.state.scene
             # on a projector the teacher says what the scene shows: its plots get the room
             caption = [] if self.state.presentation else [self._caption(name)]
             self._holders[name].extend([*caption, self.scenes[name]])
@@ -213,6 +217,7 @@ class Explorer(Built):
         from Google, and the app must not reach the network."""
         template = ClassroomTemplate(
             title="Two-ball bounce explorer",
+            design=PAGE_DESIGN,  # (a text pane's own: app.scene.Text)
             sidebar=[self.sidebar()],
             main=[self],
             sidebar_width=330,

@@ -206,6 +206,11 @@ def answers_pending(source) -> None:
     source.js_on_change("data", CustomJS(code=ANSWERED_JS))
 
 
+# The page's design (explorer.ClassroomTemplate, a BootstrapTemplate): a Text pane has it as its
+# own, so its model is made with the design's style sheets for a component of its own (below)
+PAGE_DESIGN = pn.theme.Bootstrap
+
+
 class Text(pn.pane.Markdown):
     """A Markdown pane whose change sends its new text alone.
 
@@ -213,20 +218,20 @@ class Text(pn.pane.Markdown):
     style sheets among them, each resolved from a file path) and set them on the model again:
     the drop scene's summary took 44 % of the scene's update, a tenth of a slider move's server
     CPU (py-spy, 200 served moves). Only the text depends on what changes here (the object, or
-    how it is rendered: Panel's ``_rerender_params``), so only the text is set, after a first
-    update of each model in full: that one also brings the design's style sheets, which a
-    pane's model does not have when it is made (without them the text stood 20 px lower)."""
+    how it is rendered: Panel's ``_rerender_params``), so only the text is set.
+
+    The pane has the page's design as its own (:data:`PAGE_DESIGN`): Panel makes its model with
+    the style sheets of a component styled on its own (Bootstrap's, the theme's), which the
+    template's pass then leaves alone; without a design of its own the template gave the model
+    fewer (the text stood 20 px lower), and Panel's update (which always adds them) brought them
+    after the page had loaded, an update of the whole pane and of the document's models."""
 
     def __init__(self, object=None, **params):
+        params.setdefault("design", PAGE_DESIGN)
         super().__init__(object, **params)
-        self._styled: set[str] = set()  # the models (by root ref) updated once in full
 
     def _update(self, ref: str, model) -> None:
-        if ref in self._styled:
-            model.text = self._transform_object(self.object)["object"]
-        else:
-            super()._update(ref, model)
-            self._styled.add(ref)
+        model.text = self._transform_object(self.object)["object"]
 
 
 class AnsweringMarkdown(Text):

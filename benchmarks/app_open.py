@@ -14,7 +14,8 @@ class, no per-session diagnostics) unless ``--bokeh-as-shipped``.
 
 ``--served``: the same pages opened one at a time from ``twoball serve --num-procs 1`` by a
 protocol client (tools/bokehclient.py), the server's CPU per page read from /proc (after each
-page, a second for its onload callbacks and the URL's rewrite).
+page, a second for its onload callbacks and the URL's rewrite), and the messages (PATCH-DOC) a
+page got in that second.
 """
 
 from __future__ import annotations
@@ -125,8 +126,9 @@ def measure(build, query: dict[str, str], pages: int) -> tuple[dict[str, float],
     return parts, runs[-1][1], runs[-1][2]
 
 
-def served(scene: str, pages: int) -> list[float]:
-    """Server CPU (ms) of each of ``pages`` pages opened one after another."""
+def served(scene: str, pages: int) -> tuple[list[float], list[int]]:
+    """Server CPU (ms) of each of ``pages`` pages opened one after another, and the messages
+    (PATCH-DOC) each page got after its document."""
     import asyncio
     import tempfile
 
@@ -136,12 +138,12 @@ def served(scene: str, pages: int) -> list[float]:
     from appdriver import cpu_seconds, free_port
     from bokehclient import PageClient
 
-    async def run() -> list[float]:
+    async def run() -> tuple[list[float], list[int]]:
         port = free_port()
         log = Path(tempfile.mkdtemp()) / "server.log"
         process = app_load.start_server(app_load.twoball_serve(port, 1), port, log, 1, True)
         url = f"http://127.0.0.1:{port}/app?scene={scene}"
-        costs = []
+        costs, patches = [], []
         try:
             for index in range(pages + 2):  # (the first two: the process's first pages)
                 start = cpu_seconds(process.pid)
@@ -150,11 +152,12 @@ def served(scene: str, pages: int) -> list[float]:
                 await asyncio.sleep(1.0)
                 if index >= 2:
                     costs.append(1e3 * (cpu_seconds(process.pid) - start))
+                    patches.append(len(client.patches))
                 await client.close()
         finally:
             process.terminate()
             process.wait(timeout=30)
-        return costs
+        return costs, patches
 
     return asyncio.run(run())
 
@@ -177,10 +180,11 @@ def main() -> None:
     args = parser.parse_args()
     if args.served:
         for scene in args.scene:
-            costs = served(scene, args.pages)
+            costs, patches = served(scene, args.pages)
             print(
                 f"{scene}: served, server CPU per page, median of {args.pages}: "
-                f"{statistics.median(costs):.0f} ms (all: {', '.join(f'{c:.0f}' for c in costs)})"
+                f"{statistics.median(costs):.0f} ms (all: {', '.join(f'{c:.0f}' for c in costs)}); "
+                f"messages after the document: {statistics.median(patches):.0f}"
             )
         return
     pn.extension()

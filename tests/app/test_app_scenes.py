@@ -905,28 +905,66 @@ def test_an_apex_below_zero_is_explained_not_shown_as_a_missing_bounce():
 
 def test_a_text_pane_sends_what_panels_markdown_pane_sends():
     """app.scene.Text sets only the model's text on a change: the same text Panel's Markdown
-    pane renders for the same object, and its other properties still follow the pane."""
+    pane (of the page's design) renders for the same object, and the same style sheets, which
+    the text's model has from the start; its other properties still follow the pane."""
     import panel as pn
 
-    from app.scene import Text
+    from app.scene import PAGE_DESIGN, Text
 
-    text, markdown = Text("**one**"), pn.pane.Markdown("**one**")
+    text, markdown = Text("**one**"), pn.pane.Markdown("**one**", design=PAGE_DESIGN)
     models = [pane.get_root(Document()) for pane in (text, markdown)]
 
     def sheets(model) -> list[str]:
         return [getattr(sheet, "url", sheet) for sheet in model.stylesheets]
 
+    assert any(url.endswith("bootstrap.min.css") for url in sheets(models[0]))
     for new in ("**two** and *three*", "| a | b |\n| --- | --- |\n| 1 | 2 |", ""):
+        assert sheets(models[0]) == sheets(models[1])
         text.object = markdown.object = new
         assert models[0].text == models[1].text
-        # the design's style sheets too, which the first update brings (the text stood 20 px
-        # lower without them)
         assert sheets(models[0]) == sheets(models[1])
     assert "table" not in models[0].text  # (the last object, empty, was rendered too)
     text.object = "| a | b |\n| --- | --- |\n| 1 | 2 |"
     assert "&lt;table&gt;" in models[0].text  # (Panel sends the HTML escaped)
     text.styles = {"opacity": "0.5"}
     assert models[0].styles == {"opacity": "0.5"}
+
+
+@pytest.mark.parametrize("scene", SCENES)
+@pytest.mark.parametrize("present", ["0", "1"])
+def test_a_page_s_text_panes_have_their_style_sheets_in_its_first_document(scene, present):
+    """Each text pane (app.scene.Text) of a page, that of its URL's scene and that of a scene
+    then opened from its tab, has in the page's document the style sheets Panel's full update
+    would give it (its design's for a component of its own: Bootstrap's and the theme's), in
+    that order. The template's pass gave it fewer (the text stood 20 px lower until a full
+    update after the page had loaded brought them)."""
+    from bokeh.models import ImportedStyleSheet
+    from panel.io.state import set_curdoc
+
+    from app.scene import Text
+
+    def named(sheets: list) -> list:
+        return [sheet.url if isinstance(sheet, ImportedStyleSheet) else sheet for sheet in sheets]
+
+    def checked(built) -> int:
+        """Checks the text panes of a scene just put into the page: how many models."""
+        count = 0
+        for pane in {id(p): p for p in built.__panel__().select(Text)}.values():
+            for model, _ in pane._models.values():
+                sheets = named(model.stylesheets)
+                assert any(str(url).endswith("/bootstrap.min.css") for url in sheets)
+                assert sheets == named(pane._get_properties(document)["stylesheets"])
+                count += 1
+        return count
+
+    document = Document()
+    with set_curdoc(document):
+        explorer = Explorer({"scene": scene, "present": present})
+        explorer.page().server_doc(document)
+        assert checked(explorer.scenes[scene]) >= 1
+        other = "stack" if scene != "stack" else "drop"
+        explorer.state.scene = other  # (its tab chosen)
+        assert checked(explorer.scenes[other]) >= 1
 
 
 def test_the_accuracy_plot_draws_each_measured_method_from_its_rows():

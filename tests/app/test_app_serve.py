@@ -120,6 +120,33 @@ def test_a_page_costs_only_the_scene_on_screen(two_processes, scene):
     run(check())
 
 
+@pytest.mark.parametrize("query", ["scene=drop", "scene=stack", "scene=drop&present=1"])
+def test_a_page_s_style_sheets_are_not_sent_again_after_it_has_loaded(two_processes, query):
+    """A page's text panes have their style sheets in its first document: once the page has
+    loaded, no message changes any model's style sheets. Each summary's first update (Panel's
+    whole pane, app.scene.Text) sent them again, 1.4 kB, and the server recomputed the
+    document's models for it; what the page still gets then is its text, its player's end and
+    its URL."""
+
+    async def check() -> None:
+        for _ in range(2):  # (a process's first page of a kind, then one from its kept session)
+            client = await opened(f"{two_processes.base}/app?{query}")
+            try:
+                await asyncio.sleep(1.5)  # (the page's onload callbacks, its URL's rewrite)
+                changed = [
+                    (event["model"]["id"], event["attr"])
+                    for patch in client.patches
+                    for event in patch.events
+                    if event.get("kind") == "ModelChanged"
+                ]
+                assert changed, "no patch after the page loaded (its URL is rewritten)"
+                assert [c for c in changed if c[1] == "stylesheets"] == [], changed
+            finally:
+                await client.close()
+
+    run(check())
+
+
 async def _answer(client: PageClient, sent: float, timeout: float = 30.0) -> list:
     """The patches that answered a move sent at ``sent`` (not the URL's rewrite 0.3 s later, nor
     the header's busy spinner), once the summary's new text has come."""
