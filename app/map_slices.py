@@ -20,6 +20,7 @@ from __future__ import annotations
 import functools
 import math
 import re
+from typing import NamedTuple
 
 import numpy as np
 import panel as pn
@@ -39,6 +40,8 @@ MOST_PIXELS = 400  # per axis, of a cube not evenly spaced in log10 (log_grid)
 SMALLEST_OUTLINED = 4  # cells: a delayed-rebound patch smaller than this is not outlined
 
 RATIO_CENTRES = {"h2_over_h1": 1.0, "h1_over_icm": 1.0}
+SHADES = 256  # the colours of a continuous scale (a ratio's, viridis): app/delayed_map.py
+NO_CODE = 65535  # the uint16 code of a cell without a value (:func:`encoded`)
 # whole numbers: coloured one colour each (:func:`count_palette`), not a gradient whose shades
 # between two counts stand for nothing
 COUNTS = ("contacts_first",)
@@ -203,16 +206,104 @@ def cube_colour_limits(name: str, variable: str) -> tuple[float, float]:
     return colour_limits(shown_cube(name)[variable].values, variable)
 
 
+class Coding(NamedTuple):
+    """How a slice's values travel to the browser: as uint16 codes (:func:`encoded`), code q
+    standing for ``origin + (q + 0.5) * step``, in log10 for a ratio (``logged``)."""
+
+    origin: float
+    step: float
+    logged: bool
+
+
+def colour_bands(variable: str, limits: tuple[float, float]) -> int:
+    """How many colours the map's scale of ``variable`` has between its colour limits: one a
+    count (:data:`COUNTS`), else :data:`SHADES`."""
+    return max(1, round(limits[1] - limits[0])) if variable in COUNTS else SHADES
+
+
+def coded_scale(values: np.ndarray, variable: str) -> np.ndarray:
+    """Values on the scale the map colours them on: log10 for a ratio (NaN where none, an
+    apex below 0: :func:`shown_values`), else the values (float64)."""
+    values = np.asarray(values, dtype=float)
+    if variable in RATIO_CENTRES:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(values > 0, np.log10(values), np.nan)
+    return values
+
+
+def value_coding(values: np.ndarray, variable: str, limits: tuple[float, float]) -> Coding:
+    """The coding of ``values`` (all that one figure shows: a cube's over all its eps) coloured
+    between ``limits``: the codes span the values' whole range (a hover reads outliers' own
+    values), and each colour band (:func:`colour_bands`) is a whole number of codes, as many
+    as fit into the 65535 codes, so that a code's value lies in the band of the value it codes
+    (every cell the colour its value had as float32). A ratio over 4.7 decades (the map cube's
+    h2/h1) gets steps of 7e-5 decades, its value within 1e-4; h2/H over 0 to 24, within 2e-4."""
+    scaled = coded_scale(values, variable)
+    finite = scaled[np.isfinite(scaled)]
+    low, high = coded_scale(np.asarray(limits), variable)
+    span = high - low if high > low else 1.0  # (one value alone: any step does)
+    first = min(low, float(finite.min())) if finite.size else low
+    last = max(low + span, float(finite.max())) if finite.size else low + span
+    bands = colour_bands(variable, limits)
+    # (two codes spare: an outlier's codes round outwards)
+    per_band = max(1, math.floor((NO_CODE - 2) * span / (bands * (last - first))))
+    step = span / (per_band * bands)
+    below = math.ceil((low - first) / step - 1e-9)
+    return Coding(origin=low - below * step, step=step, logged=variable in RATIO_CENTRES)
+
+
+def encoded(values: np.ndarray, variable: str, coding: Coding) -> np.ndarray:
+    """``values`` (a slice's :func:`shown_values`) as uint16 codes: NaN (no value) as
+    :data:`NO_CODE`, values beyond the codes' range (a coding too narrow for them: none of
+    the shipped cubes') clipped to its ends, which keep their colour."""
+    scaled = coded_scale(values, variable)
+    with np.errstate(invalid="ignore"):
+        codes = np.floor((scaled - coding.origin) / coding.step)
+    codes = np.clip(codes, 0, NO_CODE - 1)
+    return np.where(np.isfinite(scaled), codes, NO_CODE).astype(np.uint16)
+
+
+def decoded(codes: np.ndarray, coding: Coding) -> np.ndarray:
+    """The values codes stand for (as the browser decodes them: app/map_browser.py), NaN for
+    :data:`NO_CODE`."""
+    codes = np.asarray(codes)
+    scaled = coding.origin + (codes.astype(float) + 0.5) * coding.step
+    values = 10**scaled if coding.logged else scaled
+    return np.where(codes == NO_CODE, np.nan, values)
+
+
+@functools.cache  # (a variable of a cube read once per server)
+def cube_coding(name: str, variable: str) -> Coding:
+    """The coding of a shipped cube's ``variable``, the same for all its slices (as its colour
+    limits: :func:`cube_colour_limits`)."""
+    limits = cube_colour_limits(name, variable)
+    return value_coding(shown_cube(name)[variable].values, variable, limits)
+
+
 def slice_image(
-    slice_: xr.Dataset, variable: str, limits: tuple[float, float] | None = None
-) -> tuple[tuple, tuple[float, float]]:
-    """The slice's ``variable`` on the map's log grid (log10 mu, log10 tau_ratio, the values
-    with rows tau_ratio and columns mu: :func:`on_log_grid`; a ratio's without a value, an
-    apex below 0, NaN), and its colour limits: ``limits`` (a shipped cube's, the same for all
-    its slices: :func:`cube_colour_limits`), else the slice's own (:func:`colour_limits`)."""
-    values = slice_[variable].transpose("tau_ratio", "mu").values
-    shown = on_log_grid(slice_, shown_values(values, variable))
-    return shown, limits or colour_limits(values, variable)
+    slice_: xr.Dataset, variable: str, cube: str | None = None
+) -> tuple[tuple, tuple[float, float], Coding]:
+    """The slice's ``variable`` on the map's log grid (log10 mu, log10 tau_ratio, the codes
+    with rows tau_ratio and columns mu: :func:`on_log_grid`, :func:`encoded`), its colour
+    limits and coding: those of the shipped ``cube`` it is a slice of, the same for all its
+    slices (:func:`cube_colour_limits`, :func:`cube_coding`), else (a computed slice) its own
+    (:func:`colour_limits`, :func:`value_coding`)."""
+    codes, limits, coding = coded_slice(slice_, variable, cube)
+    return on_log_grid(slice_, codes), limits, coding
+
+
+def coded_slice(
+    slice_: xr.Dataset, variable: str, cube: str | None = None
+) -> tuple[np.ndarray, tuple[float, float], Coding]:
+    """The slice's ``variable`` as codes (rows tau_ratio, columns mu), its colour limits and
+    its coding, as :func:`slice_image` gives them."""
+    values = shown_values(slice_[variable].transpose("tau_ratio", "mu").values, variable)
+    if cube is None:
+        limits = colour_limits(values, variable)
+        coding = value_coding(values, variable, limits)
+    else:
+        limits, coding = cube_colour_limits(cube, variable), cube_coding(cube, variable)
+    return encoded(values, variable, coding), limits, coding
 
 
 def shown_values(values: np.ndarray, variable: str) -> np.ndarray:
@@ -224,26 +315,13 @@ def shown_values(values: np.ndarray, variable: str) -> np.ndarray:
 
 
 def slice_cells(
-    slice_: xr.Dataset, variable: str, limits: tuple[float, float] | None = None
-) -> tuple[np.ndarray, tuple[float, float]]:
-    """The slice's ``variable`` one value per cell, in the order of :func:`cell_frame` (rows
-    tau_ratio, columns mu, flattened), and its colour limits as :func:`slice_image`'s."""
-    values = slice_[variable].transpose("tau_ratio", "mu").values
-    return shown_values(values, variable).ravel(), limits or colour_limits(values, variable)
-
-
-def cell_frame(cube: xr.Dataset) -> dict[str, np.ndarray]:
-    """Every cell of a cube's (mu, tau_ratio) grid as a rectangle on the map's log axes: its
-    edges (``left``, ``right``, ``bottom``, ``top``: :func:`cell_edges`) and its own ``mu`` and
-    ``tau_ratio`` (for the hover); rows tau_ratio, columns mu, flattened (:func:`slice_cells`)."""
-    mu, tau = cube["mu"].values, cube["tau_ratio"].values
-    x, y = cell_edges(mu), cell_edges(tau)
-    shape = (tau.size, mu.size)
-    along_mu = {"left": x[:-1], "right": x[1:], "mu": mu}
-    along_tau = {"bottom": y[:-1], "top": y[1:], "tau_ratio": tau}
-    frame = {k: np.broadcast_to(v, shape).ravel() for k, v in along_mu.items()}
-    frame |= {k: np.broadcast_to(v[:, None], shape).ravel() for k, v in along_tau.items()}
-    return frame
+    slice_: xr.Dataset, variable: str, cube: str | None = None
+) -> tuple[np.ndarray, tuple[float, float], Coding]:
+    """The slice's ``variable`` one code per cell, rows tau_ratio, columns mu, flattened (the
+    browser places cell k at column k % mu.size, row k // mu.size: app/map_browser.py), its
+    colour limits and coding as :func:`slice_image`'s."""
+    codes, limits, coding = coded_slice(slice_, variable, cube)
+    return codes.ravel(), limits, coding
 
 
 # a cell whose delayed-rebound flag disagrees with the sign of log10(h2/h1) (a patch too small
