@@ -2,7 +2,9 @@
 computed, or a Hertz cube's) and agrees with the solver; a click sets mu and tau_ratio; an eps
 move sends the new slice into the figure on screen, and what it sends is the cube's slice
 (each pixel the cube's value at its mu and tau_ratio, the colour range computed here again, the
-outline crossing h2/h1 = 1 between grid points)."""
+outline crossing h2/h1 = 1 between grid points). The values travel as uint16 codes
+(app/map_browser.py): decoded here as the browser decodes them, each is the cube's to within
+half a code's step, and gets the colour its float value got."""
 
 from __future__ import annotations
 
@@ -12,13 +14,14 @@ import numpy as np
 import pytest
 from bokeh.document import Document
 from bokeh.events import Tap
-from bokeh.models import ColorBar, ColorMapper, GlyphRenderer, MultiLine
+from bokeh.models import ColorBar, ColorMapper, GlyphRenderer, MultiLine, Quad
 from bokeh.palettes import viridis
 
 import twoball
 from app.delayed_map import MapScene
 from app.explorer import Explorer
 from app.map_slices import map_cube, nearest_eps, shown_cube
+from app.state import MAP_COLOURS
 
 
 def rendered(query: dict) -> Explorer:
@@ -71,18 +74,71 @@ def pixels_of(cube, eps: float, variable: str, drop=None) -> np.ndarray:
     shown = cube[variable].sel(eps=eps) if drop is None else drop[variable]
     if variable in ("h2_over_h1", "h1_over_icm"):  # (no ratio where an apex is below 0)
         shown = shown.where(shown > 0)
-    shown = shown.transpose("tau_ratio", "mu").values.astype(np.float32)
+    shown = shown.transpose("tau_ratio", "mu").values
     logs = [np.log10(cube[axis].values) for axis in ("mu", "tau_ratio")]
     if all(np.allclose(np.diff(v), np.diff(v)[0], rtol=1e-6) for v in logs):
         return shown
     return shown.ravel()
 
 
-def values_on_screen(scene: MapScene) -> np.ndarray:
-    """The values the map's figure holds: its image, or its cells' (the Hertz cubes')."""
+NO_CODE = 65535  # a cell without a value
+RATIOS = ("h2_over_h1", "h1_over_icm")  # (coloured, and coded, on a log scale)
+
+
+def coding_on_screen(scene: MapScene) -> tuple[np.ndarray, float, float, bool]:
+    """The codes the map's figure holds (its image's, or its cells', the Hertz cubes'), and
+    their coding: origin, step and whether in log10 (the image's in its source, the cells' in
+    their glyph's decoding)."""
     if scene._cell_source is not None:
-        return scene._cell_source.data["value"]
-    return scene._image_source.data["image"][0]
+        codes = np.asarray(scene._cell_source.data["value"])
+        args = scene.figure.object.select_one({"type": Quad}).fill_color.expr.args
+        return codes, args["origin"], args["step"], args["logged"]
+    data = scene._image_source.data
+    return data["image"][0], data["origin"][0], data["step"][0], scene.variable in RATIOS
+
+
+def values_on_screen(scene: MapScene) -> np.ndarray:
+    """The values the map's figure holds, decoded as the browser decodes them (written out
+    here again: a code q stands for origin + (q + 0.5) step, in log10 for a ratio; NO_CODE
+    none, NaN)."""
+    codes, origin, step, logged = coding_on_screen(scene)
+    assert codes.dtype == np.uint16
+    scaled = origin + (codes.astype(float) + 0.5) * step
+    return np.where(codes == NO_CODE, np.nan, 10**scaled if logged else scaled)
+
+
+def colour_index(values: np.ndarray, low: float, high: float, colours: int, log: bool):
+    """The palette index Bokeh's colour mapper gives each value (its documented rules, as
+    BokehJS's Linear/LogColorMapper compute them): floor of the value's share of the range
+    (of its log for a LogColorMapper) times the colours, the high limit the last colour,
+    values beyond the limits the end colours (no low or high colour set); -1 for NaN."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.log(values / low) / np.log(high / low) if log else (values - low) / (high - low)
+        index = np.clip(np.floor(share * colours), 0, colours - 1)
+    index = np.where(values == high, colours - 1, index)
+    return np.where(np.isnan(values), -1, index).astype(int)
+
+
+def assert_codes_hold(scene: MapScene, want: np.ndarray) -> None:
+    """The figure's codes stand for the values ``want`` (NaN: none): each decoded to within
+    half a code's step (in log10 for a ratio: a relative error below 1e-4 on the shipped
+    cubes), and each coloured as its float value was (the colour mapper's rules)."""
+    codes, _, step, logged = coding_on_screen(scene)
+    held = values_on_screen(scene)
+    assert codes.shape == want.shape
+    np.testing.assert_array_equal(np.isnan(held), np.isnan(want))
+    known = ~np.isnan(want)
+    if logged:
+        error = np.abs(np.log10(held[known]) - np.log10(want[known].astype(float)))
+        assert step / 2 * math.log(10) < 1e-4 or scene.computed  # (a relative error)
+    else:
+        error = np.abs(held[known] - want[known].astype(float))
+    assert error.max() <= step / 2 * (1 + 1e-6), (error.max(), step)
+    mapper = scene._colour_mapper
+    rules = (mapper.low, mapper.high, len(mapper.palette), logged)
+    np.testing.assert_array_equal(
+        colour_index(held, *rules), colour_index(want.astype(float), *rules)
+    )
 
 
 def colour_range(values: np.ndarray, variable: str) -> tuple[float, float]:
@@ -174,13 +230,12 @@ def assert_shows_its_slice(scene: MapScene) -> None:
     outline, worked out here from the cube."""
     held, want = sent(scene), expected(scene)
     assert held["looks"] == want["looks"]
-    assert held["image"].dtype == np.float32
-    np.testing.assert_array_equal(held["image"], want["image"])
+    assert_codes_hold(scene, want["image"])
     assert held["range"] == pytest.approx(want["range"], rel=1e-5)
     assert_outline_crosses_one(scene)
 
 
-@pytest.mark.parametrize("variable", ["h2_over_h1", "h1_over_drop", "contacts_first"])
+@pytest.mark.parametrize("variable", list(MAP_COLOURS))
 def test_an_eps_move_sends_the_new_slice_into_the_same_figure(variable):
     explorer, scene = map_on_screen({"eps": "0.6"})
     scene.variable = variable  # (a new figure)
@@ -392,9 +447,9 @@ def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
     assert "linear" not in scene._note() or scene.state.map_force == "hertz"
     assert url_query(explorer.state)["map_force"] == "hertz"
     assert read_query(url_query(explorer.state), explorer.state)[0]["map_force"] == "hertz"
-    # every rectangle is one of the slice's cells (none interpolated)
-    shown = scene._cell_source.data["value"]
-    assert shown.size == values.size and np.isin(shown, values.values.astype(np.float32)).all()
+    # every rectangle is one of the slice's cells (none interpolated), rows tau_ratio
+    shown = values.where(values > 0).transpose("tau_ratio", "mu").values.ravel()
+    assert_codes_hold(scene, shown)
     # a drop nearer H = 100: the other cube; a click still sets mu and tau_ratio
     explorer.state.height = 300.0
     scene.current()
@@ -480,12 +535,12 @@ def test_a_ratio_with_an_apex_below_zero_is_grey_not_a_colour_of_the_scale():
     below = values <= 0
     assert below.any()  # (five such cells at eps 0.9)
     image = scene._image_source.data["image"][0]
-    assert np.isnan(image[below]).all() and np.isfinite(image[~below]).all()
+    assert (image[below] == NO_CODE).all() and (image[~below] != NO_CODE).all()
     assert scene._colour_mapper.nan_color == NO_RATIO
     assert "grey: no ratio (an apex below 0" in scene._note()
     scene.variable = "h1_over_drop"  # (not a ratio of two apexes: its values drawn as they are)
     scene.current()
-    assert np.isfinite(scene._image_source.data["image"][0]).all()
+    assert (scene._image_source.data["image"][0] != NO_CODE).all()
     assert "grey" not in scene._note()
 
 
