@@ -12,7 +12,8 @@ have their H in the Hertz length unit, and their tau_ratio counts the Hertz floo
 (twoball/precomputed/README.md). Their axes are evenly spaced in mu and tau_ratio, not in
 log10: the map draws them as one rectangle per cell (:func:`drawn_as_cells`, :func:`cell_edges`,
 :func:`slice_cells`), an eps move sending the cells' values alone; the map cube's slices are
-one image (:func:`slice_image`).
+one image (:func:`slice_image`). Either's values travel as uint16 codes (:func:`value_coding`,
+:func:`encoded`), decoded in the browser (app/map_browser.py says why).
 """
 
 from __future__ import annotations
