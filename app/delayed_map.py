@@ -16,7 +16,8 @@ in log10), not a mesh of ~6000 cells: the browser repaints the whole plot whenev
 moves, and one image repaints in a fraction of the time (a slider move took ~320 ms with the
 mesh). The Hertz cubes' (evenly spaced in the values) is one rectangle per cell, 2500 of them
 (:func:`map_slices.drawn_as_cells`): as an image it needed 177 x 227 pixels, all sent again on
-every eps move (160 kB a browser), where the cells' values are 10 kB.
+every eps move (160 kB a browser), where the cells' values are 10 kB. Both send their values
+as uint16 codes, and the cells are placed in the browser (app/map_browser.py says why).
 """
 
 from __future__ import annotations
@@ -62,6 +63,7 @@ from .map_slices import (
     SHADES,
     Coding,
     cell_edges,
+    colour_bands,
     computed_slice,
     cube_coding,
     drawn_as_cells,
@@ -129,8 +131,9 @@ def ratio_colorbar() -> dict:
 
 def count_palette(low: float, high: float) -> list[str]:
     """One colour for each whole number from ``low + 0.5`` to ``high - 0.5`` (a count's colour
-    limits, :func:`colour_limits`): each count a band of its own, centred on its tick."""
-    return list(viridis(max(1, round(high - low))))
+    limits, :func:`colour_limits`): each count a band of its own, centred on its tick (as
+    many as the codes' coding counts: :func:`map_slices.colour_bands`)."""
+    return list(viridis(colour_bands(COUNTS[0], (low, high))))
 
 
 def count_ticker() -> BasicTicker:
