@@ -17,7 +17,8 @@ moves, and one image repaints in a fraction of the time (a slider move took ~320
 mesh). The Hertz cubes' (evenly spaced in the values) is one rectangle per cell, 2500 of them
 (:func:`map_slices.drawn_as_cells`): as an image it needed 177 x 227 pixels, all sent again on
 every eps move (160 kB a browser), where the cells' values are 10 kB. Both send their values
-as uint16 codes, and the cells are placed in the browser (app/map_browser.py says why).
+as uint16 codes (each a value to three significant digits, the hover's), and the cells are
+placed in the browser (app/map_browser.py says why).
 """
 
 from __future__ import annotations
@@ -60,12 +61,9 @@ from .map_slices import (
     HERTZ_CUBES,
     NO_CODE,
     RATIO_CENTRES,
-    SHADES,
-    Coding,
     cell_edges,
-    colour_bands,
     computed_slice,
-    cube_coding,
+    cube_colour_limits,
     drawn_as_cells,
     eps_slice,
     hertz_cube_name,
@@ -118,6 +116,7 @@ FIT_STYLES = {
 # colour-bar ticks of the ratios' log scale: values below 1 get numbers too (LogTicker: powers
 # of ten only, so a range of 0.5 to 2 showed "1" alone)
 RATIO_TICKS = [0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1, 1.4, 2, 3, 5, 10, 20, 50, 100]
+SHADES = 256  # the colours of a continuous scale (a ratio's, viridis)
 # a ratio's colours: ColorBrewer's RdBu, blue below 1 and red above, in 256 shades
 RATIO_PALETTE = interp_palette(RdBu[11], SHADES)
 NO_VALUE = "rgba(0, 0, 0, 0)"  # a cell without a value (a drop without a second bounce)
@@ -131,9 +130,8 @@ def ratio_colorbar() -> dict:
 
 def count_palette(low: float, high: float) -> list[str]:
     """One colour for each whole number from ``low + 0.5`` to ``high - 0.5`` (a count's colour
-    limits, :func:`colour_limits`): each count a band of its own, centred on its tick (as
-    many as the codes' coding counts: :func:`map_slices.colour_bands`)."""
-    return list(viridis(colour_bands(COUNTS[0], (low, high))))
+    limits, :func:`colour_limits`): each count a band of its own, centred on its tick."""
+    return list(viridis(max(1, round(high - low))))
 
 
 def count_ticker() -> BasicTicker:
@@ -168,13 +166,13 @@ def image_frame(log_mu: np.ndarray, log_tau: np.ndarray) -> dict[str, list[float
 
 def blank(cube: xr.Dataset, cells: bool) -> dict:
     """The figure's codes before a slice is shown (the map off screen): an image without a
-    value on the cube's grid, where it lies and a coding, or the cells' codes, none (the
-    browser places the cells: app/map_browser.py)."""
+    value on the cube's grid and where it lies, or the cells' codes, none (the browser places
+    the cells: app/map_browser.py)."""
     if cells:
         return {"value": np.full(cube.sizes["mu"] * cube.sizes["tau_ratio"], NO_CODE, np.uint16)}
     log_mu, log_tau = log_grid(cube["mu"].values)[0], log_grid(cube["tau_ratio"].values)[0]
     codes = np.full((log_tau.size, log_mu.size), NO_CODE, np.uint16)
-    return {**image_frame(log_mu, log_tau), "image": [codes], "origin": [0.0], "step": [1.0]}
+    return {**image_frame(log_mu, log_tau), "image": [codes]}
 
 
 def outline_data(xs: np.ndarray, ys: np.ndarray) -> dict[str, list[np.ndarray]]:
@@ -267,7 +265,6 @@ class MapScene(Scene):
         # what that figure was drawn for (its variable and cube)
         self._image_source: ColumnDataSource | None = None
         self._cell_source: ColumnDataSource | None = None  # (the Hertz cubes': drawn_as_cells)
-        self._cells_coding: Coding | None = None  # (their codes', in their glyph's decoding)
         self._colour_mapper: ColorMapper | None = None
         self._outline_source: ColumnDataSource | None = None
         self._drawn_for: tuple[str, str] | None = None
@@ -298,13 +295,11 @@ class MapScene(Scene):
         if self.active:
             self.current()
         if self.active and self.slice is not None:
-            data, clim, _ = self._shown(cells)
+            data, clim = self._shown(cells)
             xs, ys = self._outline_of_slice()
         else:  # (the plot keeps its frame: a later slice fills it, _push_slice)
             data, clim = blank(cube, cells), None
             xs = ys = np.zeros(0)
-        # (the cells' coding, the cube's, is the decoding's own: a Hertz map is never computed)
-        coding = cube_coding(name, variable) if cells else None
         if cells:
             spans = [cell_edges(cube[axis].values)[[0, -1]] for axis in ("mu", "tau_ratio")]
         else:
@@ -313,9 +308,7 @@ class MapScene(Scene):
                 for at, size in (("x", "dw"), ("y", "dh"))
             ]
         presentation = self.state.presentation
-        source = ColumnDataSource(data)
-        logged = variable in RATIO_CENTRES
-        hover = values_hover(shown_label(variable), cube, source, logged, coding)
+        hover = values_hover(shown_label(variable), cube, cells)
         fig = figure(
             x_range=Range1d(*map(float, spans[0])),
             y_range=Range1d(*map(float, spans[1])),
@@ -341,8 +334,9 @@ class MapScene(Scene):
             axis.formatter = CustomJSTickFormatter(code=LOG_TICK_JS)
             axis.major_label_policy = NoOverlap()
         mapper = colour_mapper(variable, clim)
-        if coding is not None:  # (edged in their own colour: unedged, light seams showed)
-            colour = decoded_cells(coding, mapper)
+        source = ColumnDataSource(data)
+        if cells:  # (edged in their own colour: unedged, light seams showed)
+            colour = decoded_cells(mapper)
             edges = {
                 side: cell_edge(cube, axis, upper)
                 for side, axis, upper in (("left", "mu", False), ("right", "mu", True),
@@ -351,8 +345,9 @@ class MapScene(Scene):
             }  # fmt: skip
             glyph = Quad(**edges, fill_color=colour, line_color=colour, line_width=1)
         else:
-            image = decoded_image(source, logged)
-            glyph = Image(image=image, x="x", y="y", dw="dw", dh="dh", color_mapper=mapper)
+            glyph = Image(
+                image=decoded_image(), x="x", y="y", dw="dw", dh="dh", color_mapper=mapper
+            )
         self._image_source, self._cell_source = (None, source) if cells else (source, None)
         values = draw(fig, glyph, source)
         if cells:  # (a click selects the rectangle it lands in: the others not faded)
@@ -378,7 +373,6 @@ class MapScene(Scene):
         )
         fig.on_event(Tap, self._tapped)
         self._colour_mapper = mapper
-        self._cells_coding = coding
         self._drawn_for = (variable, name)
         return fig
 
@@ -433,9 +427,9 @@ class MapScene(Scene):
         if self.slice is None:
             return False
         cells = source is self._cell_source
-        data, clim, coding = self._shown(cells)
+        data, clim = self._shown(cells)
         if cells:  # the cells' codes alone (the browser places them): 5 kB, an image's 160
-            if len(source.data["value"]) != len(data["value"]) or coding != self._cells_coding:
+            if len(source.data["value"]) != len(data["value"]):
                 return False
             source.data["value"] = data["value"]
         else:
@@ -452,21 +446,14 @@ class MapScene(Scene):
         self._outline_source.data = outline_data(*self._outline_of_slice())
         return True
 
-    def _shown(self, cells: bool) -> tuple[dict, tuple[float, float], Coding]:
-        """The current slice as the data of the figure's values (the image's codes, where it
-        lies and their coding, or the cells' codes alone: :func:`slice_cells`), its colour
-        limits and its coding."""
-        shipped = None if self.computed else self.slice_cube  # (a computed slice: its own)
+    def _shown(self, cells: bool) -> tuple[dict, tuple[float, float]]:
+        """The current slice as the data of the figure's values (the image's codes and where it
+        lies, or the cells' codes alone: :func:`slice_cells`), and its colour limits."""
         if cells:
-            codes, clim, coding = slice_cells(self.slice, self.variable, shipped)
-            return {"value": codes}, clim, coding
-        (log_mu, log_tau, codes), clim, coding = slice_image(self.slice, self.variable, shipped)
-        frame = image_frame(log_mu, log_tau)
-        return (
-            {**frame, "image": [codes], "origin": [coding.origin], "step": [coding.step]},
-            clim,
-            coding,
-        )
+            codes, clim = slice_cells(self.slice, self.variable, self._limits())
+            return {"value": codes}, clim
+        (log_mu, log_tau, codes), clim = slice_image(self.slice, self.variable, self._limits())
+        return {**image_frame(log_mu, log_tau), "image": [codes]}, clim
 
     def inputs(self) -> tuple:
         """What the slice depends on: the drop's eps, H and eps12, the cube (force), the
@@ -482,6 +469,11 @@ class MapScene(Scene):
     def _is_cube_drop(self) -> bool:
         """Whether the current drop's H and eps12 are the cube's (else a slice is computed)."""
         return self.state.height == map_cube().attrs.get("height") and self.state.eps12 is None
+
+    def _limits(self) -> tuple[float, float] | None:
+        """The colour limits of the shown cube's variable over all its eps; None for a slice
+        computed for another drop (its own: its values may lie outside the cube's)."""
+        return None if self.computed else cube_colour_limits(self.slice_cube, self.variable)
 
     def _why_not_computed(self, name: str) -> str:
         """Why a drop outside the cube's eps is not computed (the end of a sentence)."""

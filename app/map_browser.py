@@ -7,13 +7,21 @@ and 102 kB (the Hertz map) where the other pages' are 35-42 kB. Decided:
 
 - A slice's values travel as uint16 codes (app/map_slices.py ``encoded``), not float32: 12 kB
   for the linear map's 81 x 73 pixels, not 24; 5 kB for the Hertz map's 2500 cells, not 10.
-  The browser decodes them (:func:`decoded_image`, :func:`decoded_cells`) and colours the
-  values with the colour mapper and colour bar they had as float32: each colour band is a
-  whole number of codes (``value_coding``), so each cell keeps its colour; a value beyond the
-  colour limits keeps its own code (the hover reads it) and the mapper's clamping; a cell
-  without a value is :data:`NO_CODE`, decoded to NaN (grey or transparent, as before). Mapping
-  the codes with a LinearColorMapper directly (no decoding) could not tell a code beyond the
-  colour limits (clamped to the palette's end) from the code of no value (grey).
+  A code is a value to three significant digits, exactly the number the hover shows: Python's
+  ``f"{value:.3g}"``, JavaScript's ``Number(value.toPrecision(3))``. Code 0 is 0; codes from 1
+  are positive values, decade by decade (900 a decade: the mantissas 100..999), from 1.00e-18
+  to 9.99e17; from 32768 the negative values likewise; :data:`NO_CODE` (65535) is no value,
+  decoded to NaN (grey or transparent, as before). A magnitude beyond those decades (none of
+  the shipped cubes': their values run from 1.4e-5 to 80) is clipped to the nearest end.
+  Decoding is a formula (:data:`DECODE_JS`), the value read from its digits, ``"197e-2"``, as
+  Python's ``float("1.97")`` reads it: the same double, no table sent.
+- An earlier coding (steps of 7e-5 decades, each colour band a whole number of codes) kept
+  each cell's colour but gave its value to 1e-4 only: the hover's third decimal was wrong for a
+  few % of the cells (h2/h1) and up to 1 in 6 (h2/H), and a student reading the map and then
+  the Drop (h2/h1 to 4 decimals) saw two numbers. The hover now prints the code's three digits
+  (:data:`VALUE_JS`, the text ``.3g`` gives: "1.97", "0.0123", "23.8", "1.48e-05"), and the
+  cell is coloured from that rounded value: a value rounded across the boundary of two of the
+  256 shades takes the next shade (never more; a count, a whole number below 1000, is exact).
 - The Hertz map's cells are placed in the browser from their index and the two axes' cell
   edges (:func:`cell_edge`): their edges, mu and tau_ratio per cell were 60 kB of the 102.
   The hover finds the cell under the pointer as on the image (:data:`CELL_JS`: the cells'
@@ -27,37 +35,56 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 from bokeh.core.property.vectorization import Expr
-from bokeh.models import ColorMapper, ColumnDataSource, CustomJSExpr, CustomJSHover, HoverTool
+from bokeh.models import ColorMapper, CustomJSExpr, CustomJSHover, HoverTool
 
-from .map_slices import NO_CODE, Coding, cell_edges
+from .map_slices import (
+    FIRST_DECADE,
+    MANTISSAS,
+    NEGATIVE_CODES,
+    NO_CODE,
+    POSITIVE_CODES,
+    ZERO_CODE,
+    cell_edges,
+)
 from .scene import on_screen
 
-# a code's value: ``origin``, ``step`` and ``logged`` as app/map_slices.py's Coding
-DECODE_JS = f"""
-const decode = (code) => code == {NO_CODE} ? NaN
-  : logged ? 10 ** (origin + (code + 0.5) * step) : origin + (code + 0.5) * step;
+# a code's sign, decade and mantissa (app/map_slices.py ``encoded``)
+DIGITS_JS = f"""
+const NO_CODE = {NO_CODE}, ZERO_CODE = {ZERO_CODE};
+const digits = (code) => {{
+  const negative = code >= {NEGATIVE_CODES};
+  const k = code - (negative ? {NEGATIVE_CODES} : {POSITIVE_CODES});
+  const decade = {FIRST_DECADE} + Math.floor(k / {MANTISSAS});
+  return [negative ? "-" : "", decade, 100 + (k % {MANTISSAS})];
+}};
 """
-# ... their values in an image's source (one row: a computed slice has a coding of its own,
-# which comes with its codes), or (the cells') in the code's own arguments
-IMAGE_CODING_JS = """
-const origin = source.get_column("origin")[0], step = source.get_column("step")[0];
+# a code's value: the double nearest mantissa * 10 ** (decade - 2), read from its digits as
+# Python's float() reads them
+DECODE_JS = (
+    DIGITS_JS
+    + """
+const decode = (code) => {
+  if (code == NO_CODE) return NaN;
+  if (code == ZERO_CODE) return 0;
+  const [sign, decade, mantissa] = digits(code);
+  return Number(`${sign}${mantissa}e${decade - 2}`);
+};
 """
+)
 # the image's values from its codes, an array of the same shape (``this``: the image's source)
-IMAGE_JS = """
-const source = this;
-{coding}{decode}
-const {{ndarray}} = Bokeh.require("core/util/ndarray");
-return source.get_column("image").map((codes) => {{
+IMAGE_JS = (
+    DECODE_JS
+    + """
+const {ndarray} = Bokeh.require("core/util/ndarray");
+return this.get_column("image").map((codes) => {
   const values = new Float64Array(codes.length);
   for (let i = 0; i < codes.length; i++) values[i] = decode(codes[i]);
-  return ndarray(values, {{dtype: "float64", shape: codes.shape}});
-}});
+  return ndarray(values, {dtype: "float64", shape: codes.shape});
+});
 """
+)
 # the cells' values from their codes (``this``: the cells' source)
-CELLS_JS = """
-{decode}
-return Float64Array.from(this.get_column("value"), decode);
-"""
+CELLS_JS = DECODE_JS + 'return Float64Array.from(this.get_column("value"), decode);'
 # one edge of every cell (k: rows tau_ratio, columns mu), from the edges along its axis
 EDGE_JS = """
 const count = this.get_length(), edges_of = new Float64Array(count);
@@ -65,13 +92,24 @@ for (let k = 0; k < count; k++)
   edges_of[k] = edges[(across ? Math.floor(k / columns) : k % columns) + upper];
 return edges_of;
 """
-# the hover's value: three decimals (or three digits, below 0.01), and a cell without a value
-# said so (:data:`NO_CODE`)
-VALUE_JS = """{coding}{decode}
-const shown = decode(value);
-if (Number.isNaN(shown)) return "none: an apex below 0, or missing";
-return Math.abs(shown) >= 0.01 ? shown.toFixed(3) : shown.toPrecision(3);
+# the hover's value: its code's three significant digits, as Python's f"{value:.3g}" writes
+# them (fixed from 1e-4 to 999, else "1.48e-05"), and a cell without a value said so
+VALUE_JS = (
+    DIGITS_JS
+    + """
+if (value == NO_CODE) return "none: an apex below 0, or missing";
+if (value == ZERO_CODE) return "0";
+const [sign, decade, mantissa] = digits(value);
+const text = String(mantissa), trimmed = (tail) => tail.replace(/0+$/, "");
+if (decade < -4 || decade > 2) {
+  const tail = trimmed(text.slice(1)), power = String(Math.abs(decade)).padStart(2, "0");
+  return `${sign}${text[0]}${tail ? "." + tail : ""}e${decade < 0 ? "-" : "+"}${power}`;
+}
+const whole = decade < 0 ? "0" : text.slice(0, decade + 1);
+const tail = trimmed(decade < 0 ? "0".repeat(-decade - 1) + text : text.slice(decade + 1));
+return `${sign}${whole}${tail ? "." + tail : ""}`;
 """
+)
 # the computed cell nearest the pointer on an axis (log10 values ``logs``), as a number
 CELL_JS = """
 let best = logs[0];
@@ -88,24 +126,16 @@ return String(Number((10 ** tick).toPrecision(3)));
 """
 
 
-def coding_args(coding: Coding) -> dict:
-    """A coding as the arguments of :data:`DECODE_JS` (the cells'; an image's is in its
-    source)."""
-    return {"origin": coding.origin, "step": coding.step, "logged": coding.logged}
+def decoded_image() -> Expr:
+    """The image's values, decoded in the browser from the codes in its source (column
+    ``image``)."""
+    return Expr(CustomJSExpr(code=IMAGE_JS))
 
 
-def decoded_image(source: ColumnDataSource, logged: bool) -> Expr:
-    """The image's values, decoded in the browser from the codes and coding in ``source``
-    (columns ``image``, ``origin``, ``step``)."""
-    code = IMAGE_JS.format(coding=IMAGE_CODING_JS, decode=DECODE_JS)
-    return Expr(CustomJSExpr(args={"logged": logged}, code=code))
-
-
-def decoded_cells(coding: Coding, mapper: ColorMapper) -> Expr:
+def decoded_cells(mapper: ColorMapper) -> Expr:
     """The cells' colours: their values decoded in the browser from their codes (column
     ``value``), coloured by ``mapper``."""
-    expr = CustomJSExpr(args=coding_args(coding), code=CELLS_JS.format(decode=DECODE_JS))
-    return Expr(expr, transform=mapper)
+    return Expr(CustomJSExpr(code=CELLS_JS), transform=mapper)
 
 
 def cell_edge(cube: xr.Dataset, axis: str, upper: bool) -> Expr:
@@ -121,34 +151,27 @@ def cell_edge(cube: xr.Dataset, axis: str, upper: bool) -> Expr:
     return Expr(CustomJSExpr(args=args, code=EDGE_JS))
 
 
-def values_hover(
-    label: str, cube: xr.Dataset, source: ColumnDataSource, logged: bool, cells: Coding | None
-) -> HoverTool:
+def values_hover(label: str, cube: xr.Dataset, cells: bool) -> HoverTool:
     """The map's hover: the mu and tau_d/tau_f of the computed cell under the pointer (what a
     click chooses, app/delayed_map.py ``MapScene._tapped``) as numbers, not the log10 the map
-    is drawn in, and its value decoded from its code (a new model each time: a Bokeh model
+    is drawn in, and its value read from its code (a new model each time: a Bokeh model
     belongs to one session's document). The pointer's own coordinates had given a value that
     was not that point's: the map read 1.973 where the Drop, at the clicked point, gave 2.014.
 
     The cell is looked for in the browser (:data:`CELL_JS`), on the image as on the cells
-    (the Hertz cubes', ``cells`` their coding), in the image's ``source`` with its coding
-    (``logged``: a ratio's)."""
+    (``cells``: the Hertz cubes')."""
     axes = {
         f"${at}": CustomJSHover(args={"logs": on_screen(np.log10(cube[axis].values))}, code=CELL_JS)
         for at, axis in (("x", "mu"), ("y", "tau_ratio"))
     }
-    if cells is not None:
-        field, args, coding = "@value", coding_args(cells), ""
-    else:
-        field, args, coding = "@image", {"source": source, "logged": logged}, IMAGE_CODING_JS
-    value = CustomJSHover(args=args, code=VALUE_JS.format(coding=coding, decode=DECODE_JS))
+    field = "@value" if cells else "@image"
     return HoverTool(
         tooltips=[
             ("mu", "$x{custom}"),
             ("tau_d/tau_f", "$y{custom}"),
             (label, f"{field}{{custom}}"),
         ],
-        formatters={**axes, field: value},
+        formatters={**axes, field: CustomJSHover(code=VALUE_JS)},
         # (over a rectangle the tooltip follows the pointer, as over the image)
-        **({"point_policy": "follow_mouse"} if cells is not None else {}),
+        **({"point_policy": "follow_mouse"} if cells else {}),
     )

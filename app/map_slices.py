@@ -12,8 +12,8 @@ have their H in the Hertz length unit, and their tau_ratio counts the Hertz floo
 (twoball/precomputed/README.md). Their axes are evenly spaced in mu and tau_ratio, not in
 log10: the map draws them as one rectangle per cell (:func:`drawn_as_cells`, :func:`cell_edges`,
 :func:`slice_cells`), an eps move sending the cells' values alone; the map cube's slices are
-one image (:func:`slice_image`). Either's values travel as uint16 codes (:func:`value_coding`,
-:func:`encoded`), decoded in the browser (app/map_browser.py says why).
+one image (:func:`slice_image`). Either's values travel as uint16 codes, each a value to three
+significant digits (:func:`encoded`), decoded in the browser (app/map_browser.py says why).
 """
 
 from __future__ import annotations
@@ -21,7 +21,6 @@ from __future__ import annotations
 import functools
 import math
 import re
-from typing import NamedTuple
 
 import numpy as np
 import panel as pn
@@ -41,8 +40,6 @@ MOST_PIXELS = 400  # per axis, of a cube not evenly spaced in log10 (log_grid)
 SMALLEST_OUTLINED = 4  # cells: a delayed-rebound patch smaller than this is not outlined
 
 RATIO_CENTRES = {"h2_over_h1": 1.0, "h1_over_icm": 1.0}
-SHADES = 256  # the colours of a continuous scale (a ratio's, viridis): app/delayed_map.py
-NO_CODE = 65535  # the uint16 code of a cell without a value (:func:`encoded`)
 # whole numbers: coloured one colour each (:func:`count_palette`), not a gradient whose shades
 # between two counts stand for nothing
 COUNTS = ("contacts_first",)
@@ -207,104 +204,54 @@ def cube_colour_limits(name: str, variable: str) -> tuple[float, float]:
     return colour_limits(shown_cube(name)[variable].values, variable)
 
 
-class Coding(NamedTuple):
-    """How a slice's values travel to the browser: as uint16 codes (:func:`encoded`), code q
-    standing for ``origin + (q + 0.5) * step``, in log10 for a ratio (``logged``)."""
-
-    origin: float
-    step: float
-    logged: bool
-
-
-def colour_bands(variable: str, limits: tuple[float, float]) -> int:
-    """How many colours the map's scale of ``variable`` has between its colour limits: one a
-    count (:data:`COUNTS`), else :data:`SHADES`."""
-    return max(1, round(limits[1] - limits[0])) if variable in COUNTS else SHADES
+# A value's uint16 code (:func:`encoded`): its three significant digits, a mantissa 100..999
+# and a decade (10**decade <= |value| < 10**(decade + 1)), decoded in the browser
+# (app/map_browser.py says why)
+MANTISSAS = 900  # the codes of a decade (mantissas 100..999)
+FIRST_DECADE, LAST_DECADE = -18, 17  # (36 decades: 32400 codes a sign)
+POSITIVE_CODES, NEGATIVE_CODES = 1, 32768  # the code of +-100e(FIRST_DECADE - 2)
+ZERO_CODE = 0
+NO_CODE = 65535  # a cell without a value
 
 
-def coded_scale(values: np.ndarray, variable: str) -> np.ndarray:
-    """Values on the scale the map colours them on: log10 for a ratio (NaN where none, an
-    apex below 0: :func:`shown_values`), else the values (float64)."""
+def encoded(values: np.ndarray) -> np.ndarray:
+    """``values`` (a slice's :func:`shown_values`) as uint16 codes, each standing for the value
+    rounded to three significant digits (Python's ``f"{value:.3g}"``): NaN or infinite (no
+    value) :data:`NO_CODE`, 0 :data:`ZERO_CODE`, else the sign's first code plus
+    ``(decade - FIRST_DECADE) * MANTISSAS + mantissa - 100``. A magnitude beyond the decades
+    (above 9.99e17 or below 1e-18: none of the shipped cubes', 1.4e-5 to 80) is clipped to the
+    largest or smallest."""
     values = np.asarray(values, dtype=float)
-    if variable in RATIO_CENTRES:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(values > 0, np.log10(values), np.nan)
-    return values
+    return np.array([_code(v) for v in values.ravel()], dtype=np.uint16).reshape(values.shape)
 
 
-def value_coding(values: np.ndarray, variable: str, limits: tuple[float, float]) -> Coding:
-    """The coding of ``values`` (all that one figure shows: a cube's over all its eps) coloured
-    between ``limits``: the codes span the values' whole range (a hover reads outliers' own
-    values), and each colour band (:func:`colour_bands`) is a whole number of codes, as many
-    as fit into the 65535 codes, so that a code's value lies in the band of the value it codes
-    (every cell the colour its value had as float32). A ratio over 4.7 decades (the map cube's
-    h2/h1) gets steps of 7e-5 decades, its value within 1e-4; h2/H over 0 to 24, within 2e-4."""
-    scaled = coded_scale(values, variable)
-    finite = scaled[np.isfinite(scaled)]
-    low, high = coded_scale(np.asarray(limits), variable)
-    span = high - low if high > low else 1.0  # (one value alone: any step does)
-    first = min(low, float(finite.min())) if finite.size else low
-    last = max(low + span, float(finite.max())) if finite.size else low + span
-    bands = colour_bands(variable, limits)
-    # (two codes spare: an outlier's codes round outwards)
-    per_band = max(1, math.floor((NO_CODE - 2) * span / (bands * (last - first))))
-    step = span / (per_band * bands)
-    below = math.ceil((low - first) / step - 1e-9)
-    return Coding(origin=low - below * step, step=step, logged=variable in RATIO_CENTRES)
-
-
-def encoded(values: np.ndarray, variable: str, coding: Coding) -> np.ndarray:
-    """``values`` (a slice's :func:`shown_values`) as uint16 codes: NaN (no value) as
-    :data:`NO_CODE`, values beyond the codes' range (a coding too narrow for them: none of
-    the shipped cubes') clipped to its ends, which keep their colour."""
-    scaled = coded_scale(values, variable)
-    with np.errstate(invalid="ignore"):
-        codes = np.floor((scaled - coding.origin) / coding.step)
-    codes = np.clip(codes, 0, NO_CODE - 1)
-    return np.where(np.isfinite(scaled), codes, NO_CODE).astype(np.uint16)
-
-
-def decoded(codes: np.ndarray, coding: Coding) -> np.ndarray:
-    """The values codes stand for (as the browser decodes them: app/map_browser.py), NaN for
-    :data:`NO_CODE`."""
-    codes = np.asarray(codes)
-    scaled = coding.origin + (codes.astype(float) + 0.5) * coding.step
-    values = 10**scaled if coding.logged else scaled
-    return np.where(codes == NO_CODE, np.nan, values)
-
-
-@functools.cache  # (a variable of a cube read once per server)
-def cube_coding(name: str, variable: str) -> Coding:
-    """The coding of a shipped cube's ``variable``, the same for all its slices (as its colour
-    limits: :func:`cube_colour_limits`)."""
-    limits = cube_colour_limits(name, variable)
-    return value_coding(shown_cube(name)[variable].values, variable, limits)
+def _code(value: float) -> int:
+    """One value's code (:func:`encoded`)."""
+    if not math.isfinite(value):
+        return NO_CODE
+    if value == 0:
+        return ZERO_CODE
+    digits, _, decade = f"{abs(value):.2e}".partition("e")  # ("1.97", "-05"): as .3g rounds
+    mantissa, decade = int(digits.replace(".", "")), int(decade)
+    if decade > LAST_DECADE:
+        mantissa, decade = 999, LAST_DECADE
+    elif decade < FIRST_DECADE:
+        mantissa, decade = 100, FIRST_DECADE
+    first = POSITIVE_CODES if value > 0 else NEGATIVE_CODES
+    return first + (decade - FIRST_DECADE) * MANTISSAS + mantissa - 100
 
 
 def slice_image(
-    slice_: xr.Dataset, variable: str, cube: str | None = None
-) -> tuple[tuple, tuple[float, float], Coding]:
+    slice_: xr.Dataset, variable: str, limits: tuple[float, float] | None = None
+) -> tuple[tuple, tuple[float, float]]:
     """The slice's ``variable`` on the map's log grid (log10 mu, log10 tau_ratio, the codes
-    with rows tau_ratio and columns mu: :func:`on_log_grid`, :func:`encoded`), its colour
-    limits and coding: those of the shipped ``cube`` it is a slice of, the same for all its
-    slices (:func:`cube_colour_limits`, :func:`cube_coding`), else (a computed slice) its own
-    (:func:`colour_limits`, :func:`value_coding`)."""
-    codes, limits, coding = coded_slice(slice_, variable, cube)
-    return on_log_grid(slice_, codes), limits, coding
-
-
-def coded_slice(
-    slice_: xr.Dataset, variable: str, cube: str | None = None
-) -> tuple[np.ndarray, tuple[float, float], Coding]:
-    """The slice's ``variable`` as codes (rows tau_ratio, columns mu), its colour limits and
-    its coding, as :func:`slice_image` gives them."""
-    values = shown_values(slice_[variable].transpose("tau_ratio", "mu").values, variable)
-    if cube is None:
-        limits = colour_limits(values, variable)
-        coding = value_coding(values, variable, limits)
-    else:
-        limits, coding = cube_colour_limits(cube, variable), cube_coding(cube, variable)
-    return encoded(values, variable, coding), limits, coding
+    with rows tau_ratio and columns mu: :func:`on_log_grid`, :func:`encoded`; a ratio's without
+    a value, an apex below 0, :data:`NO_CODE`), and its colour limits: ``limits`` (a shipped
+    cube's, the same for all its slices: :func:`cube_colour_limits`), else the slice's own
+    (:func:`colour_limits`)."""
+    values = slice_[variable].transpose("tau_ratio", "mu").values
+    codes = encoded(shown_values(values, variable))
+    return on_log_grid(slice_, codes), limits or colour_limits(values, variable)
 
 
 def shown_values(values: np.ndarray, variable: str) -> np.ndarray:
@@ -316,13 +263,14 @@ def shown_values(values: np.ndarray, variable: str) -> np.ndarray:
 
 
 def slice_cells(
-    slice_: xr.Dataset, variable: str, cube: str | None = None
-) -> tuple[np.ndarray, tuple[float, float], Coding]:
+    slice_: xr.Dataset, variable: str, limits: tuple[float, float] | None = None
+) -> tuple[np.ndarray, tuple[float, float]]:
     """The slice's ``variable`` one code per cell, rows tau_ratio, columns mu, flattened (the
-    browser places cell k at column k % mu.size, row k // mu.size: app/map_browser.py), its
-    colour limits and coding as :func:`slice_image`'s."""
-    codes, limits, coding = coded_slice(slice_, variable, cube)
-    return codes.ravel(), limits, coding
+    browser places cell k at column k % mu.size, row k // mu.size: app/map_browser.py), and its
+    colour limits as :func:`slice_image`'s."""
+    values = slice_[variable].transpose("tau_ratio", "mu").values
+    codes = encoded(shown_values(values, variable)).ravel()
+    return codes, limits or colour_limits(values, variable)
 
 
 # a cell whose delayed-rebound flag disagrees with the sign of log10(h2/h1) (a patch too small

@@ -3,8 +3,9 @@ computed, or a Hertz cube's) and agrees with the solver; a click sets mu and tau
 move sends the new slice into the figure on screen, and what it sends is the cube's slice
 (each pixel the cube's value at its mu and tau_ratio, the colour range computed here again, the
 outline crossing h2/h1 = 1 between grid points). The values travel as uint16 codes
-(app/map_browser.py): decoded here as the browser decodes them, each is the cube's to within
-half a code's step, and gets the colour its float value got."""
+(app/map_browser.py): decoded here as the browser decodes them, each is the cube's value to
+three significant digits, exactly ``float(f"{value:.3g}")``, and gets the colour its float
+value got or the next one (a count's exactly)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ import numpy as np
 import pytest
 from bokeh.document import Document
 from bokeh.events import Tap
-from bokeh.models import ColorBar, ColorMapper, GlyphRenderer, MultiLine, Quad
+from bokeh.models import ColorBar, ColorMapper, GlyphRenderer, MultiLine
 from bokeh.palettes import viridis
 
 import twoball
@@ -82,29 +83,43 @@ def pixels_of(cube, eps: float, variable: str, drop=None) -> np.ndarray:
 
 
 NO_CODE = 65535  # a cell without a value
-RATIOS = ("h2_over_h1", "h1_over_icm")  # (coloured, and coded, on a log scale)
+RATIOS = ("h2_over_h1", "h1_over_icm")  # (coloured on a log scale)
 
 
-def coding_on_screen(scene: MapScene) -> tuple[np.ndarray, float, float, bool]:
-    """The codes the map's figure holds (its image's, or its cells', the Hertz cubes'), and
-    their coding: origin, step and whether in log10 (the image's in its source, the cells' in
-    their glyph's decoding)."""
+def code_values(codes: np.ndarray) -> np.ndarray:
+    """The values uint16 codes stand for, decoded as the browser decodes them (written out here
+    again): 0 is 0; from 1 (positive) and from 32768 (negative) 900 codes a decade from 1e-18,
+    code k of a decade the mantissa 100 + k, the value read from its digits; NO_CODE none."""
+    codes = np.asarray(codes)
+    assert codes.dtype == np.uint16
+    values = np.full(codes.shape, np.nan)
+    for code in np.unique(codes):
+        if code == 0:
+            values[codes == code] = 0.0
+        elif code != NO_CODE:
+            negative = code >= 32768
+            k = int(code) - (32768 if negative else 1)
+            text = f"{'-' if negative else ''}{100 + k % 900}e{k // 900 - 18 - 2}"
+            values[codes == code] = float(text)
+    return values
+
+
+def three_digits(values: np.ndarray) -> np.ndarray:
+    """Values as the hover shows them: rounded to three significant digits by Python's ``.3g``
+    (NaN kept)."""
+    return np.array([float(f"{v:.3g}") for v in np.ravel(values)]).reshape(np.shape(values))
+
+
+def codes_on_screen(scene: MapScene) -> np.ndarray:
+    """The codes the map's figure holds: its image's, or its cells' (the Hertz cubes')."""
     if scene._cell_source is not None:
-        codes = np.asarray(scene._cell_source.data["value"])
-        args = scene.figure.object.select_one({"type": Quad}).fill_color.expr.args
-        return codes, args["origin"], args["step"], args["logged"]
-    data = scene._image_source.data
-    return data["image"][0], data["origin"][0], data["step"][0], scene.variable in RATIOS
+        return np.asarray(scene._cell_source.data["value"])
+    return scene._image_source.data["image"][0]
 
 
 def values_on_screen(scene: MapScene) -> np.ndarray:
-    """The values the map's figure holds, decoded as the browser decodes them (written out
-    here again: a code q stands for origin + (q + 0.5) step, in log10 for a ratio; NO_CODE
-    none, NaN)."""
-    codes, origin, step, logged = coding_on_screen(scene)
-    assert codes.dtype == np.uint16
-    scaled = origin + (codes.astype(float) + 0.5) * step
-    return np.where(codes == NO_CODE, np.nan, 10**scaled if logged else scaled)
+    """The values the map's figure holds, decoded as the browser decodes them."""
+    return code_values(codes_on_screen(scene))
 
 
 def colour_index(values: np.ndarray, low: float, high: float, colours: int, log: bool):
@@ -120,25 +135,17 @@ def colour_index(values: np.ndarray, low: float, high: float, colours: int, log:
 
 
 def assert_codes_hold(scene: MapScene, want: np.ndarray) -> None:
-    """The figure's codes stand for the values ``want`` (NaN: none): each decoded to within
-    half a code's step (in log10 for a ratio: a relative error below 1e-4 on the shipped
-    cubes), and each coloured as its float value was (the colour mapper's rules)."""
-    codes, _, step, logged = coding_on_screen(scene)
+    """The figure's codes stand for the values ``want`` (NaN: none) to three significant
+    digits, exactly what the hover shows (``float(f"{value:.3g}")``), and each is coloured as
+    its float value was or with the next shade (rounded across a band's edge); a count, whole,
+    exactly as it was."""
     held = values_on_screen(scene)
-    assert codes.shape == want.shape
-    np.testing.assert_array_equal(np.isnan(held), np.isnan(want))
-    known = ~np.isnan(want)
-    if logged:
-        error = np.abs(np.log10(held[known]) - np.log10(want[known].astype(float)))
-        assert step / 2 * math.log(10) < 1e-4 or scene.computed  # (a relative error)
-    else:
-        error = np.abs(held[known] - want[known].astype(float))
-    assert error.max() <= step / 2 * (1 + 1e-6), (error.max(), step)
+    assert held.shape == want.shape
+    np.testing.assert_array_equal(held, three_digits(want))  # (NaN where NaN)
     mapper = scene._colour_mapper
-    rules = (mapper.low, mapper.high, len(mapper.palette), logged)
-    np.testing.assert_array_equal(
-        colour_index(held, *rules), colour_index(want.astype(float), *rules)
-    )
+    rules = (mapper.low, mapper.high, len(mapper.palette), scene.variable in RATIOS)
+    shift = colour_index(held, *rules) - colour_index(want.astype(float), *rules)
+    assert np.abs(shift).max() <= (0 if scene.variable == "contacts_first" else 1)
 
 
 def colour_range(values: np.ndarray, variable: str) -> tuple[float, float]:
@@ -522,6 +529,34 @@ def test_the_choice_and_the_colour_bar_name_a_variable_alike():
         (label,) = [k for k, v in scene.choice.options.items() if v == variable]
         assert bar.title == label == shown_label(variable)
         assert "X2(0)" not in label and "h_ICM" not in label
+
+
+@pytest.mark.parametrize("name", ["map", "hertz-h1e2", "hertz-h1e4", "computed"])
+def test_the_codes_hold_every_value_to_the_hover_s_three_digits(name):
+    """Every value of every variable the map shows (a whole shipped cube, all its eps, or a
+    slice computed for another drop), negative ones too, is coded as exactly the number the
+    hover prints, ``float(f"{value:.3g}")``; the counts are their whole numbers."""
+    from app.map_slices import computed_slice, encoded
+
+    cube = computed_slice(0.9, 2000.0, 0.7) if name == "computed" else shown_cube(name)
+    for variable in MAP_COLOURS:
+        values = cube[variable].values
+        held = code_values(encoded(values))
+        np.testing.assert_array_equal(held, three_digits(values), err_msg=variable)
+        if variable == "contacts_first":
+            assert (held == values).all() and values.max() < 1000
+    assert (cube["h2_over_drop"].values < 0).any()  # (negative values coded too)
+
+
+def test_the_codes_round_as_the_hover_and_clip_beyond_their_decades():
+    """Zero, a rounding up to the next decade, both signs, no value; beyond 9.99e17 or below
+    1e-18 the largest or smallest code of the sign."""
+    from app.map_slices import encoded
+
+    values = np.array([0.0, 9.996, -9.996e-5, 0.012345, 123456.0, np.nan, np.inf, 1e-300, -3e40])
+    held = code_values(encoded(values))
+    np.testing.assert_array_equal(held[:6], three_digits(values[:6]))
+    assert held[6] != held[6] and (held[7], held[8]) == (1e-18, -9.99e17)
 
 
 def test_a_ratio_with_an_apex_below_zero_is_grey_not_a_colour_of_the_scale():

@@ -17,6 +17,7 @@ from bokeh.events import Tap
 from bokeh.models import ColorBar, CustomJSHover, GlyphRenderer, HoverTool, Image, Quad
 from bokeh.protocol import Protocol
 from panel.io.state import set_curdoc
+from test_app_map import code_values, three_digits
 
 import twoball
 from app.explorer import Explorer
@@ -38,15 +39,11 @@ def served(query: dict) -> tuple[Explorer, Document]:
 
 def cells_of(explorer: Explorer) -> tuple[GlyphRenderer, np.ndarray, np.ndarray]:
     """The map's rectangles' renderer, their codes and the values these stand for, decoded as
-    the browser decodes them (written out here again: code q is origin + (q + 0.5) step, in
-    log10 for a ratio; NO_CODE none, NaN)."""
+    the browser decodes them (tests/app/test_app_map.py ``code_values``)."""
     figure = explorer.scenes["map"].figure.object
     (renderer,) = [r for r in figure.select({"type": GlyphRenderer}) if isinstance(r.glyph, Quad)]
     codes = np.asarray(renderer.data_source.data["value"])
-    args = renderer.glyph.fill_color.expr.args
-    scaled = args["origin"] + (codes.astype(float) + 0.5) * args["step"]
-    values = np.where(codes == NO_CODE, np.nan, 10**scaled if args["logged"] else scaled)
-    return renderer, codes, values
+    return renderer, codes, code_values(codes)
 
 
 def cube_value(name: str, variable: str, eps: float, mu: float, tau_ratio: float) -> float:
@@ -56,11 +53,9 @@ def cube_value(name: str, variable: str, eps: float, mu: float, tau_ratio: float
 
 
 def assert_ratios_held(values: np.ndarray, want: np.ndarray) -> None:
-    """Decoded ratios are the cube's (``want``) to a relative 1e-4, NaN where it has none
-    (<= 0: grey)."""
-    none = ~(want > 0)
-    np.testing.assert_array_equal(np.isnan(values), none)
-    np.testing.assert_allclose(values[~none], want[~none], rtol=1e-4)
+    """Decoded ratios are the cube's (``want``) to three significant digits, exactly as the
+    hover shows them (``.3g``), NaN where it has none (<= 0: grey)."""
+    np.testing.assert_array_equal(values, three_digits(np.where(want > 0, want, np.nan)))
 
 
 def log_edges(values: np.ndarray) -> np.ndarray:
@@ -97,7 +92,7 @@ def test_each_rectangle_holds_its_cube_cell_and_its_edges(height, name):
     for k in np.random.default_rng(1).choice(2500, 60, replace=False):
         want = cube_value(name, "h2_over_h1", scene.slice_eps, mus[k % 50], taus[k // 50])
         if want > 0:
-            assert values[k] == pytest.approx(want, rel=1e-4)
+            assert values[k] == float(f"{want:.3g}")
         else:
             assert np.isnan(values[k])
     glyph = renderer.glyph
@@ -153,9 +148,9 @@ def test_the_map_cube_s_image_travels_as_codes():
 def test_the_hertz_map_s_colours_hover_and_grey():
     """The rectangles are coloured by the colour bar's mapper from their decoded values, a
     cell without a ratio grey (NO_RATIO: hertz-h1e2 at eps 0.5 has such cells); the hover
-    finds the cell under the pointer and decodes its value."""
+    finds the cell under the pointer and prints its code's digits."""
     from app.delayed_map import NO_RATIO
-    from app.map_browser import CELL_JS, DECODE_JS
+    from app.map_browser import CELL_JS, DECODE_JS, VALUE_JS
 
     explorer, _ = served({"map_force": "hertz", "H": "100", "eps": "0.5"})
     scene = explorer.scenes["map"]
@@ -180,7 +175,7 @@ def test_the_hertz_map_s_colours_hover_and_grey():
     fields = [field for _, field in hover.tooltips]
     assert fields == ["$x{custom}", "$y{custom}", "@value{custom}"]
     codes_js = {k: f.code for k, f in hover.formatters.items() if isinstance(f, CustomJSHover)}
-    assert codes_js["$x"] == codes_js["$y"] == CELL_JS and DECODE_JS in codes_js["@value"]
+    assert codes_js["$x"] == codes_js["$y"] == CELL_JS and codes_js["@value"] == VALUE_JS
     for at, axis in (("$x", "mu"), ("$y", "tau_ratio")):
         logs = np.log10(twoball.load_cube("hertz-h1e2")[axis].values)
         np.testing.assert_allclose(hover.formatters[at].args["logs"], logs, atol=1e-6)

@@ -19,8 +19,10 @@ from appdriver import (
     wait_for_change,
 )
 from playwright.sync_api import expect
+from test_app_map import code_values, three_digits
 
-from app.map_slices import cube_colour_limits, decoded, eps_slice, nearest_eps, slice_image
+from app.map_browser import DECODE_JS, VALUE_JS
+from app.map_slices import cube_colour_limits, eps_slice, nearest_eps, slice_image
 
 pytestmark = pytest.mark.browser
 # the map's image as drawn (its values decoded from the codes sent, flattened) and its colour
@@ -56,16 +58,13 @@ def test_an_eps_move_shows_the_new_slice_in_the_browser(browser, app_server, art
         eps = nearest_eps(float(page.locator(".bk-slider-value").first.inner_text()))
         expect(page.get_by_text(f"at eps = {eps:g} (nearest").first).to_be_visible()
         page.wait_for_timeout(500)
-        (_, _, codes), (low, high), coding = slice_image(
-            eps_slice(eps, "h2_over_h1"), "h2_over_h1", "map"
-        )
-        assert (low, high) == cube_colour_limits("map", "h2_over_h1")  # (every slice's)
+        limits = cube_colour_limits("map", "h2_over_h1")  # (every slice's)
+        _, (low, high) = slice_image(eps_slice(eps, "h2_over_h1"), "h2_over_h1", limits)
         drawn, mapped, _, _ = page.evaluate(IMAGE_JS)
         drawn = np.array([np.nan if v is None else v for v in drawn])
-        np.testing.assert_allclose(drawn, decoded(codes, coding).ravel(), rtol=1e-12)
         cube = eps_slice(eps, "h2_over_h1")["h2_over_h1"].transpose("tau_ratio", "mu").values
         want = np.where(cube > 0, cube, np.nan).ravel()  # (grey: none)
-        np.testing.assert_allclose(drawn, want, rtol=1e-4)
+        np.testing.assert_array_equal(drawn, three_digits(want))  # (what the hover shows)
         assert mapped == pytest.approx([low, high])
         (outline,) = sources_with(page, "xs", "ys")
         assert len(outline["xs"]) == 1
@@ -73,6 +72,32 @@ def test_an_eps_move_shows_the_new_slice_in_the_browser(browser, app_server, art
         assert errors == []
     finally:
         context.close()
+
+
+# every uint16 code's value and hover text, as the map's own JavaScript gives them
+ALL_CODES_JS = """([decode, text]) => {
+  const value = new Function("code", decode + "return decode(code);");
+  const shown = new Function("value", text);
+  const codes = Array.from({length: 65536}, (_, code) => code);
+  return [codes.map((code) => (Number.isNaN(value(code)) ? null : value(code))),
+          codes.map(shown)];
+}"""
+
+
+def test_the_browser_reads_every_code_as_python_does(browser):
+    """For every uint16 code the browser's value is the one Python reads from the code's
+    digits (tests/app/test_app_map.py ``code_values``), and the hover's text is Python's
+    ``f"{value:.3g}"`` of it, "none: ..." for no value."""
+    page = browser.new_page()
+    try:
+        values, texts = page.evaluate(ALL_CODES_JS, [DECODE_JS, VALUE_JS])
+    finally:
+        page.close()
+    want = code_values(np.arange(65536, dtype=np.uint16))
+    np.testing.assert_array_equal(np.array(values, dtype=float), want)  # (None: NaN)
+    shown = [f"{v:.3g}" if v == v else "none: an apex below 0, or missing" for v in want]
+    assert texts == shown
+    assert {"1.97", "0.0123", "23.8", "1.48e-05", "-0.00708", "0"} <= set(texts)
 
 
 def test_a_map_opened_from_its_tab_is_the_map_a_link_opens(browser, app_server, artifacts):
@@ -198,8 +223,7 @@ def test_the_hertz_map_s_cells_take_an_eps_move_and_hover(browser, app_server, a
     """The Hertz map's rectangles (one a cell, app/map_slices.py ``drawn_as_cells``), placed in
     the browser from their index: each lies between its axis values' log10 midpoints; an eps
     move gives them the new slice's codes; the hover over a cell gives its mu, tau_d/tau_f and
-    its value, read here from the cube (to its three decimals, one off at most where the
-    code's 1e-4 crosses a rounding)."""
+    its value, read here from the cube: exactly its three significant digits (``.3g``)."""
     import math
 
     import twoball
@@ -233,8 +257,7 @@ def test_the_hertz_map_s_cells_take_an_eps_move_and_hover(browser, app_server, a
         tips = {t for t in tooltips(page) if t.startswith("mu:\t")}
         (tip,) = tips  # (the tooltip, and the element holding it)
         head = f"mu:\t{mu:#.3g}\ntau_d/tau_f:\t{tau:#.3g}\nh2 / h1:\t"  # (JS toPrecision)
-        assert tip.startswith(head), tip
-        assert abs(float(tip[len(head) :]) - value) <= 0.001 + 1e-4 * value, (tip, value)
+        assert tip == f"{head}{value:.3g}", tip
         page.screenshot(path=folder / "map_hertz_cells_hover.png")
         assert errors == []
     finally:
@@ -246,9 +269,10 @@ IMAGE_POINT_JS = CELL_POINT_JS.replace('"Quad"', '"Image"')
 
 
 def test_the_map_s_hover_reads_a_value_and_says_none(browser, app_server, artifacts):
-    """The linear map's hover reads a cell's value decoded from its code (the cube's, to its
-    three decimals) and, over a grey cell (an apex below 0), says there is none: Bokeh had
-    printed "NaN" before the hover's own text could say so."""
+    """The linear map's hover reads a cell's value from its code: the cube's value to three
+    significant digits, exactly as Python's ``.3g`` prints it (small ones too), and, over a
+    grey cell (an apex below 0), says there is none: Bokeh had printed "NaN" before the
+    hover's own text could say so."""
     import math
 
     from app.map_slices import map_cube
@@ -262,7 +286,9 @@ def test_the_map_s_hover_reads_a_value_and_says_none(browser, app_server, artifa
         expect(page.get_by_text("at eps = 0.9 (nearest").first).to_be_visible(timeout=60_000)
         values = cube.transpose("tau_ratio", "mu").values
         (rows, columns) = np.nonzero(values <= 0)
-        for row, column, none in ((40, 30, False), (rows[0], columns[0], True)):
+        small = np.unravel_index(np.nanargmin(np.where(values > 0, values, np.nan)), values.shape)
+        cells = ((40, 30, False), (10, 60, False), (*small, False), (rows[0], columns[0], True))
+        for row, column, none in cells:
             mu, tau = float(cube["mu"][column]), float(cube["tau_ratio"][row])
             page.mouse.move(0, 0)
             page.mouse.move(*page.evaluate(IMAGE_POINT_JS, [math.log10(mu), math.log10(tau)]))
@@ -275,8 +301,7 @@ def test_the_map_s_hover_reads_a_value_and_says_none(browser, app_server, artifa
                 assert shown == "none: an apex below 0, or missing", tip
                 page.screenshot(path=folder / "map_hover_none.png")
             else:
-                value = float(values[row, column])
-                assert abs(float(shown) - value) <= 0.001 + 1e-4 * value, (tip, value)
+                assert shown == f"{float(values[row, column]):.3g}", tip
         assert errors == []
     finally:
         context.close()
