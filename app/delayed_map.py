@@ -16,7 +16,9 @@ in log10), not a mesh of ~6000 cells: the browser repaints the whole plot whenev
 moves, and one image repaints in a fraction of the time (a slider move took ~320 ms with the
 mesh). The Hertz cubes' (evenly spaced in the values) is one rectangle per cell, 2500 of them
 (:func:`map_slices.drawn_as_cells`): as an image it needed 177 x 227 pixels, all sent again on
-every eps move (160 kB a browser), where the cells' values are 10 kB.
+every eps move (160 kB a browser), where the cells' values are 10 kB. Both send their values
+as uint16 codes (each a value to three significant digits, the hover's), and the cells are
+placed in the browser (app/map_browser.py says why).
 """
 
 from __future__ import annotations
@@ -35,10 +37,8 @@ from bokeh.models import (
     ColorBar,
     ColorMapper,
     ColumnDataSource,
-    CustomJSHover,
     CustomJSTickFormatter,
     FixedTicker,
-    HoverTool,
     Image,
     LinearColorMapper,
     LogColorMapper,
@@ -50,18 +50,18 @@ from bokeh.models import (
 )
 from bokeh.palettes import RdBu, interp_palette, viridis
 from bokeh.plotting import figure
-from bokeh.transform import transform
 
 from twoball import jit
 
 from .controls import PhoneSliders, on_a_phone
+from .map_browser import LOG_TICK_JS, cell_edge, decoded_cells, decoded_image, values_hover
 from .map_slices import (
     COUNTS,
     CUBE,
     HERTZ_CUBES,
+    NO_CODE,
     RATIO_CENTRES,
     cell_edges,
-    cell_frame,
     computed_slice,
     cube_colour_limits,
     drawn_as_cells,
@@ -116,8 +116,9 @@ FIT_STYLES = {
 # colour-bar ticks of the ratios' log scale: values below 1 get numbers too (LogTicker: powers
 # of ten only, so a range of 0.5 to 2 showed "1" alone)
 RATIO_TICKS = [0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1, 1.4, 2, 3, 5, 10, 20, 50, 100]
+SHADES = 256  # the colours of a continuous scale (a ratio's, viridis)
 # a ratio's colours: ColorBrewer's RdBu, blue below 1 and red above, in 256 shades
-RATIO_PALETTE = interp_palette(RdBu[11], 256)
+RATIO_PALETTE = interp_palette(RdBu[11], SHADES)
 NO_VALUE = "rgba(0, 0, 0, 0)"  # a cell without a value (a drop without a second bounce)
 
 
@@ -125,57 +126,6 @@ def ratio_colorbar() -> dict:
     """Colour-bar options of a ratio: a FixedTicker shows the ticks inside the colour range
     (new models each time: a Bokeh model belongs to one session's document)."""
     return {"ticker": FixedTicker(ticks=RATIO_TICKS), "formatter": BasicTickFormatter()}
-
-
-# the hover's value: three decimals (or three digits, below 0.01), and a cell without a ratio
-# said so (its image value NaN: :func:`slice_image`)
-VALUE_JS = """
-if (Number.isNaN(value)) return "none: an apex below 0, or missing";
-return Math.abs(value) >= 0.01 ? value.toFixed(3) : value.toPrecision(3);
-"""
-# the computed cell nearest the pointer on an axis of the image (log10 values ``logs``), as a
-# number
-CELL_JS = """
-let best = logs[0];
-for (const log of logs) if (Math.abs(log - value) < Math.abs(best - value)) best = log;
-return (10 ** best).toPrecision(3);
-"""
-# a rectangle's own mu or tau_d/tau_f (the Hertz cubes': drawn_as_cells), as CELL_JS gives it
-AXIS_VALUE_JS = "return value.toPrecision(3);"
-
-
-def values_hover(label: str, cube: xr.Dataset, cells: bool = False) -> HoverTool:
-    """The map's hover: the mu and tau_d/tau_f of the computed cell under the pointer (what a
-    click chooses, :meth:`MapScene._tapped`) as numbers, not the log10 the image is drawn in,
-    and its value (a new model each time, as :func:`ratio_colorbar`). The pointer's own
-    coordinates had given a value that was not that point's: the map read 1.973 where the
-    Drop, at the clicked point, gave 2.014.
-
-    On the image the cell is looked for in the browser (:data:`CELL_JS`); drawn as
-    rectangles (``cells``: :meth:`MapScene._map_figure`), the pointer is on the cell itself,
-    whose mu, tau_ratio and value its columns hold."""
-    if cells:
-        number = CustomJSHover(code=AXIS_VALUE_JS)
-        fields = {"mu": "@mu", "tau_ratio": "@tau_ratio", "value": "@value"}
-        formatters = {"@mu": number, "@tau_ratio": number}
-    else:
-        fields = {"mu": "$x", "tau_ratio": "$y", "value": "@image"}
-        formatters = {
-            fields[axis]: CustomJSHover(
-                args={"logs": on_screen(np.log10(cube[axis].values))}, code=CELL_JS
-            )
-            for axis in ("mu", "tau_ratio")
-        }
-    return HoverTool(
-        tooltips=[
-            ("mu", fields["mu"] + "{custom}"),
-            ("tau_d/tau_f", fields["tau_ratio"] + "{custom}"),
-            (label, fields["value"] + "{custom}"),
-        ],
-        formatters={**formatters, fields["value"]: CustomJSHover(code=VALUE_JS)},
-        # (over a rectangle the tooltip follows the pointer, as over the image)
-        **({"point_policy": "follow_mouse"} if cells else {}),
-    )
 
 
 def count_palette(low: float, high: float) -> list[str]:
@@ -203,16 +153,6 @@ def _log_ticks(cube: xr.Dataset) -> dict[str, list[float]]:
     return ticks
 
 
-# a log axis's tick label: the value itself; over more than two decades in view, the powers of
-# ten alone (1, 2 and 5 each labelled, a narrow projected or phone map dropped "0.01" and "0.1"
-# for lack of room), the others marked by their ticks
-LOG_TICK_JS = """
-const decade = Math.abs(tick - Math.round(tick)) < 1e-9;
-if (ticks[ticks.length - 1] - ticks[0] > 2 && !decade) return "";
-return String(Number((10 ** tick).toPrecision(3)));
-"""
-
-
 def image_frame(log_mu: np.ndarray, log_tau: np.ndarray) -> dict[str, list[float]]:
     """Where an image of pixel centres ``log_mu`` x ``log_tau`` (evenly spaced) lies: its
     lower left corner and its width and height, half a pixel beyond the outer centres."""
@@ -225,14 +165,14 @@ def image_frame(log_mu: np.ndarray, log_tau: np.ndarray) -> dict[str, list[float
 
 
 def blank(cube: xr.Dataset, cells: bool) -> dict:
-    """The figure's values before a slice is shown (the map off screen): an image without a
-    value on the cube's grid and where it lies, or the cells' values, none (:func:`cell_frame`
-    gives the cells' edges)."""
+    """The figure's codes before a slice is shown (the map off screen): an image without a
+    value on the cube's grid and where it lies, or the cells' codes, none (the browser places
+    the cells: app/map_browser.py)."""
     if cells:
-        return {"value": on_screen(np.full(cube.sizes["mu"] * cube.sizes["tau_ratio"], np.nan))}
+        return {"value": np.full(cube.sizes["mu"] * cube.sizes["tau_ratio"], NO_CODE, np.uint16)}
     log_mu, log_tau = log_grid(cube["mu"].values)[0], log_grid(cube["tau_ratio"].values)[0]
-    shown = np.full((log_tau.size, log_mu.size), np.nan)
-    return {**image_frame(log_mu, log_tau), "image": [on_screen(shown)]}
+    codes = np.full((log_tau.size, log_mu.size), NO_CODE, np.uint16)
+    return {**image_frame(log_mu, log_tau), "image": [codes]}
 
 
 def outline_data(xs: np.ndarray, ys: np.ndarray) -> dict[str, list[np.ndarray]]:
@@ -249,8 +189,8 @@ def colour_mapper(variable: str, clim: tuple[float, float] | None) -> ColorMappe
         low, high = clim or (0.5, 2.0)  # (a log scale needs limits)
         return LogColorMapper(palette=RATIO_PALETTE, low=low, high=high, nan_color=NO_RATIO)
     if clim is None:  # (no slice yet: its range and bands come with it, _push_slice)
-        return LinearColorMapper(palette=viridis(256), nan_color=NO_VALUE)
-    palette = count_palette(*clim) if variable in COUNTS else viridis(256)
+        return LinearColorMapper(palette=viridis(SHADES), nan_color=NO_VALUE)
+    palette = count_palette(*clim) if variable in COUNTS else viridis(SHADES)
     return LinearColorMapper(palette=palette, low=clim[0], high=clim[1], nan_color=NO_VALUE)
 
 
@@ -360,8 +300,7 @@ class MapScene(Scene):
         else:  # (the plot keeps its frame: a later slice fills it, _push_slice)
             data, clim = blank(cube, cells), None
             xs = ys = np.zeros(0)
-        if cells:  # (the cells' edges and axis values: sent with the figure only)
-            data = {**{k: on_screen(v) for k, v in cell_frame(cube).items()}, **data}
+        if cells:
             spans = [cell_edges(cube[axis].values)[[0, -1]] for axis in ("mu", "tau_ratio")]
         else:
             spans = [
@@ -396,12 +335,19 @@ class MapScene(Scene):
             axis.major_label_policy = NoOverlap()
         mapper = colour_mapper(variable, clim)
         source = ColumnDataSource(data)
-        if cells:  # (edged in their own colour: unedged, light seams showed between cells)
-            colour = transform("value", mapper)
-            glyph = Quad(left="left", right="right", bottom="bottom", top="top",
-                         fill_color=colour, line_color=colour, line_width=1)  # fmt: skip
+        if cells:  # (edged in their own colour: unedged, light seams showed)
+            colour = decoded_cells(mapper)
+            edges = {
+                side: cell_edge(cube, axis, upper)
+                for side, axis, upper in (("left", "mu", False), ("right", "mu", True),
+                                          ("bottom", "tau_ratio", False),
+                                          ("top", "tau_ratio", True))
+            }  # fmt: skip
+            glyph = Quad(**edges, fill_color=colour, line_color=colour, line_width=1)
         else:
-            glyph = Image(image="image", x="x", y="y", dw="dw", dh="dh", color_mapper=mapper)
+            glyph = Image(
+                image=decoded_image(), x="x", y="y", dw="dw", dh="dh", color_mapper=mapper
+            )
         self._image_source, self._cell_source = (None, source) if cells else (source, None)
         values = draw(fig, glyph, source)
         if cells:  # (a click selects the rectangle it lands in: the others not faded)
@@ -482,7 +428,7 @@ class MapScene(Scene):
             return False
         cells = source is self._cell_source
         data, clim = self._shown(cells)
-        if cells:  # the cells' values alone (their edges stay): 10 kB, not an image's 160
+        if cells:  # the cells' codes alone (the browser places them): 5 kB, an image's 160
             if len(source.data["value"]) != len(data["value"]):
                 return False
             source.data["value"] = data["value"]
@@ -501,13 +447,13 @@ class MapScene(Scene):
         return True
 
     def _shown(self, cells: bool) -> tuple[dict, tuple[float, float]]:
-        """The current slice as the data of the figure's values (the image and where it lies,
-        or the cells' values alone: :func:`slice_cells`), and its colour limits."""
+        """The current slice as the data of the figure's values (the image's codes and where it
+        lies, or the cells' codes alone: :func:`slice_cells`), and its colour limits."""
         if cells:
-            values, clim = slice_cells(self.slice, self.variable, self._limits())
-            return {"value": on_screen(values)}, clim
-        (log_mu, log_tau, shown), clim = slice_image(self.slice, self.variable, self._limits())
-        return {**image_frame(log_mu, log_tau), "image": [on_screen(shown)]}, clim
+            codes, clim = slice_cells(self.slice, self.variable, self._limits())
+            return {"value": codes}, clim
+        (log_mu, log_tau, codes), clim = slice_image(self.slice, self.variable, self._limits())
+        return {**image_frame(log_mu, log_tau), "image": [codes]}, clim
 
     def inputs(self) -> tuple:
         """What the slice depends on: the drop's eps, H and eps12, the cube (force), the

@@ -12,7 +12,8 @@ have their H in the Hertz length unit, and their tau_ratio counts the Hertz floo
 (twoball/precomputed/README.md). Their axes are evenly spaced in mu and tau_ratio, not in
 log10: the map draws them as one rectangle per cell (:func:`drawn_as_cells`, :func:`cell_edges`,
 :func:`slice_cells`), an eps move sending the cells' values alone; the map cube's slices are
-one image (:func:`slice_image`).
+one image (:func:`slice_image`). Either's values travel as uint16 codes, each a value to three
+significant digits (:func:`encoded`), decoded in the browser (app/map_browser.py says why).
 """
 
 from __future__ import annotations
@@ -203,16 +204,54 @@ def cube_colour_limits(name: str, variable: str) -> tuple[float, float]:
     return colour_limits(shown_cube(name)[variable].values, variable)
 
 
+# A value's uint16 code (:func:`encoded`): its three significant digits, a mantissa 100..999
+# and a decade (10**decade <= |value| < 10**(decade + 1)), decoded in the browser
+# (app/map_browser.py says why)
+MANTISSAS = 900  # the codes of a decade (mantissas 100..999)
+FIRST_DECADE, LAST_DECADE = -18, 17  # (36 decades: 32400 codes a sign)
+POSITIVE_CODES, NEGATIVE_CODES = 1, 32768  # the code of +-100e(FIRST_DECADE - 2)
+ZERO_CODE = 0
+NO_CODE = 65535  # a cell without a value
+
+
+def encoded(values: np.ndarray) -> np.ndarray:
+    """``values`` (a slice's :func:`shown_values`) as uint16 codes, each standing for the value
+    rounded to three significant digits (Python's ``f"{value:.3g}"``): NaN or infinite (no
+    value) :data:`NO_CODE`, 0 :data:`ZERO_CODE`, else the sign's first code plus
+    ``(decade - FIRST_DECADE) * MANTISSAS + mantissa - 100``. A magnitude beyond the decades
+    (above 9.99e17 or below 1e-18: none of the shipped cubes', 1.4e-5 to 80) is clipped to the
+    largest or smallest."""
+    values = np.asarray(values, dtype=float)
+    return np.array([_code(v) for v in values.ravel()], dtype=np.uint16).reshape(values.shape)
+
+
+def _code(value: float) -> int:
+    """One value's code (:func:`encoded`)."""
+    if not math.isfinite(value):
+        return NO_CODE
+    if value == 0:
+        return ZERO_CODE
+    digits, _, decade = f"{abs(value):.2e}".partition("e")  # ("1.97", "-05"): as .3g rounds
+    mantissa, decade = int(digits.replace(".", "")), int(decade)
+    if decade > LAST_DECADE:
+        mantissa, decade = 999, LAST_DECADE
+    elif decade < FIRST_DECADE:
+        mantissa, decade = 100, FIRST_DECADE
+    first = POSITIVE_CODES if value > 0 else NEGATIVE_CODES
+    return first + (decade - FIRST_DECADE) * MANTISSAS + mantissa - 100
+
+
 def slice_image(
     slice_: xr.Dataset, variable: str, limits: tuple[float, float] | None = None
 ) -> tuple[tuple, tuple[float, float]]:
-    """The slice's ``variable`` on the map's log grid (log10 mu, log10 tau_ratio, the values
-    with rows tau_ratio and columns mu: :func:`on_log_grid`; a ratio's without a value, an
-    apex below 0, NaN), and its colour limits: ``limits`` (a shipped cube's, the same for all
-    its slices: :func:`cube_colour_limits`), else the slice's own (:func:`colour_limits`)."""
+    """The slice's ``variable`` on the map's log grid (log10 mu, log10 tau_ratio, the codes
+    with rows tau_ratio and columns mu: :func:`on_log_grid`, :func:`encoded`; a ratio's without
+    a value, an apex below 0, :data:`NO_CODE`), and its colour limits: ``limits`` (a shipped
+    cube's, the same for all its slices: :func:`cube_colour_limits`), else the slice's own
+    (:func:`colour_limits`)."""
     values = slice_[variable].transpose("tau_ratio", "mu").values
-    shown = on_log_grid(slice_, shown_values(values, variable))
-    return shown, limits or colour_limits(values, variable)
+    codes = encoded(shown_values(values, variable))
+    return on_log_grid(slice_, codes), limits or colour_limits(values, variable)
 
 
 def shown_values(values: np.ndarray, variable: str) -> np.ndarray:
@@ -226,24 +265,12 @@ def shown_values(values: np.ndarray, variable: str) -> np.ndarray:
 def slice_cells(
     slice_: xr.Dataset, variable: str, limits: tuple[float, float] | None = None
 ) -> tuple[np.ndarray, tuple[float, float]]:
-    """The slice's ``variable`` one value per cell, in the order of :func:`cell_frame` (rows
-    tau_ratio, columns mu, flattened), and its colour limits as :func:`slice_image`'s."""
+    """The slice's ``variable`` one code per cell, rows tau_ratio, columns mu, flattened (the
+    browser places cell k at column k % mu.size, row k // mu.size: app/map_browser.py), and its
+    colour limits as :func:`slice_image`'s."""
     values = slice_[variable].transpose("tau_ratio", "mu").values
-    return shown_values(values, variable).ravel(), limits or colour_limits(values, variable)
-
-
-def cell_frame(cube: xr.Dataset) -> dict[str, np.ndarray]:
-    """Every cell of a cube's (mu, tau_ratio) grid as a rectangle on the map's log axes: its
-    edges (``left``, ``right``, ``bottom``, ``top``: :func:`cell_edges`) and its own ``mu`` and
-    ``tau_ratio`` (for the hover); rows tau_ratio, columns mu, flattened (:func:`slice_cells`)."""
-    mu, tau = cube["mu"].values, cube["tau_ratio"].values
-    x, y = cell_edges(mu), cell_edges(tau)
-    shape = (tau.size, mu.size)
-    along_mu = {"left": x[:-1], "right": x[1:], "mu": mu}
-    along_tau = {"bottom": y[:-1], "top": y[1:], "tau_ratio": tau}
-    frame = {k: np.broadcast_to(v, shape).ravel() for k, v in along_mu.items()}
-    frame |= {k: np.broadcast_to(v[:, None], shape).ravel() for k, v in along_tau.items()}
-    return frame
+    codes = encoded(shown_values(values, variable)).ravel()
+    return codes, limits or colour_limits(values, variable)
 
 
 # a cell whose delayed-rebound flag disagrees with the sign of log10(h2/h1) (a patch too small

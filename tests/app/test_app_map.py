@@ -2,7 +2,10 @@
 computed, or a Hertz cube's) and agrees with the solver; a click sets mu and tau_ratio; an eps
 move sends the new slice into the figure on screen, and what it sends is the cube's slice
 (each pixel the cube's value at its mu and tau_ratio, the colour range computed here again, the
-outline crossing h2/h1 = 1 between grid points)."""
+outline crossing h2/h1 = 1 between grid points). The values travel as uint16 codes
+(app/map_browser.py): decoded here as the browser decodes them, each is the cube's value to
+three significant digits, exactly ``float(f"{value:.3g}")``, and gets the colour its float
+value got or the next one (a count's exactly)."""
 
 from __future__ import annotations
 
@@ -19,6 +22,7 @@ import twoball
 from app.delayed_map import MapScene
 from app.explorer import Explorer
 from app.map_slices import map_cube, nearest_eps, shown_cube
+from app.state import MAP_COLOURS
 
 
 def rendered(query: dict) -> Explorer:
@@ -71,18 +75,77 @@ def pixels_of(cube, eps: float, variable: str, drop=None) -> np.ndarray:
     shown = cube[variable].sel(eps=eps) if drop is None else drop[variable]
     if variable in ("h2_over_h1", "h1_over_icm"):  # (no ratio where an apex is below 0)
         shown = shown.where(shown > 0)
-    shown = shown.transpose("tau_ratio", "mu").values.astype(np.float32)
+    shown = shown.transpose("tau_ratio", "mu").values
     logs = [np.log10(cube[axis].values) for axis in ("mu", "tau_ratio")]
     if all(np.allclose(np.diff(v), np.diff(v)[0], rtol=1e-6) for v in logs):
         return shown
     return shown.ravel()
 
 
-def values_on_screen(scene: MapScene) -> np.ndarray:
-    """The values the map's figure holds: its image, or its cells' (the Hertz cubes')."""
+NO_CODE = 65535  # a cell without a value
+RATIOS = ("h2_over_h1", "h1_over_icm")  # (coloured on a log scale)
+
+
+def code_values(codes: np.ndarray) -> np.ndarray:
+    """The values uint16 codes stand for, decoded as the browser decodes them (written out here
+    again): 0 is 0; from 1 (positive) and from 32768 (negative) 900 codes a decade from 1e-18,
+    code k of a decade the mantissa 100 + k, the value read from its digits; NO_CODE none."""
+    codes = np.asarray(codes)
+    assert codes.dtype == np.uint16
+    values = np.full(codes.shape, np.nan)
+    for code in np.unique(codes):
+        if code == 0:
+            values[codes == code] = 0.0
+        elif code != NO_CODE:
+            negative = code >= 32768
+            k = int(code) - (32768 if negative else 1)
+            text = f"{'-' if negative else ''}{100 + k % 900}e{k // 900 - 18 - 2}"
+            values[codes == code] = float(text)
+    return values
+
+
+def three_digits(values: np.ndarray) -> np.ndarray:
+    """Values as the hover shows them: rounded to three significant digits by Python's ``.3g``
+    (NaN kept)."""
+    return np.array([float(f"{v:.3g}") for v in np.ravel(values)]).reshape(np.shape(values))
+
+
+def codes_on_screen(scene: MapScene) -> np.ndarray:
+    """The codes the map's figure holds: its image's, or its cells' (the Hertz cubes')."""
     if scene._cell_source is not None:
-        return scene._cell_source.data["value"]
+        return np.asarray(scene._cell_source.data["value"])
     return scene._image_source.data["image"][0]
+
+
+def values_on_screen(scene: MapScene) -> np.ndarray:
+    """The values the map's figure holds, decoded as the browser decodes them."""
+    return code_values(codes_on_screen(scene))
+
+
+def colour_index(values: np.ndarray, low: float, high: float, colours: int, log: bool):
+    """The palette index Bokeh's colour mapper gives each value (its documented rules, as
+    BokehJS's Linear/LogColorMapper compute them): floor of the value's share of the range
+    (of its log for a LogColorMapper) times the colours, the high limit the last colour,
+    values beyond the limits the end colours (no low or high colour set); -1 for NaN."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.log(values / low) / np.log(high / low) if log else (values - low) / (high - low)
+        index = np.clip(np.floor(share * colours), 0, colours - 1)
+    index = np.where(values == high, colours - 1, index)
+    return np.where(np.isnan(values), -1, index).astype(int)
+
+
+def assert_codes_hold(scene: MapScene, want: np.ndarray) -> None:
+    """The figure's codes stand for the values ``want`` (NaN: none) to three significant
+    digits, exactly what the hover shows (``float(f"{value:.3g}")``), and each is coloured as
+    its float value was or with the next shade (rounded across a band's edge); a count, whole,
+    exactly as it was."""
+    held = values_on_screen(scene)
+    assert held.shape == want.shape
+    np.testing.assert_array_equal(held, three_digits(want))  # (NaN where NaN)
+    mapper = scene._colour_mapper
+    rules = (mapper.low, mapper.high, len(mapper.palette), scene.variable in RATIOS)
+    shift = colour_index(held, *rules) - colour_index(want.astype(float), *rules)
+    assert np.abs(shift).max() <= (0 if scene.variable == "contacts_first" else 1)
 
 
 def colour_range(values: np.ndarray, variable: str) -> tuple[float, float]:
@@ -174,13 +237,12 @@ def assert_shows_its_slice(scene: MapScene) -> None:
     outline, worked out here from the cube."""
     held, want = sent(scene), expected(scene)
     assert held["looks"] == want["looks"]
-    assert held["image"].dtype == np.float32
-    np.testing.assert_array_equal(held["image"], want["image"])
+    assert_codes_hold(scene, want["image"])
     assert held["range"] == pytest.approx(want["range"], rel=1e-5)
     assert_outline_crosses_one(scene)
 
 
-@pytest.mark.parametrize("variable", ["h2_over_h1", "h1_over_drop", "contacts_first"])
+@pytest.mark.parametrize("variable", list(MAP_COLOURS))
 def test_an_eps_move_sends_the_new_slice_into_the_same_figure(variable):
     explorer, scene = map_on_screen({"eps": "0.6"})
     scene.variable = variable  # (a new figure)
@@ -392,9 +454,9 @@ def test_the_hertz_map_shows_the_shipped_hertz_cube_nearest_the_drop_height():
     assert "linear" not in scene._note() or scene.state.map_force == "hertz"
     assert url_query(explorer.state)["map_force"] == "hertz"
     assert read_query(url_query(explorer.state), explorer.state)[0]["map_force"] == "hertz"
-    # every rectangle is one of the slice's cells (none interpolated)
-    shown = scene._cell_source.data["value"]
-    assert shown.size == values.size and np.isin(shown, values.values.astype(np.float32)).all()
+    # every rectangle is one of the slice's cells (none interpolated), rows tau_ratio
+    shown = values.where(values > 0).transpose("tau_ratio", "mu").values.ravel()
+    assert_codes_hold(scene, shown)
     # a drop nearer H = 100: the other cube; a click still sets mu and tau_ratio
     explorer.state.height = 300.0
     scene.current()
@@ -469,6 +531,34 @@ def test_the_choice_and_the_colour_bar_name_a_variable_alike():
         assert "X2(0)" not in label and "h_ICM" not in label
 
 
+@pytest.mark.parametrize("name", ["map", "hertz-h1e2", "hertz-h1e4", "computed"])
+def test_the_codes_hold_every_value_to_the_hover_s_three_digits(name):
+    """Every value of every variable the map shows (a whole shipped cube, all its eps, or a
+    slice computed for another drop), negative ones too, is coded as exactly the number the
+    hover prints, ``float(f"{value:.3g}")``; the counts are their whole numbers."""
+    from app.map_slices import computed_slice, encoded
+
+    cube = computed_slice(0.9, 2000.0, 0.7) if name == "computed" else shown_cube(name)
+    for variable in MAP_COLOURS:
+        values = cube[variable].values
+        held = code_values(encoded(values))
+        np.testing.assert_array_equal(held, three_digits(values), err_msg=variable)
+        if variable == "contacts_first":
+            assert (held == values).all() and values.max() < 1000
+    assert (cube["h2_over_drop"].values < 0).any()  # (negative values coded too)
+
+
+def test_the_codes_round_as_the_hover_and_clip_beyond_their_decades():
+    """Zero, a rounding up to the next decade, both signs, no value; beyond 9.99e17 or below
+    1e-18 the largest or smallest code of the sign."""
+    from app.map_slices import encoded
+
+    values = np.array([0.0, 9.996, -9.996e-5, 0.012345, 123456.0, np.nan, np.inf, 1e-300, -3e40])
+    held = code_values(encoded(values))
+    np.testing.assert_array_equal(held[:6], three_digits(values[:6]))
+    assert held[6] != held[6] and (held[7], held[8]) == (1e-18, -9.99e17)
+
+
 def test_a_ratio_with_an_apex_below_zero_is_grey_not_a_colour_of_the_scale():
     """h2/h1 is negative where the first apex lies below 0 (h1 = -134, h2 = 9329: a strong
     delayed rebound): drawn dark blue, it read as h2 far below h1. It is no ratio: NaN in the
@@ -480,12 +570,12 @@ def test_a_ratio_with_an_apex_below_zero_is_grey_not_a_colour_of_the_scale():
     below = values <= 0
     assert below.any()  # (five such cells at eps 0.9)
     image = scene._image_source.data["image"][0]
-    assert np.isnan(image[below]).all() and np.isfinite(image[~below]).all()
+    assert (image[below] == NO_CODE).all() and (image[~below] != NO_CODE).all()
     assert scene._colour_mapper.nan_color == NO_RATIO
     assert "grey: no ratio (an apex below 0" in scene._note()
     scene.variable = "h1_over_drop"  # (not a ratio of two apexes: its values drawn as they are)
     scene.current()
-    assert np.isfinite(scene._image_source.data["image"][0]).all()
+    assert (scene._image_source.data["image"][0] != NO_CODE).all()
     assert "grey" not in scene._note()
 
 

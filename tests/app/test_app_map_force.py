@@ -19,20 +19,29 @@ from appdriver import (
     wait_for_change,
 )
 from playwright.sync_api import expect
+from test_app_map import code_values, three_digits
 
+from app.map_browser import DECODE_JS, VALUE_JS
 from app.map_slices import cube_colour_limits, eps_slice, nearest_eps, slice_image
-from app.scene import on_screen
 
 pytestmark = pytest.mark.browser
-# the map's image (its values, flattened) and its colour mapper's range, in the browser
+# the map's image as drawn (its values decoded from the codes sent, flattened) and its colour
+# mapper's range, in the browser
 IMAGE_JS = """() => {
   const models = [...Bokeh.documents[0].all_models];
-  const image = models.find((m) => m.constructor.__name__ === "ColumnDataSource"
-    && (m.data instanceof Map ? m.data.has("image") : "image" in m.data));
-  const data = image.data instanceof Map ? image.data.get("image") : image.data.image;
+  const view = [...Bokeh.index.all_views()].find((v) => v.model.glyph
+    && v.model.glyph.constructor.__name__ === "Image");
+  const data = view.glyph.image.get(0);
   const mapper = models.find((m) => m.constructor.__name__.endsWith("ColorMapper"));
-  return [Array.from(data[0], (v) => (Number.isNaN(v) ? null : v)), [mapper.low, mapper.high],
+  return [Array.from(data, (v) => (Number.isNaN(v) ? null : v)), [mapper.low, mapper.high],
           mapper.palette, models.filter((m) => m.constructor.__name__ === "ColorBar").length];
+}"""
+# the Hertz map's cells as drawn: their edges, placed in the browser (log10)
+CELL_EDGES_JS = """() => {
+  const view = [...Bokeh.index.all_views()].find((v) => v.model.glyph
+    && v.model.glyph.constructor.__name__ === "Quad");
+  const {left, right, bottom, top} = view.glyph;
+  return [left, right, bottom, top].map((edges) => Array.from(edges));
 }"""
 
 
@@ -49,12 +58,13 @@ def test_an_eps_move_shows_the_new_slice_in_the_browser(browser, app_server, art
         eps = nearest_eps(float(page.locator(".bk-slider-value").first.inner_text()))
         expect(page.get_by_text(f"at eps = {eps:g} (nearest").first).to_be_visible()
         page.wait_for_timeout(500)
-        limits = cube_colour_limits("map", "h2_over_h1")  # (every slice's: the cube's)
-        (_, _, expected), (low, high) = slice_image(
-            eps_slice(eps, "h2_over_h1"), "h2_over_h1", limits
-        )
+        limits = cube_colour_limits("map", "h2_over_h1")  # (every slice's)
+        _, (low, high) = slice_image(eps_slice(eps, "h2_over_h1"), "h2_over_h1", limits)
         drawn, mapped, _, _ = page.evaluate(IMAGE_JS)
-        np.testing.assert_array_equal(np.array(drawn, dtype=float), on_screen(expected).ravel())
+        drawn = np.array([np.nan if v is None else v for v in drawn])
+        cube = eps_slice(eps, "h2_over_h1")["h2_over_h1"].transpose("tau_ratio", "mu").values
+        want = np.where(cube > 0, cube, np.nan).ravel()  # (grey: none)
+        np.testing.assert_array_equal(drawn, three_digits(want))  # (what the hover shows)
         assert mapped == pytest.approx([low, high])
         (outline,) = sources_with(page, "xs", "ys")
         assert len(outline["xs"]) == 1
@@ -62,6 +72,32 @@ def test_an_eps_move_shows_the_new_slice_in_the_browser(browser, app_server, art
         assert errors == []
     finally:
         context.close()
+
+
+# every uint16 code's value and hover text, as the map's own JavaScript gives them
+ALL_CODES_JS = """([decode, text]) => {
+  const value = new Function("code", decode + "return decode(code);");
+  const shown = new Function("value", text);
+  const codes = Array.from({length: 65536}, (_, code) => code);
+  return [codes.map((code) => (Number.isNaN(value(code)) ? null : value(code))),
+          codes.map(shown)];
+}"""
+
+
+def test_the_browser_reads_every_code_as_python_does(browser):
+    """For every uint16 code the browser's value is the one Python reads from the code's
+    digits (tests/app/test_app_map.py ``code_values``), and the hover's text is Python's
+    ``f"{value:.3g}"`` of it, "none: ..." for no value."""
+    page = browser.new_page()
+    try:
+        values, texts = page.evaluate(ALL_CODES_JS, [DECODE_JS, VALUE_JS])
+    finally:
+        page.close()
+    want = code_values(np.arange(65536, dtype=np.uint16))
+    np.testing.assert_array_equal(np.array(values, dtype=float), want)  # (None: NaN)
+    shown = [f"{v:.3g}" if v == v else "none: an apex below 0, or missing" for v in want]
+    assert texts == shown
+    assert {"1.97", "0.0123", "23.8", "1.48e-05", "-0.00708", "0"} <= set(texts)
 
 
 def test_a_map_opened_from_its_tab_is_the_map_a_link_opens(browser, app_server, artifacts):
@@ -177,10 +213,17 @@ CELL_POINT_JS = """([x, y]) => {
 }"""
 
 
+def tooltips(page) -> list[str]:
+    """The visible tooltips' text."""
+    page.wait_for_timeout(800)
+    return [t["text"] for t in deep_query(page, "[class*=tooltip]") if t["visible"]]
+
+
 def test_the_hertz_map_s_cells_take_an_eps_move_and_hover(browser, app_server, artifacts):
-    """The Hertz map's rectangles (one a cell, app/map_slices.py ``drawn_as_cells``): an eps
-    move gives them the new slice's values, read here from the cube, their edges kept; the
-    hover over a cell gives its mu, tau_d/tau_f and value."""
+    """The Hertz map's rectangles (one a cell, app/map_slices.py ``drawn_as_cells``), placed in
+    the browser from their index: each lies between its axis values' log10 midpoints; an eps
+    move gives them the new slice's codes; the hover over a cell gives its mu, tau_d/tau_f and
+    its value, read here from the cube: exactly its three significant digits (``.3g``)."""
     import math
 
     import twoball
@@ -192,25 +235,73 @@ def test_the_hertz_map_s_cells_take_an_eps_move_and_hover(browser, app_server, a
     cube = twoball.load_cube("hertz-h1e4")
     try:
         expect(page.get_by_text("Hertz length unit").first).to_be_visible(timeout=60_000)
-        (before,) = sources_with(page, "left", "right", "bottom", "top", "value")
+        left, right, bottom, top = (np.array(e) for e in page.evaluate(CELL_EDGES_JS))
+        cells = np.arange(2500)
+        for low, high, axis, index in ((left, right, "mu", cells % 50),
+                                       (bottom, top, "tau_ratio", cells // 50)):  # fmt: skip
+            logs = np.log10(cube[axis].values)
+            edges = np.r_[logs[0], (logs[1:] + logs[:-1]) / 2, logs[-1]]
+            np.testing.assert_allclose(low, edges[index], atol=1e-6)
+            np.testing.assert_allclose(high, edges[index + 1], atol=1e-6)
+        (before,) = sources_with(page, "value")
         assert press_slider(page, "eps", key="End") > 0
         eps = nearest_eps(float(page.locator(".bk-slider-value").first.inner_text()), "hertz-h1e4")
         expect(page.get_by_text(f"at eps = {eps:g} (nearest").first).to_be_visible()
         page.wait_for_timeout(500)
-        (after,) = sources_with(page, "left", "right", "bottom", "top", "value")
-        for edge in ("left", "right", "bottom", "top"):
-            assert after[edge] == before[edge]
-        want = cube["h2_over_h1"].sel(eps=eps).transpose("tau_ratio", "mu").values.ravel()
-        want = np.where(want > 0, want, np.nan).astype(np.float32)
-        np.testing.assert_array_equal(np.array(after["value"], dtype=np.float32), want)
+        (after,) = sources_with(page, "value")
+        assert after["value"] != before["value"]
+        assert np.array_equal(page.evaluate(CELL_EDGES_JS)[0], left)  # (still in place)
         mu, tau = float(cube["mu"][7]), float(cube["tau_ratio"][12])
         page.mouse.move(*page.evaluate(CELL_POINT_JS, [math.log10(mu), math.log10(tau)]))
         value = float(cube["h2_over_h1"].sel(eps=eps, mu=mu, tau_ratio=tau))
-        tip = f"mu:\t{mu:.3g}\ntau_d/tau_f:\t{tau:.3g}\nh2 / h1:\t{value:.3f}"
-        page.wait_for_timeout(800)
-        tips = [t["text"] for t in deep_query(page, "[class*=tooltip]") if t["visible"]]
-        assert tip in tips, tips
+        tips = {t for t in tooltips(page) if t.startswith("mu:\t")}
+        (tip,) = tips  # (the tooltip, and the element holding it)
+        head = f"mu:\t{mu:#.3g}\ntau_d/tau_f:\t{tau:#.3g}\nh2 / h1:\t"  # (JS toPrecision)
+        assert tip == f"{head}{value:.3g}", tip
         page.screenshot(path=folder / "map_hertz_cells_hover.png")
+        assert errors == []
+    finally:
+        context.close()
+
+
+# where a point of the linear map (log10 mu, log10 tau_ratio) lies in the page, in px
+IMAGE_POINT_JS = CELL_POINT_JS.replace('"Quad"', '"Image"')
+
+
+def test_the_map_s_hover_reads_a_value_and_says_none(browser, app_server, artifacts):
+    """The linear map's hover reads a cell's value from its code: the cube's value to three
+    significant digits, exactly as Python's ``.3g`` prints it (small ones too), and, over a
+    grey cell (an apex below 0), says there is none: Bokeh had printed "NaN" before the
+    hover's own text could say so."""
+    import math
+
+    from app.map_slices import map_cube
+
+    base, _ = app_server
+    folder = artifacts / "map_force"
+    folder.mkdir(exist_ok=True)
+    context, page, errors = open_page(browser, f"{base}/app?scene=map&eps=0.9")
+    cube = map_cube()["h2_over_h1"].sel(eps=0.9)
+    try:
+        expect(page.get_by_text("at eps = 0.9 (nearest").first).to_be_visible(timeout=60_000)
+        values = cube.transpose("tau_ratio", "mu").values
+        (rows, columns) = np.nonzero(values <= 0)
+        small = np.unravel_index(np.nanargmin(np.where(values > 0, values, np.nan)), values.shape)
+        cells = ((40, 30, False), (10, 60, False), (*small, False), (rows[0], columns[0], True))
+        for row, column, none in cells:
+            mu, tau = float(cube["mu"][column]), float(cube["tau_ratio"][row])
+            page.mouse.move(0, 0)
+            page.mouse.move(*page.evaluate(IMAGE_POINT_JS, [math.log10(mu), math.log10(tau)]))
+            tips = {t for t in tooltips(page) if t.startswith("mu:\t")}
+            (tip,) = tips  # (the tooltip, and the element holding it)
+            head = f"mu:\t{mu:#.3g}\ntau_d/tau_f:\t{tau:#.3g}\nh2 / h1:\t"  # (JS toPrecision)
+            assert tip.startswith(head), tip
+            shown = tip[len(head) :]
+            if none:
+                assert shown == "none: an apex below 0, or missing", tip
+                page.screenshot(path=folder / "map_hover_none.png")
+            else:
+                assert shown == f"{float(values[row, column]):.3g}", tip
         assert errors == []
     finally:
         context.close()
