@@ -212,6 +212,9 @@ FIRST_DECADE, LAST_DECADE = -18, 17  # (36 decades: 32400 codes a sign)
 POSITIVE_CODES, NEGATIVE_CODES = 1, 32768  # the code of +-100e(FIRST_DECADE - 2)
 ZERO_CODE = 0
 NO_CODE = 65535  # a cell without a value
+# a scaled magnitude (100 to 1000) this near a rounding tie or its decade's ends is coded by
+# Python's own formatting (:func:`encoded`): NumPy's is within 1e-10 of the exact value
+DOUBTFUL = 1e-6
 
 
 def encoded(values: np.ndarray) -> np.ndarray:
@@ -220,9 +223,35 @@ def encoded(values: np.ndarray) -> np.ndarray:
     value) :data:`NO_CODE`, 0 :data:`ZERO_CODE`, else the sign's first code plus
     ``(decade - FIRST_DECADE) * MANTISSAS + mantissa - 100``. A magnitude beyond the decades
     (above 9.99e17 or below 1e-18: none of the shipped cubes', 1.4e-5 to 80) is clipped to the
-    largest or smallest."""
+    largest or smallest.
+
+    Worked out in NumPy; a value whose scaled magnitude lies within :data:`DOUBTFUL` of a
+    rounding tie or of its decade's ends, where binary arithmetic might round otherwise than
+    Python's decimal formatting, takes Python's own (:func:`_code`): one value at a time,
+    a slice took 7 ms at every eps move."""
     values = np.asarray(values, dtype=float)
-    return np.array([_code(v) for v in values.ravel()], dtype=np.uint16).reshape(values.shape)
+    magnitude = np.abs(values)
+    valued = np.isfinite(values) & (magnitude > 0)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        decade = np.floor(np.log10(magnitude))
+        scaled = magnitude / 10.0 ** (decade - 2)  # (in [100, 1000) but for rounding)
+    mantissa = np.rint(scaled)
+    doubtful = valued & (
+        (np.abs(scaled - np.floor(scaled) - 0.5) < DOUBTFUL)
+        | (scaled < 100 + DOUBTFUL)
+        | (scaled > 999.5 - DOUBTFUL)
+    )
+    clipped_high, clipped_low = decade > LAST_DECADE, decade < FIRST_DECADE
+    mantissa = np.where(clipped_high, 999, np.where(clipped_low, 100, mantissa))
+    decade = np.clip(decade, FIRST_DECADE, LAST_DECADE)
+    first = np.where(values > 0, POSITIVE_CODES, NEGATIVE_CODES)
+    with np.errstate(invalid="ignore"):
+        codes = first + (decade - FIRST_DECADE) * MANTISSAS + mantissa - 100
+    codes = np.where(valued, codes, np.where(magnitude == 0, ZERO_CODE, NO_CODE))
+    codes = codes.astype(np.uint16)
+    for index in np.flatnonzero(doubtful):
+        codes.flat[index] = _code(float(values.flat[index]))
+    return codes
 
 
 def _code(value: float) -> int:

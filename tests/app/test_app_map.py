@@ -559,6 +559,22 @@ def test_the_codes_round_as_the_hover_and_clip_beyond_their_decades():
     assert held[6] != held[6] and (held[7], held[8]) == (1e-18, -9.99e17)
 
 
+def test_the_codes_worked_out_in_numpy_round_as_python_does_at_ties_and_decade_ends():
+    """The codes are worked out in NumPy: values over every decade, both signs, and those
+    where binary arithmetic and Python's decimal rounding could part (mantissas exactly
+    halfway, 100.5 or 2.675e-3, values that round up into the next decade, 9.995, 999.5) are
+    coded as exactly the number the hover prints."""
+    from app.map_slices import encoded
+
+    rng = np.random.default_rng(7)
+    spread = 10 ** rng.uniform(-17.9, 17.9, 20000) * rng.choice([-1.0, 1.0], 20000)
+    mantissas = np.arange(100, 1000, dtype=float)
+    ties = np.concatenate([(mantissas + 0.5) * 10.0**k for k in (-7, -3, 0, 2)])
+    edges = np.array([9.995, 999.5, 0.09995, 2.675e-3, 1.005, 99.95, -9.995e-4, 1e-18, 9.99e17])
+    values = np.concatenate([spread, ties, -ties, mantissas, edges])
+    np.testing.assert_array_equal(code_values(encoded(values)), three_digits(values))
+
+
 def test_a_ratio_with_an_apex_below_zero_is_grey_not_a_colour_of_the_scale():
     """h2/h1 is negative where the first apex lies below 0 (h1 = -134, h2 = 9329: a strong
     delayed rebound): drawn dark blue, it read as h2 far below h1. It is no ratio: NaN in the
