@@ -1226,3 +1226,40 @@ def test_a_url_s_scene_name_opens_its_scene_in_any_case():
     assert explorer.tabs.active == list(SCENE_REGISTRY).index("map")
     assert explorer.scenes["map"].active and "drop" not in explorer.scenes
     assert not explorer.controls.message.visible
+
+
+TEXT_PAGES = [
+    {"scene": "drop"},
+    {"scene": "drop", "units": "SI", "present": "1"},
+    {"scene": "drop", "eps": "0.3", "mu": "10"},
+    {"scene": "closeup", "mu": "0.01"},
+    {"scene": "map", "eps": "0.9"},
+    {"scene": "accuracy"},
+    {"scene": "stack", "N": "4", "force": "hertz", "units": "SI"},
+    {"scene": "stack", "ratio": "0.02", "N": "8"},  # (refused: the solver's limit, said)
+    {"scene": "stack", "stack_eps": "0.5, 0.7, 0.9", "N": "4"},
+]
+
+
+@pytest.mark.parametrize(
+    "query", TEXT_PAGES, ids=lambda q: "&".join(f"{k}={v}" for k, v in q.items())
+)
+def test_every_text_renders_as_panels_markdown_pane(query):
+    """app.scene.Text parses with CommonMark and tables (TEXT_MARKDOWN), not Panel's GFM-like
+    parser: every text the scenes show (summaries, tables, notes, refusals, in both unit
+    systems and on a projector) gives the same HTML as Panel's own Markdown pane."""
+    from app.scene import Text
+
+    explorer = Explorer(query)
+    page = explorer.page()
+    scene = explorer.scene(query["scene"])
+    scene.active = True
+    scene.redraw_now()
+    shown = [*page.main, *page.sidebar, scene.__panel__()]
+    texts = {id(pane): pane for area in shown for pane in area.select(Text) if pane.object}
+    assert texts
+    if query.get("ratio") == "0.02":
+        assert any("outside what the solver carries" in pane.object for pane in texts.values())
+    for pane in texts.values():
+        markdown = pn.pane.Markdown(pane.object)
+        assert pane._transform_object(pane.object) == markdown._transform_object(pane.object)
