@@ -239,11 +239,18 @@ async def cycles(url: str, count: int, rounds: int, pid: int, settle: float) -> 
     return sizes
 
 
-def start_server(command: list[str], port: int, log: Path, processes: int, compiles: bool):
+def start_server(
+    command: list[str],
+    port: int,
+    log: Path,
+    processes: int,
+    compiles: bool,
+    env: dict | None = None,
+):
     """Start the server and wait until it serves, and (``compiles``) until each of its
     processes has its compiled kernels in use: their loading from the disk cache, in a thread
     and a child process, is a start's cost, not a move's."""
-    process = serve(command, log)
+    process = serve(command, log, env=env)
     wait_until_served(f"http://127.0.0.1:{port}/liveness", process, timeout=300)
     deadline = time.monotonic() + 600
     while compiles and log.read_text().count("compiled kernels in use") < processes:
