@@ -941,7 +941,7 @@ def test_a_page_s_text_panes_have_their_style_sheets_in_its_first_document(scene
     from bokeh.models import ImportedStyleSheet
     from panel.io.state import set_curdoc
 
-    from app.scene import Text
+    from app.scene import PAGE_DESIGN, Text
 
     def named(sheets: list) -> list:
         return [sheet.url if isinstance(sheet, ImportedStyleSheet) else sheet for sheet in sheets]
@@ -960,7 +960,9 @@ def test_a_page_s_text_panes_have_their_style_sheets_in_its_first_document(scene
     document = Document()
     with set_curdoc(document):
         explorer = Explorer({"scene": scene, "present": present})
-        explorer.page().server_doc(document)
+        page = explorer.page()
+        assert page.design is PAGE_DESIGN  # (the text panes' own design is the page's)
+        page.server_doc(document)
         assert checked(explorer.scenes[scene]) >= 1
         other = "stack" if scene != "stack" else "drop"
         explorer.state.scene = other  # (its tab chosen)
