@@ -227,8 +227,8 @@ def encoded(values: np.ndarray) -> np.ndarray:
 
     Worked out in NumPy; a value whose scaled magnitude lies within :data:`DOUBTFUL` of a
     rounding tie or of its decade's ends, where binary arithmetic might round otherwise than
-    Python's decimal formatting, takes Python's own (:func:`_code`): one value at a time,
-    a slice took 7 ms at every eps move."""
+    Python's decimal formatting, takes Python's own digits (:func:`decimal_digits`): one value
+    at a time, a slice took 7 ms at every eps move."""
     values = np.asarray(values, dtype=float)
     magnitude = np.abs(values)
     valued = np.isfinite(values) & (magnitude > 0)
@@ -241,33 +241,22 @@ def encoded(values: np.ndarray) -> np.ndarray:
         | (scaled < 100 + DOUBTFUL)
         | (scaled > 999.5 - DOUBTFUL)
     )
+    for index in np.flatnonzero(doubtful):
+        mantissa.flat[index], decade.flat[index] = decimal_digits(float(magnitude.flat[index]))
     clipped_high, clipped_low = decade > LAST_DECADE, decade < FIRST_DECADE
     mantissa = np.where(clipped_high, 999, np.where(clipped_low, 100, mantissa))
     decade = np.clip(decade, FIRST_DECADE, LAST_DECADE)
     first = np.where(values > 0, POSITIVE_CODES, NEGATIVE_CODES)
     with np.errstate(invalid="ignore"):
         codes = first + (decade - FIRST_DECADE) * MANTISSAS + mantissa - 100
-    codes = np.where(valued, codes, np.where(magnitude == 0, ZERO_CODE, NO_CODE))
-    codes = codes.astype(np.uint16)
-    for index in np.flatnonzero(doubtful):
-        codes.flat[index] = _code(float(values.flat[index]))
-    return codes
+    return np.where(valued, codes, np.where(magnitude == 0, ZERO_CODE, NO_CODE)).astype(np.uint16)
 
 
-def _code(value: float) -> int:
-    """One value's code (:func:`encoded`)."""
-    if not math.isfinite(value):
-        return NO_CODE
-    if value == 0:
-        return ZERO_CODE
-    digits, _, decade = f"{abs(value):.2e}".partition("e")  # ("1.97", "-05"): as .3g rounds
-    mantissa, decade = int(digits.replace(".", "")), int(decade)
-    if decade > LAST_DECADE:
-        mantissa, decade = 999, LAST_DECADE
-    elif decade < FIRST_DECADE:
-        mantissa, decade = 100, FIRST_DECADE
-    first = POSITIVE_CODES if value > 0 else NEGATIVE_CODES
-    return first + (decade - FIRST_DECADE) * MANTISSAS + mantissa - 100
+def decimal_digits(magnitude: float) -> tuple[int, int]:
+    """A positive value's three significant digits as Python's decimal formatting rounds them
+    (``.3g``): its mantissa 100..999 and its decade."""
+    digits, _, decade = f"{magnitude:.2e}".partition("e")  # ("1.97", "-05")
+    return int(digits.replace(".", "")), int(decade)
 
 
 def slice_image(
