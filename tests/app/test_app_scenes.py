@@ -19,6 +19,7 @@ import twoball
 from app.collisions import collisions
 from app.drop import TRAILS
 from app.explorer import Explorer
+from app.scene import Scene
 from app.map_slices import map_cube
 from app.scenes import SCENE_REGISTRY, SCENES
 from app.state import ExplorerState, metres_text, url_query
@@ -55,6 +56,21 @@ def test_a_page_opens_on_the_scene_its_url_names(scene):
     assert not explorer.scenes[scene].active
     assert explorer.scenes[explorer.state.scene].active
     assert explorer.tabs.active == SCENES.index(explorer.state.scene)
+
+
+@pytest.mark.parametrize("scene", ["drop", "closeup", "map", "stack"])
+def test_a_scene_is_drawn_once_when_its_page_opens(scene, monkeypatch):
+    """Its layout draws it; it is not redrawn on top for having come on screen (the Stack was
+    drawn twice, its data sent again after the page's document). Back on screen after another
+    scene, it is redrawn (once). (The Accuracy scene measures instead: test_app_accuracy.py.)"""
+    redraws = []
+    monkeypatch.setattr(Scene, "redraw_now", lambda self: redraws.append(type(self).__name__))
+    explorer = rendered({"scene": scene})
+    assert redraws == []
+    assert explorer.scenes[scene].computations == 1  # (drawn, by its layout)
+    explorer.state.scene = "drop" if scene != "drop" else "map"
+    explorer.state.scene = scene
+    assert redraws.count(type(explorer.scenes[scene]).__name__) == 1
 
 
 @pytest.mark.parametrize("present", [False, True])
