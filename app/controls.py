@@ -277,6 +277,31 @@ class Controls(Built):
 
     def __init__(self, messages: list[str] | None = None, **params):
         super().__init__(**params)
+        self._applying_preset = False
+        self._syncing = False  # True while the widgets follow the state
+        # the two-ball controls (preset, units, sliders, their meanings) are made when a scene
+        # they drive is first shown (show_scene_controls): a page opened on the Stack, which
+        # has sliders of its own, never showed them yet paid 14-16 ms of its opening for them
+        # (benchmarks/app_open.py)
+        self.two_ball: pn.Column | None = None
+        # (a watcher, not @param.depends: _show_state reads which parameters changed)
+        self.state.param.watch(
+            self._show_state, ["eps", "mu", "tau_ratio", "height", "eps12", "units"]
+        )
+        # a slider released, here or elsewhere (a phone's copies under the plot: PhoneSliders)
+        self.state.param.watch(lambda event: self.show_messages([]), "slider_moved")
+        # on a phone the sidebar lies under the scenes, 1500 px down, where a student never saw
+        # that a link's value was refused: the URL's messages go above the scenes, into the
+        # layout the explorer gives (``messages_at``), which shows them when it is built
+        self.messages_above_scenes = on_a_phone()
+        self.messages_at: pn.layout.ListLike | None = None
+        self.show_messages(messages or [])
+        self.scene_controls = pn.Column(sizing_mode="stretch_width")
+        self.explained: Folded | None = None  # (a projector's: layout)
+
+    def _make_two_ball(self) -> None:
+        """The preset, the units and the two-ball sliders (``two_ball``) and the sliders'
+        meanings, following the state, placed in the layout if it is built."""
         # on a projector the titles are short: at 20 px a long one pushed its value out of
         # the sidebar ("mu = m2/m1 (log scale): 0.09...")
         self.sliders = two_ball_sliders(self.state, short=self.state.presentation)
@@ -290,37 +315,39 @@ class Controls(Built):
             stylesheets=for_a_room(self.state.presentation),
         )
         self.preset.param.watch(self._apply_preset, "value")
-        self._applying_preset = False
-        self.two_ball = pn.Column(self.preset, sizing_mode="stretch_width")
         self.units = pn.widgets.RadioButtonGroup(
             label="Units",
             options={"dimensionless": "dimensionless", "metres, seconds": "SI"},
             value=self.state.units,  # (a link syncs changes only: a lesson's URL opens in SI)
         )
         self.units.link(self.state, value="units", bidirectional=True)
-        self._syncing = False  # True while the widgets follow the state
         self.meanings = pn.pane.Markdown(self._meanings(), sizing_mode="stretch_width")
-        # (a watcher, not @param.depends: _show_state reads which parameters changed)
-        self.state.param.watch(
-            self._show_state, ["eps", "mu", "tau_ratio", "height", "eps12", "units"]
+        self.two_ball = pn.Column(
+            self.preset, self.units, *self.sliders.values(), sizing_mode="stretch_width"
         )
-        # a slider released, here or elsewhere (a phone's copies under the plot: PhoneSliders)
-        self.state.param.watch(lambda event: self.show_messages([]), "slider_moved")
-        # on a phone the sidebar lies under the scenes, 1500 px down, where a student never saw
-        # that a link's value was refused: the URL's messages go above the scenes, into the
-        # layout the explorer gives (``messages_at``), which shows them when it is built
-        self.messages_above_scenes = on_a_phone()
-        self.messages_at: pn.layout.ListLike | None = None
         self._show_state()
-        self.show_messages(messages or [])
-        self.two_ball.extend([self.units, *self.sliders.values()])
         self._syncing = True  # a link's preset (state.read_query): shown, its drop already set
         try:
             self.preset.value = self.state.preset
         finally:
             self._syncing = False
-        self.scene_controls = pn.Column(sizing_mode="stretch_width")
-        self.explained: Folded | None = None  # (a projector's: layout)
+        if self._layout is not None:  # (a page opened on the Stack, now on a two-ball scene)
+            objects = self._layout.objects
+            shown = [o for o in (self.scene_controls, self.advanced.button) if o in objects]
+            self._layout.insert(self._layout.objects.index(shown[0]), self.two_ball)
+            self._place_meanings(self._layout)
+
+    def _place_meanings(self, layout: pn.Column) -> None:
+        """The sliders' meanings at the foot of the controls."""
+        if self.state.presentation:
+            # On a projector the sliders' meanings are folded: open, their 720 px ran under
+            # "advanced", and the sidebar scrolled, the button itself cut at the screen's foot
+            # (1280x720, a teacher's trial); the teacher says what the sliders mean
+            self.explained = Folded("what the sliders mean", lambda: [self.meanings])
+            self.explained.button.visible = self.meanings.visible  # (show_scene_controls)
+            layout.append(self.explained.place(layout))
+        else:
+            layout.append(self.meanings)
 
     # The message boxes, the preset's source and the advanced inputs are made when first
     # needed: most pages never show them, and each cost about a millisecond of a page's
@@ -342,7 +369,8 @@ class Controls(Built):
     def eps12(self) -> pn.widgets.TextInput:
         """The ball-ball restitution, typed (under "advanced"; empty: equal to eps)."""
         box = pn.widgets.TextInput(label="eps12 (ball-ball; empty: equal to eps)", width=140)
-        box.visible = self.two_ball.visible  # (not on the Stack: show_scene_controls)
+        # (not on the Stack: show_scene_controls)
+        box.visible = self.two_ball is not None and self.two_ball.visible
         self._inputs_follow_state(None, box)
         box.param.watch(self._eps12_typed, "value")
         return box
@@ -455,7 +483,8 @@ class Controls(Built):
         """Move the widgets to the state (after a preset, a map click or a URL); a change not
         made by the preset unselects it."""
         moved = any(e.name != "units" for e in events)
-        if moved and not self._applying_preset and self.preset.value:
+        made = self.two_ball is not None
+        if made and moved and not self._applying_preset and self.preset.value:
             self.preset.value = ""
         self._syncing = True
         try:
@@ -464,10 +493,10 @@ class Controls(Built):
             self._syncing = False
 
     def _follow_state(self) -> None:
-        s = self.state
-        follow_log_sliders(self.sliders, s)
-        if self.meanings.object != self._meanings():
-            self.meanings.object = self._meanings()
+        if self.two_ball is not None:
+            follow_log_sliders(self.sliders, self.state)
+            if self.meanings.object != self._meanings():
+                self.meanings.object = self._meanings()
         self._inputs_follow_state(self.__dict__.get("height"), self.__dict__.get("eps12"))
 
     def _inputs_follow_state(
@@ -515,34 +544,30 @@ class Controls(Built):
                 if self.url_message_shown() and not self.messages_above_scenes
                 else []
             ),
-            self.two_ball,
+            *([self.two_ball] if self.two_ball is not None else []),
             *([self.scene_controls] if self.scene_controls.objects else []),
             sizing_mode="stretch_width",
         )
         layout.append(self.advanced.place(layout))
-        if self.state.presentation:
-            # On a projector the sliders' meanings are folded: open, their 720 px ran under
-            # "advanced", and the sidebar scrolled, the button itself cut at the screen's foot
-            # (1280x720, a teacher's trial); the teacher says what the sliders mean
-            self.explained = Folded("what the sliders mean", lambda: [self.meanings])
-            self.explained.button.visible = self.meanings.visible  # (show_scene_controls)
-            layout.append(self.explained.place(layout))
-        else:
-            layout.append(self.meanings)
+        if self.two_ball is not None:
+            self._place_meanings(layout)
         return layout
 
     def show_scene_controls(self, own: pn.viewable.Viewable | None) -> None:
         """Show a scene's own controls (:meth:`Scene.own_controls`) instead of the two-ball
         sliders, their preset and meanings, which do not drive it (the Stack scene showed two
         'eps' sliders, one of them doing nothing there); None shows the two-ball ones."""
+        if own is None and self.two_ball is None:
+            self._make_two_ball()
         if own is not None and own not in self.scene_controls.objects:
             self.scene_controls.append(own)
             if self._layout is not None:  # (an empty box in every page cost a Bokeh column)
-                at = self._layout.objects.index(self.two_ball) + 1
+                at = self._layout.objects.index(self.advanced.button)
                 join(self._layout, self.scene_controls, at)
         for shown in self.scene_controls.objects:
             shown.visible = shown is own
-        self.two_ball.visible = self.meanings.visible = own is None
+        if self.two_ball is not None:
+            self.two_ball.visible = self.meanings.visible = own is None
         if self.explained is not None:  # (a projector's fold of the meanings: layout)
             self.explained.button.visible = own is None
         # eps12 is the two-ball drop's (a stack has its own eps per contact): typed on the Stack

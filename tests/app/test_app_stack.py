@@ -8,8 +8,10 @@ import pytest
 from appdriver import open_page, page_query, press_slider, slider_titles, sources_with
 from playwright.sync_api import expect
 
+import twoball
+from app.state import ExplorerState
 from twoball.stacks import simulate_stack
-from twoball.units import number_text
+from twoball.units import DIMENSIONLESS, number_text
 
 pytestmark = pytest.mark.browser
 
@@ -39,6 +41,39 @@ def test_the_stack_scene_shows_the_library_and_follows_its_sliders(browser, app_
         page.wait_for_timeout(600)
         assert page_query(page)["force"] == "hertz"
         page.screenshot(path=folder / "four_hertz.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_a_page_opened_on_the_stack_gets_the_two_ball_sliders_with_the_drop(
+    browser, app_server, artifacts
+):
+    """A page opened on the Stack has only the stack's sliders (the two-ball ones are made when
+    a scene they drive is first shown: app/controls.py); its Drop tab brings them, following
+    the URL's mu, above the (hidden) stack's, and they drive the drop."""
+    base, _ = app_server
+    folder = artifacts / "stack"
+    folder.mkdir(exist_ok=True)
+    context, page, errors = open_page(browser, f"{base}/app?scene=stack&mu=0.1")
+    try:
+        expect(page.get_by_text("3 balls, linear force")).to_be_visible(timeout=60_000)
+        assert not any(t.startswith("mu = m2/m1") for t in slider_titles(page))
+        page.locator(".bk-tab", has_text="Drop").click()
+        d = ExplorerState()
+        drop = twoball.simulate(d.eps, 0.1, d.tau_ratio, height=d.height, until="second")
+        summary = page.get_by_text(f"h1 = {DIMENSIONLESS.height(drop.h1)}").first
+        expect(summary).to_be_visible(timeout=60_000)
+        expect(page.locator(".bk-slider-title", has_text="mu = m2/m1").first).to_be_visible()
+        expect(page.locator(".bk-slider-title", has_text="balls N").first).to_be_hidden()
+        titles = [t.split(":")[0] for t in slider_titles(page)]  # (a title, then its value)
+        assert titles.index("eps (restitution)") < titles.index("balls N")  # (their order)
+        assert "mu = m2/m1 (log scale): 0.1" in slider_titles(page)  # (the URL's mu)
+        page.screenshot(path=folder / "stack_then_drop.png", full_page=True)
+        assert press_slider(page, "eps") > 0, "the eps slider did not redraw the drop"
+        page.wait_for_timeout(600)  # the URL is written shortly after a change
+        query = page_query(page)
+        assert query["scene"] == "drop" and float(query["eps"]) != d.eps
         assert errors == []
     finally:
         context.close()

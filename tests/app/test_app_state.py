@@ -59,7 +59,9 @@ def test_the_explorer_s_range_is_declared_once_and_inside_the_model_s(name):
         assert check_value(name, edge) == edge  # the model accepts it
         assert validate(name, str(edge), None) == (edge, None)
         ExplorerState(**{name: edge})  # so does the state
-    slider = Controls(state=ExplorerState()).sliders.get(name)
+    controls = Controls(state=ExplorerState())
+    controls.show_scene_controls(None)  # (a two-ball scene's: its sliders made then)
+    slider = controls.sliders.get(name)
     if slider is not None:
         ends = (math.log10(low), math.log10(high)) if name in LOG_SLIDERS else (low, high)
         assert (slider.start, slider.end) == pytest.approx(ends)
