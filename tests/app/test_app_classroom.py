@@ -255,10 +255,12 @@ def test_a_projector_s_sidebar_fits_its_screen(browser, app_server, artifacts, s
     meanings are one press away. (Opened once the server's kernels are compiled: until then
     the note that says so comes last in the sidebar, and may run past the screen's foot.)"""
     base, log = app_server
-    for _ in range(240):
+    for _ in range(600):  # (a first start under the test run's load took over 2 minutes)
         if "compiled kernels in use" in log.read_text():
             break
         time.sleep(0.5)
+    else:
+        pytest.fail("the server's kernels were not compiled within 5 minutes")
     context, page, errors = open_page(
         browser, f"{base}/app?present=1&scene={scene}", viewport=(1280, 720)
     )
