@@ -12,6 +12,11 @@ pages; CPU time of the process (``time.process_time``).
 Bokeh is set up as the server sets it up (``app_hooks.bokeh_as_served``: its defaults cached per
 class, no per-session diagnostics) unless ``--bokeh-as-shipped``.
 
+``--baseline DIR``: the same pages of another checkout DIR (e.g. ``git worktree add DIR
+5018baa``) built in a second process beside this tree's, a page in each in turn, so that the
+machine's state falls on both alike; the median of the pages' ratios, this tree over DIR. On
+this machine the same page's median swung by a third between runs minutes apart.
+
 ``--served``: the same pages opened one at a time from ``twoball serve --num-procs 1`` by a
 protocol client (tools/bokehclient.py), the server's CPU per page read from /proc (after each
 page, a second for its onload callbacks and the URL's rewrite), and the messages (PATCH-DOC) a
@@ -162,6 +167,49 @@ def served(scene: str, pages: int) -> tuple[list[float], list[int]]:
     return asyncio.run(run())
 
 
+def paired(scenes: list[str], pages: int, baseline: Path, extra: list[str]) -> None:
+    """Each scene's page built in turn by this tree and by ``baseline`` (a worker process each,
+    ``--worker``), and the ratio of each pair of pages' CPU."""
+    import subprocess
+
+    def worker(tree: Path, scene: str) -> subprocess.Popen:
+        command = [sys.executable, __file__, "--worker", str(tree), "--scene", scene]
+        return subprocess.Popen(
+            [*command, "--query", *extra], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+        )
+
+    def page(process: subprocess.Popen) -> float:
+        process.stdin.write("page\n")
+        process.stdin.flush()
+        return float(process.stdout.readline())
+
+    for scene in scenes:
+        ours, theirs = worker(REPO, scene), worker(baseline, scene)
+        try:
+            ours.stdout.readline(), theirs.stdout.readline()  # (each warmed up: "ready")
+            pairs = [(page(ours), page(theirs)) for _ in range(pages)]
+        finally:
+            for process in (ours, theirs):
+                process.stdin.close()
+                process.wait(timeout=60)
+        ratios = [a / b for a, b in pairs]
+        print(
+            f"{scene}: this tree {statistics.median(a for a, _ in pairs):.1f} ms, baseline "
+            f"{statistics.median(b for _, b in pairs):.1f} ms (medians of {pages}); ratio of "
+            f"pairs, median {statistics.median(ratios):.3f} "
+            f"(quartiles {np.percentile(ratios, 25):.3f}-{np.percentile(ratios, 75):.3f})"
+        )
+
+
+def serve_pages(query: dict[str, str]) -> None:
+    """A worker of :func:`paired`: builds a page (total CPU ms, printed) for each line read."""
+    measure(explorer_page, query, 1)
+    print("ready", flush=True)
+    for _ in sys.stdin:
+        parts, _, _ = explorer_page(query)
+        print(sum(parts.values()), flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--pages", type=int, default=10)
@@ -172,6 +220,8 @@ def main() -> None:
     )
     parser.add_argument("--profile", help="profile the pages of this scene instead")
     parser.add_argument("--served", action="store_true", help="from twoball serve, one by one")
+    parser.add_argument("--baseline", type=Path, help="another checkout, paired page by page")
+    parser.add_argument("--worker", type=Path, help=argparse.SUPPRESS)  # (a tree: paired)
     parser.add_argument(
         "--bokeh-as-shipped",
         action="store_true",
@@ -187,6 +237,11 @@ def main() -> None:
                 f"messages after the document: {statistics.median(patches):.0f}"
             )
         return
+    if args.baseline:
+        paired(args.scene, args.pages, args.baseline, args.query)
+        return
+    if args.worker:  # (this tree's app, or the baseline's: paired)
+        sys.path.insert(0, str(args.worker))
     pn.extension()
     from app.app_hooks import bokeh_as_served, exempt_the_server_from_collection
     from twoball import warmup
@@ -198,6 +253,9 @@ def main() -> None:
     exempt_the_server_from_collection()  # as the server does after start-up
     extra = {"present": "1"} if args.present else {}
     extra.update(item.split("=", 1) for item in args.query)
+    if args.worker:
+        serve_pages({"scene": args.scene[0], **extra})
+        return
     if args.profile:
         query = {"scene": args.profile, **extra}
         measure(explorer_page, query, 1)
