@@ -17,6 +17,11 @@ class, no per-session diagnostics) unless ``--bokeh-as-shipped``.
 machine's state falls on both alike; the median of the pages' ratios, this tree over DIR. On
 this machine the same page's median swung by a third between runs minutes apart.
 
+``--served --baseline DIR``: both trees served (``twoball serve --num-procs 1`` each), pages
+opened on each in turn, ``--pages`` a block, and each block's server CPU (all threads, to the
+nanosecond) over the following 8 s in which its sessions are discarded and collected: a
+page's whole cost to the server, the ratio of each block's, and this tree's per page.
+
 ``--served``: the same pages opened one at a time from ``twoball serve --num-procs 1`` by a
 protocol client (tools/bokehclient.py), the server's CPU per page read from /proc (after each
 page, a second for its onload callbacks and the URL's rewrite), and the messages (PATCH-DOC) a
@@ -210,6 +215,57 @@ def serve_pages(query: dict[str, str]) -> None:
         print(sum(parts.values()), flush=True)
 
 
+def served_paired(scene: str, pages: int, baseline: Path, blocks: int = 4) -> None:
+    """Pages opened on this tree's server and the baseline's in turn (:func:`paired`, served)."""
+    import asyncio
+    import tempfile
+
+    sys.path.insert(0, str(REPO / "benchmarks"))
+    sys.path.insert(0, str(REPO / "tools"))
+    from appdriver import free_port
+    from bokehclient import PageClient
+    from served_moves import served_from, thread_cpu_seconds
+
+    async def run() -> list[tuple[float, float]]:
+        servers = []
+        try:
+            for checkout in (None, baseline):
+                port = free_port()
+                log = Path(tempfile.mkdtemp()) / "server.log"
+                servers.append((f"http://127.0.0.1:{port}/app?scene={scene}",
+                                served_from(checkout, port, log)))  # fmt: skip
+            costs = []
+            for block in range(blocks + 1):  # (the first: each process's first pages)
+                start = [thread_cpu_seconds(process.pid) for _, process in servers]
+                for _ in range(pages):
+                    for url, _ in servers:
+                        client = PageClient(url)
+                        await client.open()
+                        await asyncio.sleep(0.5)  # (its onload callbacks, its URL's rewrite)
+                        await client.close()
+                await asyncio.sleep(8)  # (closed sessions discarded within 6 s, collected)
+                spent = [
+                    thread_cpu_seconds(p.pid) - s for (_, p), s in zip(servers, start, strict=True)
+                ]
+                if block:
+                    costs.append((1e3 * spent[0] / pages, 1e3 * spent[1] / pages))
+            return costs
+        finally:
+            for _, process in servers:
+                process.terminate()
+                process.wait(timeout=30)
+
+    costs = asyncio.run(run())
+    ratios = [ours / theirs for ours, theirs in costs]
+    print(
+        f"{scene}: served, server CPU a page (opened, loaded, closed, collected), this tree "
+        f"{statistics.median(c[0] for c in costs):.0f} ms, baseline "
+        f"{statistics.median(c[1] for c in costs):.0f} ms (medians of {blocks} blocks of "
+        f"{pages}); ratio, median of blocks {statistics.median(ratios):.3f} "
+        f"({min(ratios):.3f} to {max(ratios):.3f})"
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--pages", type=int, default=10)
@@ -228,6 +284,10 @@ def main() -> None:
         help="Bokeh as installed, not as the server sets it up (app_hooks.bokeh_as_served)",
     )
     args = parser.parse_args()
+    if args.served and args.baseline:
+        for scene in args.scene:
+            served_paired(scene, args.pages, args.baseline)
+        return
     if args.served:
         for scene in args.scene:
             costs, patches = served(scene, args.pages)
