@@ -195,3 +195,29 @@ def test_one_compiler_at_a_time_per_cache():
         assert server.stdout.readline().strip() == "compiling"  # waiting for the lock
     assert server.stdout.readline().strip() == "compiled"
     assert server.wait(timeout=60) == 0
+
+
+def test_the_python_stand_ins_are_all_put_back():
+    """A first start runs the kernels' Python functions while the compiler works, then puts
+    the compiled kernels back (twoball.jit). In a fresh process, where no kernel module was
+    imported yet, every module must have its compiled kernels again afterwards, those it
+    imports from another module too: hertz's ``force_bounds`` stayed a Python function, and a
+    first start with a cold cache failed to compile the Hertz kernel and stayed on Python
+    kernels ("Untyped global name 'force_bounds'")."""
+    code = (
+        "import importlib, sys\n"
+        "from numba.core.registry import CPUDispatcher\n"
+        "from twoball import jit\n"
+        "assert 'twoball.kernels.hertz' not in sys.modules\n"
+        "jit.use_python_kernels(); jit.use_compiled_kernels()\n"
+        "modules = [importlib.import_module(name) for name in jit.KERNEL_MODULES]\n"
+        "kernels = [v for m in modules for v in vars(m).values() if isinstance(v, CPUDispatcher)]\n"
+        "stand_ins = {id(k.py_func) for k in kernels}\n"
+        "left = [(m.__name__, a) for m in modules for a, v in vars(m).items()\n"
+        "        if id(v) in stand_ins]\n"
+        "print(len(kernels), left)\n"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    count, left = run.stdout.split(" ", 1)
+    assert int(count) > 50 and left.strip() == "[]", run.stdout

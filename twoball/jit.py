@@ -164,8 +164,12 @@ def use_python_kernels() -> None:
     """Run every kernel as its pure-Python function from now on (same results, ~100x slower)."""
     global state
     with _lock:
-        for name in KERNEL_MODULES:
-            module = importlib.import_module(name)
+        # every kernel module imported before any is swapped: one first imported midway took
+        # the Python stand-in of a kernel it imports from a module already swapped (hertz's
+        # ``force_bounds``), never saved and never put back, and the compiler then failed on
+        # it ("Untyped global name"): a first start with a cold cache stayed on Python kernels
+        modules = {name: importlib.import_module(name) for name in KERNEL_MODULES}
+        for name, module in modules.items():
             saved = _dispatchers.setdefault(name, {})
             for attribute, value in vars(module).items():
                 if isinstance(value, CPUDispatcher):
