@@ -19,8 +19,8 @@ import twoball
 from app.collisions import collisions
 from app.drop import TRAILS
 from app.explorer import Explorer
-from app.scene import Scene
 from app.map_slices import map_cube
+from app.scene import Scene
 from app.scenes import SCENE_REGISTRY, SCENES
 from app.state import ExplorerState, metres_text, url_query
 from twoball import ParameterError, presets
