@@ -371,14 +371,6 @@ def exempt_the_server_from_collection() -> None:
     Building a session allocates enough to start a full collection every few sessions, and
     Panel runs one after sessions close; each walked every object of the process, about 100 ms
     on 2 cores: a sixth of a page's opening cost, and seconds when a class closed its tabs.
-    Objects of the sessions themselves are collected as before (``gc.freeze``).
-
-    Full collections come ten times rarer (the third threshold 10 -> 100): each walked every
-    live session (those of the last ~20 s too, discarded 6-20 s after they close), 130 ms
-    every 6 pages opened one after another, 27 ms of a page's 160-200. The sessions' cycles
-    are still collected: Panel collects fully a few seconds after sessions close, and the
-    younger generations as before. Served pages opened in turn on both settings: a page's CPU
-    0.94-0.95 of what it was (``app_open.py --served --baseline``; docs/performance.md)."""
+    Objects of the sessions themselves are collected as before (``gc.freeze``)."""
     gc.collect()
     gc.freeze()
-    gc.set_threshold(*gc.get_threshold()[:2], 100)

@@ -597,22 +597,3 @@ def test_read_only_lifted_where_set_behaves_as_panels_own(monkeypatch):
     assert panel.reactive.edit_readonly.where_set
     assert run() == own
     assert own[:2] == (0.25, 0.25) and own[4]  # (a constant watcher saw the lift)
-
-
-def test_the_server_s_objects_are_exempt_and_full_collections_rarer():
-    """After start-up the server's own objects are out of the cycle collector's way, and full
-    collections, which walk every live session, come ten times rarer than Python's default
-    (app_hooks.exempt_the_server_from_collection); the younger generations' thresholds are
-    Python's. In a process of its own: freezing would keep this test run's objects."""
-    import subprocess
-    import sys
-
-    code = (
-        "import gc; before = gc.get_threshold()\n"
-        "from app.app_hooks import exempt_the_server_from_collection\n"
-        "exempt_the_server_from_collection()\n"
-        "print(before, gc.get_threshold(), gc.get_freeze_count() > 10000)\n"
-    )
-    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
-    assert run.returncode == 0, run.stderr
-    assert run.stdout.split(") (") == ["(700, 10, 10", "700, 10, 100) True\n"], run.stdout
