@@ -226,6 +226,39 @@ def test_a_presentation_clicker_drives_the_lesson(browser, app_server, artifacts
         context.close()
 
 
+FOCUSED_JS = """() => { let el = document.activeElement;
+  while (el && el.shadowRoot && el.shadowRoot.activeElement) el = el.shadowRoot.activeElement;
+  return el ? [el.tagName, el.type] : null; }"""
+
+
+@pytest.mark.browser
+def test_away_from_a_projector_the_keys_wait_for_a_prediction(browser, app_server):
+    """On a laptop (no present=1) a student predicts first: forward never skips the answer
+    (a new user's PageDown went from step 1 to 3 and never saw one); it puts the focus on the
+    choices. Once one is chosen, forward reveals, then goes on."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?step=1", viewport=SIZES["projector"])
+    title = "Step {} of " + str(len(STEPS))
+    try:
+        waiting = page.get_by_role("button", name=CHOOSE_FIRST)
+        expect(waiting).to_be_visible()
+        page.keyboard.press("ArrowRight")
+        page.keyboard.press("PageDown")
+        page.wait_for_timeout(1000)  # (a step changed by the server would have come by now)
+        expect(page.get_by_text(title.format(1))).to_be_visible()
+        expect(waiting).to_be_visible()
+        assert page.evaluate(FOCUSED_JS) == ["INPUT", "radio"]
+        page.get_by_text(STEPS[0].choices[STEPS[0].answer], exact=True).click()
+        expect(page.get_by_role("button", name="Reveal the answer")).to_be_enabled()
+        page.keyboard.press("PageDown")
+        _answer(page).wait_for()
+        page.keyboard.press("PageDown")
+        page.get_by_text(title.format(2)).wait_for()
+        assert errors == []
+    finally:
+        context.close()
+
+
 def _phone_with_held_messages(browser):
     """A phone's page (context, page, link) whose messages from the server are held while
     ``link["held"]`` is a list (set it to ``[]``), then sent on by :func:`_release`."""
