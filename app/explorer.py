@@ -30,7 +30,10 @@ PAGE_CSS = """
                         height: auto !important; flex: none !important; }
   #header .title, .title { font-size: 1.15rem !important; white-space: normal; }
   #sidebar-toggle { display: none !important; }
+  #twoball-projector { display: none; }
 }
+#twoball-projector { margin-left: auto; margin-right: 0.5rem; color: var(--header-color);
+                     font-size: 1.1rem; text-decoration: underline; }
 """
 # A change the server has not answered yet (scene.PENDING_JS marks the body): after a quarter of
 # a second, so that a quick answer never flickers, the scene dims and a banner says the plots

@@ -13,7 +13,8 @@ from .scene import send_without_delay
 # presentation clicker's keys drive the lesson; a11y.js, names and a focus ring the widgets lack;
 # drag.js, a slider's drag stays in the page until its release; animation.js, the animations
 # drawn in the page (app/animation.py); pending.js, a page waiting for its change's answer
-# (app/scene.py); lesson.js, the lesson's card scrolled to each new step
+# (app/scene.py); lesson.js, the lesson's card scrolled to each new step; projector.js, the
+# header's link to the projector view and back
 pn.extension(
     notifications=False,
     js_files={
@@ -24,6 +25,7 @@ pn.extension(
         "animation": "app/static/animation.js",
         "pending": "app/static/pending.js",
         "lesson": "app/static/lesson.js",
+        "projector": "app/static/projector.js",
     },
 )
 

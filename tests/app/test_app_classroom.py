@@ -243,6 +243,37 @@ def test_presentation_mode_fits_a_projector(browser, app_server, artifacts):
         context.close()
 
 
+def test_the_header_links_to_the_projector_view_and_back(browser, app_server, artifacts):
+    """A teacher at a projector finds its view in the page (a new user found it only in the
+    README): the header's link reloads the page's URL as it is at the click (the scene chosen
+    since) with present=1, in large text; its link there leads back; a phone has none."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?eps=0.8", viewport=(1366, 768))
+    font = "() => parseFloat(getComputedStyle(document.body).fontSize)"
+    try:
+        link = page.locator("#twoball-projector")
+        expect(link).to_have_text("Projector view")
+        assert page.evaluate(font) < 18
+        tab(page, "First collision")
+        page.wait_for_url(re.compile(r"scene=closeup"))
+        link.click()
+        page.wait_for_url(re.compile(r"present=1"))
+        expect(link).to_have_text("Leave projector view")
+        assert "scene=closeup" in page.url and "eps=0.8" in page.url, page.url
+        wait_for_plots(page)
+        assert page.evaluate(font) >= 18  # (PRESENTATION_CSS)
+        page.screenshot(path=artifacts / "projector_link.png")
+        link.click()
+        page.wait_for_url(lambda url: "present" not in url)
+        expect(link).to_have_text("Projector view")
+        assert "scene=closeup" in page.url and page.evaluate(font) < 18, page.url
+        page.set_viewport_size({"width": 390, "height": 844})
+        expect(link).to_be_hidden()
+        assert errors == []
+    finally:
+        context.close()
+
+
 SIDEBAR_SCROLLS_JS = """() => { const s = document.querySelector("#sidebar");
   return [s.scrollHeight, s.clientHeight]; }"""
 
