@@ -51,14 +51,15 @@ STEPS = (
         scene="drop",
         drop={"eps": 1.0, "eps12": None, "mu": 0.01, "tau_ratio": 1.0, "height": HEIGHT},
         look_for="Two perfectly bouncy balls, the top one a hundred times lighter, dropped "
-        "together from 1 m with a small gap between them. The orange curve is the small ball's "
-        "height, the blue one the big ball's, the dotted green line what the textbook predicts.",
+        "together from about 1 m with a small gap between them. The orange curve is the small "
+        "ball's height, the blue one the big ball's, the dotted green line what the textbook "
+        "predicts.",
         question="How high does the small ball go, compared with the height it was dropped from?",
         choices=("Back to the same height", "Twice as high", "About 4 times", "About 8 to 9 times"),
         answer=3,
-        explanation="About 8.5 times: dropped from 1.04 m, it rises to 8.8 m (the question's "
-        "1 m is 1.04 m rounded). The textbook argument (the independent contact model): the "
-        "big ball bounces off the floor first and meets the small ball still falling; "
+        explanation="About 8.5 times: dropped from 1.04 m, it rises to 8.8 m. The textbook "
+        "argument (the independent contact model): the big ball bounces off the floor first "
+        "and meets the small ball still falling; "
         "seen from the big ball, the small ball comes in at twice the fall speed and leaves at "
         "twice it, so it goes up at three times the fall speed: 3 x 3 = 9 times the height for "
         "a very light ball. (Its second bounce goes higher still, to 21.1 m, when the balls "
