@@ -60,6 +60,12 @@ html, body { font-size: 20px; }
 """
 
 
+TABS_CSS = """
+:host(.bk-above) .bk-headers-wrapper { flex-wrap: wrap; }
+:host > [aria-hidden="true"] { display: none; }
+"""
+
+
 class Explorer(Built):
     """One session of the app, built from a URL query (``{key: text}``)."""
 
@@ -84,8 +90,10 @@ class Explorer(Built):
             active=SCENES.index(self.state.scene),
             sizing_mode="stretch_width",
             # the tab titles wrap onto a second row on a narrow screen (Bokeh scrolls them
-            # sideways, with no sign on a phone that two more tabs lie off screen)
-            stylesheets=[":host(.bk-above) .bk-headers-wrapper { flex-wrap: wrap; }"],
+            # sideways, with no sign on a phone that two more tabs lie off screen); a hidden
+            # scene takes no room: Panel hides it but keeps its place, so the page stayed as
+            # tall as the tallest scene visited (a phone: 300 px of blank above the controls)
+            stylesheets=[TABS_CSS],
         )
         self.tabs.param.watch(self._tab_chosen, "active")
         self.stage = self.lesson.stage()  # a step's question, in place of its covered scene
