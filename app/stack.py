@@ -198,7 +198,6 @@ class StackScene(Scene):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # plots and player within 720 px (scene.py)
             self.heights.height = self.animation.height = PROJECTOR_PLOT_HEIGHT
-            self.heights.xaxis.axis_label, self.heights.yaxis.axis_label = "time tau", "height X"
 
     def _sliders(self) -> list[pn.widgets.Widget]:
         """N, the mass ratio, eps and the gap, each linked both ways to the state (a set for the
@@ -223,7 +222,7 @@ class StackScene(Scene):
             ),
             ReleasedSlider.from_param(
                 state.stack_gap,
-                name="gap td/tau_f",
+                name="gap tau_d/tau_f",
                 step=0.05,
                 throttled=True,
                 sizing_mode="stretch_width",
@@ -242,8 +241,9 @@ class StackScene(Scene):
             title=None if self.state.presentation else "Heights to the top ball's h2",
             y_range=Range1d(0.0, 1.0),
             tools="pan,box_zoom,wheel_zoom,reset,save",
-            x_axis_label="time tau (dimensionless)",
-            y_axis_label="height X (dimensionless)",
+            # (the drop's dimensionless labels: a stack has no units to switch to)
+            x_axis_label="time tau",
+            y_axis_label="height X",
         )
         fig.toolbar.autohide = True
         height_axis(fig)

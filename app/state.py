@@ -88,7 +88,7 @@ class ExplorerState(Parameters):
     stack_gap = param.Number(
         default=0.2,
         bounds=(0.01, 2.0),  # touching balls (0) cannot be carried with five or more
-        doc="td/tau_f: how far apart the balls are at release.",
+        doc="tau_d/tau_f between each pair: how far apart the balls are at release.",
     )
     force = param.Selector(
         default="linear", objects=["linear", "hertz"], doc="The contact force of the stack."
