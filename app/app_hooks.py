@@ -1,7 +1,8 @@
 """Server hooks of the directory app: the solver must never keep a page waiting for numba.
 
 At start-up the kernels' Python functions stand in for them (same results, a drop in ~25 ms)
-while another process compiles them (15-40 s on a new machine or CPU, ~2 s from the disk cache);
+while another process compiles them (about 3 minutes on a new machine or CPU, ~2 s from the
+disk cache);
 then the machine code takes over (:func:`twoball.warmup.compile_in_background`). The map cube is
 opened once per server. A page closed while an update is being sent to it is a client leaving,
 not an error (:func:`drop_messages_to_closed_sockets`).

@@ -188,8 +188,8 @@ class Explorer(Built):
         if jit.state == "compiled":
             return []
         text = (
-            "First start on this machine: the solver is still being compiled (about a minute on "
-            "two idle cores, several on a busy machine). "
+            "First start on this machine: the solver is still being compiled (about 3 minutes, "
+            "more on a busy machine). "
             "Until then drops are computed in plain Python: the same results, a little slower."
         )
         return [alert(text, alert_type="info", sizing_mode="stretch_width")]

@@ -2,8 +2,9 @@
 own Python functions standing in for them while the compiler runs.
 
 The kernels are the ``@njit`` functions of :mod:`twoball.model` and of :mod:`twoball.kernels`
-(:data:`KERNEL_MODULES`). numba compiles them on first call (15-40 s
-for the two-ball solver, about as long again for the N-ball one, 15 s for the Hertz one) and
+(:data:`KERNEL_MODULES`). numba compiles them on first call (30-45 s
+for the two-ball solver, about 2 minutes for the N-ball one, 30 s for the Hertz one, of one core
+here) and
 keeps the machine code on disk, beside the sources or in ``NUMBA_CACHE_DIR``. Two rules follow
 from how programs are deployed:
 
