@@ -16,7 +16,7 @@ import param
 from bokeh.models import ColumnDataSource, Legend, LegendItem, Line, Range1d, Scatter
 from bokeh.plotting import figure
 
-from twoball import jit
+from twoball import warmup
 from twoball.studies.precision import ERROR_FLOOR, FAILED_ERROR, PrecisionRow, work_precision
 
 from .controls import PhoneSliders, on_a_phone
@@ -61,11 +61,12 @@ def measured(
     eps: float, mu: float, tau_ratio: float, eps12: float | None, height: float, compiled: bool
 ) -> tuple[PrecisionRow, ...]:
     """The work-precision rows of a drop, measured once per server process and state of the
-    compiler (``compiled``: :data:`twoball.jit.state`): a class opening the scene at one lesson
-    step's drop costs the server one measurement (a few seconds of CPU), not one a student.
-    The run times shown are those of that first measurement; one made while the kernels were
-    still compiling (their Python stand-ins: the exact solver 2.8 ms, LSODA 0.8 s) is measured
-    again once they are compiled, not kept for the rest of the server's life."""
+    compiler (``compiled``: the two-ball solver's kernels in use, :func:`twoball.warmup.in_use`):
+    a class opening the scene at one lesson step's drop costs the server one measurement (a few
+    seconds of CPU), not one a student. The run times shown are those of that first
+    measurement; one made while the kernels were still compiling (their Python stand-ins: the
+    exact solver 2.8 ms, LSODA 0.8 s) is measured again once they are compiled, not kept for
+    the rest of the server's life."""
     return tuple(work_precision(eps, mu, tau_ratio, eps12=eps12, height=height))
 
 
@@ -154,12 +155,12 @@ class AccuracyScene(Scene):
 
     def inputs(self) -> tuple:
         """The drop, and whether the kernels are compiled (:func:`measured`)."""
-        return (*super().inputs(), jit.state == "compiled")
+        return (*super().inputs(), warmup.in_use("two-ball"))
 
     def _work(self) -> list[PrecisionRow]:
         s = self.state
         self.computations += 1
-        compiled = jit.state == "compiled"
+        compiled = warmup.in_use("two-ball")
         return list(measured(s.eps, s.mu, s.tau_ratio, s.eps12, s.height, compiled))
 
     async def _measure_in_thread(self, document) -> None:

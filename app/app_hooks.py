@@ -2,8 +2,8 @@
 
 At start-up the kernels' Python functions stand in for them (same results, a drop in ~25 ms)
 while another process compiles them (about 3 minutes on a new machine or CPU, ~2 s from the
-disk cache);
-then the machine code takes over (:func:`twoball.warmup.compile_in_background`). The map cube is
+disk cache); the machine code takes over as it comes, the two-ball solver's in under a minute
+(:func:`twoball.warmup.compile_in_background`). The map cube is
 opened once per server. A page closed while an update is being sent to it is a client leaving,
 not an error (:func:`drop_messages_to_closed_sockets`).
 """
@@ -118,11 +118,15 @@ def on_server_loaded(server_context) -> None:
     loop.set_exception_handler(closed_socket_handler(loop.get_exception_handler()))
     started = time.monotonic()
 
+    def staged(stage: str) -> None:
+        log.info("%s kernels in use after %.1f s", stage, time.monotonic() - started)
+        if stage == "two-ball":  # (the accuracy's methods; in the compiler's thread)
+            measure_ahead()
+
     def compiled() -> None:
         log.info("compiled kernels in use after %.1f s", time.monotonic() - started)
-        measure_ahead()  # (in the compiler's thread, not the event loop's)
 
-    warmup.compile_in_background(done=compiled)
+    warmup.compile_in_background(done=compiled, staged=staged)
     for entry in SCENE_REGISTRY.values():  # imported now, not by the first page to visit one
         entry.viewer_class()
     try:

@@ -51,7 +51,7 @@ from bokeh.models import (
 from bokeh.palettes import RdBu, interp_palette, viridis
 from bokeh.plotting import figure
 
-from twoball import jit
+from twoball import warmup
 
 from .controls import PhoneSliders, on_a_phone
 from .map_browser import LOG_TICK_JS, cell_edge, decoded_cells, decoded_image, values_hover
@@ -463,7 +463,7 @@ class MapScene(Scene):
         (The variable and the cube are read here, not heard of: a new figure's first frame,
         whose ranges the plot keeps, is drawn before the scene hears of the change.)"""
         s = self.state
-        compiled = jit.state == "compiled"
+        compiled = warmup.in_use("two-ball")
         return (s.eps, s.eps12, s.height, self.cube_name(), self.variable, compiled)
 
     def _is_cube_drop(self) -> bool:
@@ -515,7 +515,7 @@ class MapScene(Scene):
     def _computable(self) -> bool:
         """Whether a slice is computed for this drop: the map cube's axes, another H or eps12
         or an eps outside the cube (not below :data:`LOWEST_COMPUTED_EPS`), once compiled."""
-        if jit.state != "compiled" or self.state.eps < LOWEST_COMPUTED_EPS - 1e-9:
+        if not warmup.in_use("two-ball") or self.state.eps < LOWEST_COMPUTED_EPS - 1e-9:
             return False
         return not self._is_cube_drop() or self._eps_outside()
 

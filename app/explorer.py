@@ -9,7 +9,7 @@ import panel as pn
 import param
 from panel.widgets.indicators import BooleanIndicator
 
-from twoball import jit
+from twoball import warmup
 
 from .controls import Controls
 from .lesson import Lesson
@@ -185,10 +185,10 @@ class Explorer(Built):
     @staticmethod
     def _compiling_notice() -> list[pn.pane.Alert]:
         """A note on a page opened while the server's first start compiles the solver."""
-        if jit.state == "compiled":
+        if warmup.in_use("two-ball"):  # (a stack's solver follows 2 minutes later)
             return []
         text = (
-            "First start on this machine: the solver is still being compiled (about 3 minutes, "
+            "First start on this machine: the solver is still being compiled (under a minute, "
             "more on a busy machine). "
             "Until then drops are computed in plain Python: the same results, a little slower."
         )

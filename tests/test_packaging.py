@@ -221,3 +221,54 @@ def test_the_python_stand_ins_are_all_put_back():
     assert run.returncode == 0, run.stderr
     count, left = run.stdout.split(" ", 1)
     assert int(count) > 50 and left.strip() == "[]", run.stdout
+
+
+def test_each_compile_stage_holds_the_kernels_its_kernels_call():
+    """The first start puts the compiled kernels back stage by stage (twoball.warmup.STAGES),
+    the two-ball solver's first. A module put back while a kernel its kernels call is still a
+    Python stand-in would compile against the stand-in and fail: every kernel a stage's module
+    names is defined in that stage or an earlier one, and the stages hold every module once."""
+    import importlib
+
+    from numba.core.registry import CPUDispatcher
+
+    from twoball import jit, warmup
+
+    staged = [module for _, modules, _ in warmup.STAGES for module in modules]
+    assert sorted(staged) == sorted(jit.KERNEL_MODULES)
+    ready: set[str] = set()
+    for _, modules, _ in warmup.STAGES:
+        ready.update(modules)
+        for name in modules:
+            for attribute, value in vars(importlib.import_module(name)).items():
+                if isinstance(value, CPUDispatcher):
+                    assert value.py_func.__module__ in ready, (name, attribute)
+
+
+def test_the_two_ball_kernels_come_back_before_the_stacks():
+    """While the stacks' kernels still compile, the two-ball solver's run as machine code and
+    the stack's Python stand-ins still give the stack's results (checked against the same
+    stack once everything is compiled); then everything is compiled."""
+    script = (
+        "from twoball import jit, warmup\n"
+        "from twoball.stacks import simulate_stack\n"
+        "import twoball\n"
+        "def staged(stage):\n"
+        "    if stage == 'two-ball':\n"
+        "        stack = simulate_stack([0.2, 0.2], 0.9, 0.2)\n"
+        "        print(stage, jit.compiled('twoball.kernels.runs'),\n"
+        "              jit.compiled('twoball.kernels.stack'), jit.state, stack.h2, flush=True)\n"
+        "thread = warmup.compile_in_background(staged=staged)\n"
+        "thread.join(timeout=900)\n"
+        "print(jit.state, simulate_stack([0.2, 0.2], 0.9, 0.2).h2, flush=True)\n"
+    )
+    run = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=1200
+    )
+    assert run.returncode == 0, run.stderr[-3000:]
+    first, last = run.stdout.splitlines()
+    stage, runs, stack, state, h2_python = first.split()
+    assert (stage, runs, stack, state) == ("two-ball", "True", "False", "compiling"), first
+    final_state, h2_compiled = last.split()
+    assert final_state == "compiled"
+    assert abs(float(h2_python) - float(h2_compiled)) <= 1e-9 * abs(float(h2_compiled)), run.stdout

@@ -37,7 +37,7 @@ import os
 import shutil
 import tempfile
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent
@@ -159,6 +159,14 @@ def njit(
 _dispatchers: dict[str, dict[str, CPUDispatcher]] = {}
 _lock = threading.Lock()
 state = "compiled"  # or "python" while the kernels' Python functions stand in, or "compiling"
+# the kernel modules whose Python functions stand in for their kernels (use_python_kernels),
+# until use_compiled_kernels puts their machine code back
+python_modules: set[str] = set()
+
+
+def compiled(module: str) -> bool:
+    """Whether the kernels of ``module`` (one of :data:`KERNEL_MODULES`) run as machine code."""
+    return module not in python_modules
 
 
 def use_python_kernels() -> None:
@@ -177,15 +185,25 @@ def use_python_kernels() -> None:
                     saved[attribute] = value
             for attribute, dispatcher in saved.items():
                 setattr(module, attribute, dispatcher.py_func)
+        python_modules.update(modules)
         state = "python"
 
 
-def use_compiled_kernels() -> None:
-    """Put the compiled kernels back (they load from the disk cache, or compile, on first call)."""
+def use_compiled_kernels(modules: Iterable[str] | None = None) -> None:
+    """Put the compiled kernels of ``modules`` back, all by default (they load from the disk
+    cache, or compile, on first call).
+
+    ``modules`` must hold every kernel module whose kernels theirs import (or those must be
+    back already): a kernel compiled while a kernel it calls is a Python stand-in fails
+    ("Untyped global name"). A Python stand-in keeps calling stand-ins, its module's names, until
+    its own module is put back."""
     global state
     with _lock:
-        for name, saved in _dispatchers.items():
+        names = list(_dispatchers) if modules is None else list(modules)
+        for name in names:
             module = importlib.import_module(name)
-            for attribute, dispatcher in saved.items():
+            for attribute, dispatcher in _dispatchers.get(name, {}).items():
                 setattr(module, attribute, dispatcher)
-        state = "compiled"
+            python_modules.discard(name)
+        if not python_modules:
+            state = "compiled"

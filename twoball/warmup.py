@@ -1,5 +1,5 @@
 """Every kernel compiled before it is needed: :func:`warm_up` calls each kernel path once (the
-Dockerfile runs :data:`WARM_UP`), and :func:`compile_in_background` lets a program that cannot wait
+Dockerfile runs it), and :func:`compile_in_background` lets a program that cannot wait
 (the app's first start) run on the kernels' Python functions while another process compiles them
 (:mod:`twoball.jit` has the disk cache and the switch between the two)."""
 
@@ -8,58 +8,130 @@ from __future__ import annotations
 import logging
 import subprocess
 import sys
+import tempfile
 import threading
 from collections.abc import Callable
 
 from twoball import jit
 
-# what compiles every kernel in a new process (the Dockerfile runs it too)
-WARM_UP = "from twoball import warmup; warmup.warm_up()"
-
 log = logging.getLogger(__name__)
 
 
-def warm_up() -> None:
-    """Call every kernel path once (a drop to its second apex with a sampled trajectory)."""
+def warm_up_two_ball() -> None:
+    """Call the two-ball solver's kernel paths once: a drop to its second apex with a sampled
+    trajectory, and the batch path of sweeps and the map (twoball.kernels.runs.run_block)."""
+    from twoball.batch.sweep import compute_block
     from twoball.solve import simulate
 
     simulate(0.9, 0.01, 0.01, until="second", dense_output=True)
-    from twoball.batch.sweep import compute_block  # the batch path (twoball.kernels.runs.run_block)
-
     compute_block([0.9], [0.01], [0.01])
-    from twoball.stacks import simulate_stack  # the N-ball solver (twoball.kernels.stack)
+
+
+def warm_up_stacks() -> None:
+    """Call the N-ball solver's kernel paths once (twoball.kernels.stack), then the Hertz
+    force's (twoball.kernels.hertz)."""
+    from twoball.stacks import simulate_stack
 
     simulate_stack([0.2, 0.2], 0.9, 0.2, t_eval=[0.0, 1.0])
-    # the Hertz stack (twoball.kernels.hertz)
     simulate_stack([0.2, 0.2], 0.9, 0.2, force="hertz", t_eval=[0.0, 1.0])
 
 
-def compile_in_background(done: Callable[[], None] | None = None) -> threading.Thread:
+# The kernels compiled in two stages, the two-ball solver's first: what a page opens on, 30-45 s
+# of the ~3 minutes it all takes (a stack's solver ~2 minutes). Each stage: its name, its kernel
+# modules, and the function that calls their kernel paths. A stage's modules hold every kernel
+# module whose kernels theirs import, with the stages before it (jit.use_compiled_kernels;
+# tests/test_packaging.py checks it).
+STAGES: tuple[tuple[str, tuple[str, ...], Callable[[], None]], ...] = (
+    (
+        "two-ball",
+        (
+            "twoball.model",
+            "twoball.kernels.codes",
+            "twoball.kernels.closed_forms",
+            "twoball.kernels.phases",
+            "twoball.kernels.runs",
+        ),
+        warm_up_two_ball,
+    ),
+    (
+        "stacks",
+        (
+            "twoball.kernels.modes",
+            "twoball.kernels.clusters",
+            "twoball.kernels.stack",
+            "twoball.kernels.taylor",
+            "twoball.kernels.certified",
+            "twoball.kernels.hertz",
+        ),
+        warm_up_stacks,
+    ),
+)
+
+
+def in_use(stage: str) -> bool:
+    """Whether the kernels of ``stage`` (a name in :data:`STAGES`) run as machine code."""
+    modules = next(modules for name, modules, _ in STAGES if name == stage)
+    return all(jit.compiled(module) for module in modules)
+
+
+def warm_up(report: bool = False) -> None:
+    """Call every kernel path once, stage by stage (:data:`STAGES`); ``report``: print each
+    stage's name once its kernels are compiled (the compiler process of
+    :func:`compile_in_background` tells its server so)."""
+    for name, _, call in STAGES:
+        call()
+        if report:
+            print(name, flush=True)
+
+
+def compile_in_background(
+    done: Callable[[], None] | None = None, staged: Callable[[str], None] | None = None
+) -> threading.Thread:
     """Stand the Python functions in for the kernels now; compile them in another process
-    (:data:`WARM_UP`, which fills the disk cache) and switch back when it is done.
+    (which fills the disk cache) and put each stage's machine code back (:data:`STAGES`) as
+    soon as that process has compiled it: the two-ball solver's in 30-45 s, not after the
+    stacks' 2 minutes more.
 
     Without a disk cache the other process cannot help: the kernels then compile in this
-    process's thread, under the lock that numba takes, and the switch comes after that.
-    ``done`` is called once the compiled kernels are in use.
+    process's thread, stage by stage, under the lock that numba takes.
+    ``staged`` is called with each stage's name once its kernels are in use, ``done`` once
+    all are.
     """
     jit.use_python_kernels()
 
+    def put_back(name: str, modules: tuple[str, ...], call: Callable[[], None]) -> None:
+        jit.use_compiled_kernels(modules)
+        call()  # loads the machine code from the cache (or compiles it here)
+        if staged is not None:
+            staged(name)
+
     def work() -> None:
         jit.state = "compiling"
+        stages = {name: (name, modules, call) for name, modules, call in STAGES}
         if jit.CACHING:
             # niced: the pages being served come first; one compiler at a time per cache (the
             # processes of `twoball serve --num-procs N` start together: the others wait on
-            # the lock without using a core, then find the cache filled)
+            # the lock without using a core, then find the cache filled); it prints each
+            # stage's name when done (its errors go to a file: a full pipe would stop it)
             lock = jit.CACHE_DIR / "compiling.lock"
             script = (
                 f"import fcntl, os; os.nice(10); lock = open({str(lock)!r}, 'w'); "
-                f"fcntl.flock(lock, fcntl.LOCK_EX); {WARM_UP}"
+                "fcntl.flock(lock, fcntl.LOCK_EX); "
+                "from twoball import warmup; warmup.warm_up(report=True)"
             )
-            outcome = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
-            if outcome.returncode != 0:
-                log.warning("compiling the kernels failed: %s", outcome.stderr.strip()[-2000:])
+            with tempfile.TemporaryFile("w+") as errors:
+                compiler = subprocess.Popen(
+                    [sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=errors, text=True
+                )
+                for line in compiler.stdout:
+                    if line.strip() in stages:
+                        put_back(*stages.pop(line.strip()))
+                if compiler.wait() != 0:
+                    errors.seek(0)
+                    log.warning("compiling the kernels failed: %s", errors.read().strip()[-2000:])
+        for stage in stages.values():  # (those the other process did not compile, if any)
+            put_back(*stage)
         jit.use_compiled_kernels()
-        warm_up()  # loads the machine code from the cache (or compiles it here)
         if done is not None:
             done()
 

@@ -1,6 +1,7 @@
 """The first start after an install, with nothing compiled: pages are served at once on the
 kernels' Python functions, saying that the solver is being compiled, and the machine code takes
-over when the compiler, in another process, is done (app/app_hooks.py, twoball/warmup.py).
+over as the compiler, in another process, is done with each stage: the two-ball solver's first,
+then the stacks' (app/app_hooks.py, twoball/warmup.py).
 
 How long each step takes is measured by benchmarks/first_start.py, not asserted here."""
 
@@ -47,9 +48,15 @@ def test_first_start_serves_plots_while_the_solver_compiles(browser, artifacts, 
             assert time.monotonic() < deadline, "the solver was not compiled within 600 s"
             time.sleep(2)
         assert any(cache.rglob("*.nbi")), "the compiler wrote no cache"
+        # the notice goes with the two-ball solver's kernels; the stacks' follow
+        assert "two-ball kernels in use" in log.read_text()
+        while "compiled kernels in use" not in log.read_text():
+            assert time.monotonic() < deadline, "the stacks were not compiled within 600 s"
+            time.sleep(2)
     finally:
         process.terminate()
         process.wait(timeout=30)
     text = log.read_text()
     assert "Traceback" not in text, text[-3000:]
-    assert "compiled kernels in use" in text
+    assert text.index("two-ball kernels in use") < text.index("stacks kernels in use")
+    assert text.index("stacks kernels in use") < text.index("compiled kernels in use")
