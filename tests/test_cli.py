@@ -85,6 +85,26 @@ def test_unknown_command_exits_2():
     assert completed.returncode == 2 and len(completed.stderr.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize(
+    ("arguments", "named"),
+    [
+        (["simulate", "--bogus"], "--bogus"),  # (named before the required ones missing)
+        (["simulate", "--eps", "0.9", "--mu", "0.01", "--tau_ratio", "0.01"], "--tau_ratio"),
+        (["simulate", "--eps", "0.9", "--mu", "0.01", "--tau-ratio", "0.01", "--x=1"], "--x"),
+    ],
+)
+def test_an_unknown_option_is_named(arguments, named):
+    line = _one_line_error(_run(*arguments))
+    assert f"unrecognized arguments: {named}" in line, line
+
+
+def test_abbreviations_and_negative_values_are_not_unknown():
+    """argparse takes an option's abbreviation (--tau for --tau-ratio) and a negative value:
+    neither is named unknown; the refused value is."""
+    line = _one_line_error(_run("simulate", "--eps", "-0.5", "--mu", "0.01", "--tau", "0.01"))
+    assert "unrecognized" not in line and "eps must be" in line, line
+
+
 def test_stack_json_matches_the_library():
     from twoball.stacks import simulate_stack
 

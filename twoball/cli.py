@@ -49,8 +49,41 @@ class UsageError(ParameterError):
 
 
 class _Parser(argparse.ArgumentParser):
+    _given: tuple[str, ...] = ()  # the arguments this parser was handed
+
+    def parse_known_args(self, args=None, namespace=None):
+        self._given = tuple(sys.argv[1:] if args is None else args)
+        return super().parse_known_args(args, namespace)
+
     def error(self, message: str) -> None:  # argparse's own errors: one line, status 2
+        unknown = self._unknown_options()
+        if unknown and not message.startswith("unrecognized"):
+            # (argparse names the required options missing first: a new user's misspelt or
+            # unknown option was then never named)
+            message = f"unrecognized arguments: {' '.join(unknown)}; {message}"
         raise UsageError(message)
+
+    def _unknown_options(self) -> list[str]:
+        """The options given that this parser does not know (nor any of its options begins
+        with, as argparse takes abbreviations)."""
+        known = list(self._option_string_actions)
+        unknown = []
+        for given in self._given:
+            if given == "--":
+                break
+            name = given.split("=", 1)[0]
+            option = given.startswith("-") and not _is_number(given)
+            if option and not any(known_option.startswith(name) for known_option in known):
+                unknown.append(name)
+        return unknown
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 # Argument types: a number out of range is argparse's error, naming the option and the range.
