@@ -7,7 +7,8 @@
 // - the template's sidebar list (<ul> holding no <li>) is presented as what it is, a group;
 // - two things Bokeh makes focusable (tabindex 0) had no name: each plot's event layer, which
 //   the keyboard reaches, is a group named by the plot's title (or its axis), and a toolbar's
-//   overflow (its "⋯") a button named "more plot tools".
+//   overflow (its "⋯") a button named "more plot tools";
+// - the scenes' tabs are a tab list, the one on screen selected.
 // New widgets appear as scenes are first visited: every second the page is looked over again,
 // and a handle's value is mended as soon as the slider changes it.
 (() => {
@@ -67,6 +68,12 @@
       }
       for (const frame of root.querySelectorAll('input[type="range"]')) {
         set(frame, "aria-label", "animation frame");
+      }
+      // the scenes' tabs, named as such (Bokeh draws them as plain focusable divs)
+      for (const list of root.querySelectorAll(".bk-headers-wrapper")) set(list, "role", "tablist");
+      for (const tab of root.querySelectorAll(".bk-headers-wrapper > .bk-tab")) {
+        set(tab, "role", "tab");
+        set(tab, "aria-selected", String(tab.classList.contains("bk-active")));
       }
       for (const box of root.querySelectorAll('input[type="checkbox"]')) {
         const label = (box.parentElement ?? root).querySelector(".bk-label, span");

@@ -8,8 +8,9 @@ from __future__ import annotations
 import pytest
 from appdriver import open_page
 from axe_playwright_python.sync_playwright import Axe
+from playwright.sync_api import expect
 
-from app.scenes import SCENE_REGISTRY
+from app.scenes import SCENE_REGISTRY, SCENES
 
 pytestmark = pytest.mark.browser
 SERIOUS = ("serious", "critical")
@@ -166,6 +167,24 @@ def test_every_focusable_control_has_a_name(browser, app_server, scene):
         page.get_by_role("button", name="advanced", exact=True).click()
         page.wait_for_timeout(1500)  # (a11y.js looks the page over every second)
         assert _unnamed_focusable(page) == []
+        assert errors == []
+    finally:
+        context.close()
+
+
+def test_the_scenes_tabs_are_a_tab_list_with_the_scene_on_screen_selected(browser, app_server):
+    """A screen reader hears the scenes as tabs, the one on screen selected (Bokeh draws them
+    as plain focusable divs: a new user's tool found no tab), and the selection follows a
+    change of scene."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?scene=map")
+    try:
+        tabs = page.get_by_role("tablist").get_by_role("tab")
+        expect(tabs).to_have_count(len(SCENE_REGISTRY))
+        titles = [entry.title for entry in SCENE_REGISTRY.values()]
+        expect(page.get_by_role("tab", selected=True)).to_have_text(titles[SCENES.index("map")])
+        page.get_by_role("tab", name=titles[0]).click()
+        expect(page.get_by_role("tab", selected=True)).to_have_text(titles[0])
         assert errors == []
     finally:
         context.close()
