@@ -44,9 +44,17 @@ def collision_window(contacts: list[twoball.ContactInterval], end: float) -> tup
     return max(start - pad, 0.0), min(stop + pad, end)
 
 
-PROJECTOR_PLOT_HEIGHT = 400  # presentation mode (scene.py): positions; each force half of it
+# presentation mode (scene.py): positions; each force half of it. Under them the summary's line
+# and the contacts' table, a contact a column: within 1280 x 720 with 360 (with 400, and the
+# table a contact a row, it ran 200 px below the screen)
+PROJECTOR_PLOT_HEIGHT = 360
 # beside the forces, each at least 380 px wide (a phone wraps them one above the other)
 BESIDE_STYLES = {"flex": "1 1 380px", "min-width": "0"}
+
+
+def markdown_row(cells: list[str]) -> str:
+    """A row of a Markdown table."""
+    return "| " + " | ".join(cells) + " |"
 
 
 class CloseUpScene(Scene):
@@ -80,6 +88,8 @@ class CloseUpScene(Scene):
         for fig in (self.positions, self.floor_force, self.ball_force):
             readable(fig, self.state.presentation)
         if self.state.presentation:  # side by side within 720 px (layout), a shorter title
+            # (a contact a column: many contacts scroll sideways inside the table's box)
+            self.table.stylesheets = [*self.table.stylesheets, ":host { overflow-x: auto; }"]
             self.positions.title.text = "Positions (< 0: compressed)"
             self.positions.height = PROJECTOR_PLOT_HEIGHT
             self.floor_force.height = self.ball_force.height = PROJECTOR_PLOT_HEIGHT // 2
@@ -167,27 +177,33 @@ class CloseUpScene(Scene):
             intro = f"{counted} before the first apex, all {where}, shown above."
         # the times' unit in the columns' heads ("time [s]" gives "[s]"; dimensionless, tau)
         unit = "[s]" if "[s]" in units.time_label else "(tau)"
-        heads = f"| contact | starts {unit} | ends {unit} | lasts {unit} |"
-        lines = [intro, "", heads, "| --- | --- | --- | --- |"]
         numbers = {}  # each contact's number among those of its kind, in time order
         for kind in (BALLS, FLOOR):
             ordered = sorted((c for c in r.contacts if c.contact == kind), key=lambda c: c.start)
             numbers.update({id(c): i for i, c in enumerate(ordered, 1)})
 
-        def row(c: twoball.ContactInterval) -> str:
+        def cells(c: twoball.ContactInterval) -> list[str]:
             name = "ball" if c.contact == BALLS else "floor"
-            return (
-                f"| {name} {numbers[id(c)]} | {c.start * units.time:.6g} | "
-                f"{c.end * units.time:.6g} | {(c.end - c.start) * units.time:.4g} |"
-            )
+            start, end = c.start * units.time, c.end * units.time
+            return [f"{name} {numbers[id(c)]}", f"{start:.6g}", f"{end:.6g}", f"{end - start:.4g}"]
 
         # the first collision's ball contacts, then its floor contacts (as the plots stack
         # them), then the later contacts in time order
-        lines += [row(c) for kind in (BALLS, FLOOR) for c in collision if c.contact == kind]
+        table = [cells(c) for kind in (BALLS, FLOOR) for c in collision if c.contact == kind]
         if later:
-            lines.append("| *after the collision shown:* | | | |")
-            lines += [row(c) for c in sorted(later, key=lambda c: c.start)]
-        return "\n".join(lines)
+            table.append(["*after the collision shown:*", "", "", ""])
+            table += [cells(c) for c in sorted(later, key=lambda c: c.start)]
+        heads = ["contact", f"starts {unit}", f"ends {unit}", f"lasts {unit}"]
+        if self.state.presentation:
+            # a room's screen: a contact a column, under one line (as rows, under the plots,
+            # the table ran 200 px below a 1280 x 720 screen, and the teacher scrolled)
+            columns = [heads, *table]
+            rows = [[column[i] for column in columns] for i in range(len(heads))]
+            intro = f"{counted} before the first apex:"
+        else:
+            rows = [heads, *table]
+        lines = [intro, "", markdown_row(rows[0]), markdown_row(["---"] * len(rows[0]))]
+        return "\n".join(lines + [markdown_row(row) for row in rows[1:]])
 
     def layout(self) -> pn.viewable.Viewable:
         self._draw()  # (on screen already: Explorer.scene)

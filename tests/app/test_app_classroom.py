@@ -547,6 +547,9 @@ def test_presentation_mode_shows_each_scene_on_one_screen(
         if scene == "map":  # its note whole beside it (it ran below the screen's foot)
             note = page.get_by_text("Precomputed map at").bounding_box()
             assert note is not None and note["y"] + note["height"] <= height, note
+        if scene == "closeup":  # its table of contacts whole on the screen (ran 200 px below)
+            tables = [t for t in deep_query(page, "table") if t["visible"]]
+            assert tables and all(t["bottom"] <= height for t in tables), tables
         if scene == "drop":  # the summary styled as Panel styles Markdown (app.scene.Text)
             margins = page.evaluate(SUMMARY_MARGINS_JS)
             assert margins == ["0px"], margins

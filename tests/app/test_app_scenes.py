@@ -279,6 +279,30 @@ def test_closeup_s_table_names_its_time_unit():
     )
 
 
+@pytest.mark.parametrize("query", [PAPER, {"mu": "0.5", "tau_ratio": "10"}])
+def test_closeup_s_projected_table_has_a_contact_a_column(query):
+    """On a projector the contacts' table is turned, a contact a column under one line (as
+    rows it ran below a 1280 x 720 screen): its heads name every contact before the first
+    apex, its rows give their start, end and duration, as the solver finds them."""
+    explorer = rendered({**query, "scene": "closeup", "present": "1"})
+    lines = explorer.scenes["closeup"].table.object.splitlines()
+    s = explorer.state
+    solved = twoball.simulate(s.eps, s.mu, s.tau_ratio, height=s.height, until="first")
+    assert lines[0].endswith("before the first apex:") and len(lines) == 7, lines
+    rows = {line.split("|")[1].strip(): line.split("|")[2:-1] for line in lines[2:]}
+    names = [name.strip() for name in rows["contact"]]
+    starts, ends = rows["starts (tau)"], rows["ends (tau)"]
+    found = {}
+    for name, start, end in zip(names, starts, ends, strict=True):
+        if re.fullmatch(r"(ball|floor) \d+", name):
+            found[name] = (float(start), float(end))
+    for kind, label in ((BALLS, "ball"), (FLOOR, "floor")):
+        exact = sorted((c.start, c.end) for c in solved.contacts if c.contact == kind)
+        listed = [found[f"{label} {i}"] for i in range(1, len(exact) + 1)]
+        assert np.ravel(listed) == pytest.approx(np.ravel(exact), rel=1e-5)
+    assert len(found) == len(solved.contacts)
+
+
 @pytest.mark.parametrize(
     "query",
     [
