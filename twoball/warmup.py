@@ -5,6 +5,7 @@ Dockerfile runs it), and :func:`compile_in_background` lets a program that canno
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import subprocess
 import sys
@@ -74,12 +75,18 @@ def in_use(stage: str) -> bool:
     return all(jit.compiled(module) for module in modules)
 
 
-def warm_up(report: bool = False) -> None:
+def warm_up(report: bool = False, lock: str | None = None) -> None:
     """Call every kernel path once, stage by stage (:data:`STAGES`); ``report``: print each
     stage's name once its kernels are compiled (the compiler process of
-    :func:`compile_in_background` tells its server so)."""
+    :func:`compile_in_background` tells its server so); ``lock``: a file locked while each
+    stage compiles, so that one compiler at a time works on a cache."""
     for name, _, call in STAGES:
-        call()
+        with open(lock, "w") if lock else contextlib.nullcontext() as held:
+            if held is not None:
+                import fcntl  # (POSIX: where a server compiles in another process)
+
+                fcntl.flock(held, fcntl.LOCK_EX)  # (released as the file closes)
+            call()
         if report:
             print(name, flush=True)
 
@@ -109,15 +116,16 @@ def compile_in_background(
         jit.state = "compiling"
         stages = {name: (name, modules, call) for name, modules, call in STAGES}
         if jit.CACHING:
-            # niced: the pages being served come first; one compiler at a time per cache (the
-            # processes of `twoball serve --num-procs N` start together: the others wait on
-            # the lock without using a core, then find the cache filled); it prints each
-            # stage's name when done (its errors go to a file: a full pipe would stop it)
+            # niced: the pages being served come first; one compiler at a time per cache and
+            # stage (the processes of `twoball serve --num-procs N` start together: the others
+            # wait on the lock without using a core, then find the stage in the cache; locked
+            # for the whole compile, they got the two-ball solver only with the stacks, at
+            # 290 s, not 104); it prints each stage's name when done (its errors go to a
+            # file: a full pipe would stop it)
             lock = jit.CACHE_DIR / "compiling.lock"
             script = (
-                f"import fcntl, os; os.nice(10); lock = open({str(lock)!r}, 'w'); "
-                "fcntl.flock(lock, fcntl.LOCK_EX); "
-                "from twoball import warmup; warmup.warm_up(report=True)"
+                "import os; os.nice(10); from twoball import warmup; "
+                f"warmup.warm_up(report=True, lock={str(lock)!r})"
             )
             with tempfile.TemporaryFile("w+") as errors:
                 compiler = subprocess.Popen(
