@@ -41,12 +41,16 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent
-KERNEL_MODULES = (
+# the two-ball solver's kernel modules, then the N-ball stack's (compiled in that order on a
+# first start: twoball.warmup.STAGES), each group holding the modules its kernels call
+TWO_BALL_MODULES = (
     "twoball.model",
     "twoball.kernels.codes",
     "twoball.kernels.closed_forms",
     "twoball.kernels.phases",
     "twoball.kernels.runs",
+)
+STACK_MODULES = (
     "twoball.kernels.modes",
     "twoball.kernels.clusters",
     "twoball.kernels.stack",
@@ -54,6 +58,7 @@ KERNEL_MODULES = (
     "twoball.kernels.certified",
     "twoball.kernels.hertz",
 )
+KERNEL_MODULES = TWO_BALL_MODULES + STACK_MODULES
 
 log = logging.getLogger(__name__)
 

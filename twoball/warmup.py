@@ -43,29 +43,8 @@ def warm_up_stacks() -> None:
 # module whose kernels theirs import, with the stages before it (jit.use_compiled_kernels;
 # tests/test_packaging.py checks it).
 STAGES: tuple[tuple[str, tuple[str, ...], Callable[[], None]], ...] = (
-    (
-        "two-ball",
-        (
-            "twoball.model",
-            "twoball.kernels.codes",
-            "twoball.kernels.closed_forms",
-            "twoball.kernels.phases",
-            "twoball.kernels.runs",
-        ),
-        warm_up_two_ball,
-    ),
-    (
-        "stacks",
-        (
-            "twoball.kernels.modes",
-            "twoball.kernels.clusters",
-            "twoball.kernels.stack",
-            "twoball.kernels.taylor",
-            "twoball.kernels.certified",
-            "twoball.kernels.hertz",
-        ),
-        warm_up_stacks,
-    ),
+    ("two-ball", jit.TWO_BALL_MODULES, warm_up_two_ball),
+    ("stacks", jit.STACK_MODULES, warm_up_stacks),
 )
 
 
