@@ -252,7 +252,12 @@ def _one_or_all(values: list[float]) -> float | list[float]:
 
 
 def _add_stack(subparsers: argparse._SubParsersAction) -> None:
-    from twoball.stacks.model import HERTZ_LARGEST_MASS, HERTZ_SMALLEST_RESTITUTION
+    from twoball.stacks.model import (
+        HERTZ_LARGEST_MASS,
+        HERTZ_SMALLEST_RESTITUTION,
+        SMALLEST_GAP,
+        TOUCHING_LIMIT_BALLS,
+    )
 
     parser = subparsers.add_parser(
         "stack", help="drop a stack of N balls and print the top ball's bounces"
@@ -275,7 +280,8 @@ def _add_stack(subparsers: argparse._SubParsersAction) -> None:
         "--tau-ratios",
         type=_numbers,
         default=[0.2],
-        help=f"one gap td/tau_f in {allowed_range('tau_ratio')}, or N-1 (0.2)",
+        help=f"one gap tau_d/tau_f in {allowed_range('tau_ratio')} (linear, with "
+        f"{TOUCHING_LIMIT_BALLS} or more balls: from {SMALLEST_GAP:g}), or N-1 (0.2)",
     )
     _add_height(parser)
     parser.add_argument("--force", default="linear", help="linear (exact) or hertz")
@@ -372,7 +378,10 @@ def _bench(args: argparse.Namespace) -> int:
 
 
 def _add_sweep(subparsers: argparse._SubParsersAction) -> None:
-    from twoball.stacks.model import HERTZ_LARGEST_MASS, HERTZ_SMALLEST_RESTITUTION
+    from twoball.stacks.model import (
+        HERTZ_LARGEST_MASS,
+        HERTZ_SMALLEST_RESTITUTION,
+    )
 
     hertz_limits = {
         "eps": f" (hertz: from {HERTZ_SMALLEST_RESTITUTION:g})",
@@ -667,8 +676,8 @@ def say_if_compiling(args: argparse.Namespace) -> None:
     module = kernels_used(args)
     if module is not None and not jit.compiled_on_disk(module):
         print(
-            "twoball: compiling the solver for its first use on this machine (about 20 s on two "
-            "idle cores, minutes on a busy machine; kept for later runs)...",
+            "twoball: compiling the solver for its first use on this machine (about 40 s for a "
+            "drop, 2 minutes for a stack, more on a busy machine; kept for later runs)...",
             file=sys.stderr,
             flush=True,
         )
