@@ -126,6 +126,61 @@ def test_icm_chain_is_the_two_ball_icm():
     assert icm_chain(made)[-1] == pytest.approx(twoball.simulate(0.816, 0.05, 0.0).h_icm, rel=1e-12)
 
 
+@pytest.mark.parametrize(("eps", "mu", "tau_ratio"), [(0.9, 0.1, 10.0), (0.7, 0.5, 2.0)])
+def test_a_two_ball_stack_s_icm_is_the_drop_s_with_its_gap(eps, mu, tau_ratio):
+    """The chain takes the gaps: a two-ball stack's h_ICM is the two-ball drop's (its formula
+    with dH), linear and Hertz (the Hertz cubes' formula with the Hertz release's gap). It had
+    left the gap out: h1/h_ICM 0.948 against the drop's 1.016 at tau_ratio 10."""
+    from twoball.model import icm_height
+
+    drop = twoball.simulate(eps, mu, tau_ratio)
+    linear = simulate_stack([mu], eps, tau_ratio)
+    assert linear.h_icm == pytest.approx(drop.h_icm, rel=1e-12)
+    assert linear.h1 / linear.h_icm == pytest.approx(drop.h1_over_icm, rel=1e-9)
+    made = check_stack([mu], eps, tau_ratio, force="hertz", height=100.0)
+    gap = made.x_start[-1] - made.height
+    assert icm_chain(made)[-1] == pytest.approx(icm_height(100.0, gap, eps, eps, mu), rel=1e-12)
+
+
+def _chain_by_root_finding(stack) -> list[float]:
+    """The ICM chain found another way: each ball's path written out in absolute time and
+    each meeting found by a root finder (the chain closes the distance at a constant speed)."""
+    from scipy.optimize import brentq
+
+    impact = np.sqrt(2.0 * stack.height)
+    start, level, up = impact, 0.0, stack.eps[0] * impact  # ball i - 1 after its collision
+    heights = [up**2 / 2]
+    for i in range(1, stack.balls):
+
+        def below(t, start=start, level=level, up=up):
+            return level + up * (t - start) - (t - start) ** 2 / 2
+
+        def falling(t, i=i):
+            return stack.x_start[i] - t**2 / 2
+
+        met = brentq(lambda t: falling(t) - below(t), start, start + 1e6, xtol=1e-14, rtol=1e-15)
+        below_speed, speed = up - (met - start), -met
+        m_below, m = stack.masses[i - 1], stack.masses[i]
+        after = m_below * below_speed + m * speed - stack.eps[i] * m_below * (speed - below_speed)
+        start, level, up = met, below(met), after / (m_below + m)
+        heights.append(level + up**2 / 2)
+    return heights
+
+
+def test_the_icm_chain_with_gaps_against_a_root_finder():
+    """Three and five balls with gaps: each ball's ICM apex is the one found by writing the
+    paths out and finding each meeting with a root finder; released touching, every collision
+    is at the floor and the chain is the textbook one (apexes v^2/2)."""
+    for ratios, eps, gaps in (([0.3, 0.2], [0.9, 0.8, 0.7], [1.0, 3.0]), ([0.5] * 4, 0.85, 0.7)):
+        made = check_stack(ratios, eps, gaps)
+        assert icm_chain(made) == pytest.approx(_chain_by_root_finding(made), rel=1e-9)
+    touching = check_stack([0.3, 0.2], 0.9, 0.0)
+    impact = np.sqrt(2.0 * touching.height)
+    chain = icm_chain(touching)
+    assert chain[0] == pytest.approx((0.9 * impact) ** 2 / 2, rel=1e-14)
+    assert chain == pytest.approx(_chain_by_root_finding(touching), rel=1e-9)
+
+
 def test_eight_balls_run_to_the_second_apex():
     result = simulate_stack([0.6] * 7, 0.9, 0.3)
     assert result.success and result.status is Status.DONE

@@ -336,18 +336,31 @@ def _apex_bound(stack: Stack, force: str) -> float:
 def icm_chain(stack: Stack) -> list[float]:
     """The textbook chain of independent collisions (docs/model.md, "Stacks of N balls").
 
-    Ball 0 hits the floor at sqrt(2H) and leaves with eps_0 times it; then ball i, still falling
-    at sqrt(2H), meets ball i - 1 going up, with restitution eps_i. Returns each ball's rebound
-    height above its contact point (v^2/2). For an elastic three-ball stack with vanishing mass
-    ratios the top ball leaves at 7 sqrt(2H): 49 times as high.
+    Ball 0 hits the floor at sqrt(2H) and leaves with eps_0 times it; then ball i, released at
+    X_i(0) and falling freely, meets ball i - 1 where that one flies after its own collision
+    (both fall alike, so the distance between them closes at a constant speed), with
+    restitution eps_i. Returns each ball's apex after its collision, in its own coordinate X_i:
+    the collision's height plus v^2/2. Released touching (no gaps), every collision is at
+    height 0: for an elastic three-ball stack with vanishing mass ratios the top ball leaves at
+    7 sqrt(2H), 49 times as high. For two balls this is h_ICM of "What is measured" with the gap
+    X_1(0) - H (:func:`twoball.model.icm_height`); the gaps had been left out, and a two-ball
+    stack's h_ICM differed from the same drop's (h1/h_ICM 0.948 against 1.016 at tau_ratio 10).
     """
-    impact = math.sqrt(2.0 * stack.height)
-    up = stack.eps[0] * impact
+    clock = math.sqrt(2.0 * stack.height)  # (g = 1: the time of the floor impact, and its speed)
+    level, up = 0.0, stack.eps[0] * clock  # ball i - 1 leaving its collision: height, speed
     heights = [up * up / 2.0]
     for i in range(1, stack.balls):
         below, mass = stack.masses[i - 1], stack.masses[i]
-        restitution = stack.eps[i]
-        # momentum and restitution: (u - u_below) = -eps (v - v_below), with v = -impact
-        up = (below * up - mass * impact + restitution * below * (up + impact)) / (below + mass)
-        heights.append(float(up * up / 2.0))  # Python floats, as Result.h_icm
+        falling_from = float(stack.x_start[i])
+        # ball i falls at -clock: the distance to ball i - 1 closes at up + clock
+        apart = falling_from - clock * clock / 2.0 - level
+        flight = apart / (up + clock)
+        level += up * flight - flight * flight / 2.0
+        clock += flight
+        below_speed, speed = up - flight, -clock
+        # momentum and restitution: (u - u_below) = -eps (v - v_below)
+        up = (below * below_speed + mass * speed + stack.eps[i] * below * (below_speed - speed)) / (
+            below + mass
+        )
+        heights.append(float(level + up * up / 2.0))  # Python floats, as Result.h_icm
     return heights
