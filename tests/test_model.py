@@ -100,6 +100,55 @@ def test_icm_with_separate_restitutions_follows_the_collision_steps():
     assert icm_height(height, 0.0, 1.0, 0.0, mu) == pytest.approx(together**2 / 2, rel=1e-12)
 
 
+def _meeting_flight_by_flight(height, gap, eps01):
+    """The balls' first meeting found flight by flight: the lower ball's bounces stepped one
+    at a time, each flight searched by a root finder for the upper ball reaching it."""
+    from scipy.optimize import brentq
+
+    v_i = math.sqrt(2 * height)
+    start, up = v_i, eps01 * v_i
+    for _ in range(100_000):
+
+        def apart(t, start=start, up=up):
+            return height + gap - t * t / 2 - (up * (t - start) - (t - start) ** 2 / 2)
+
+        end = start + 2 * up
+        if apart(end) <= 0:
+            t = brentq(apart, start, end, xtol=1e-13, rtol=1e-15)
+            return t, up * (t - start) - (t - start) ** 2 / 2, up - (t - start)
+        if up < 1e-12 * v_i:  # the bounces have died out: the lower ball rests on the floor
+            break
+        start, up = end, eps01 * up
+    landing = math.sqrt(2 * (height + gap))
+    return landing, 0.0, 0.0
+
+
+@pytest.mark.parametrize(
+    ("eps01", "gap"),
+    [
+        (0.9, 37.0),  # the textbook case: the first flight
+        (0.9, 1.2e5),  # the second flight or later
+        (0.9, 3e6),  # a gap of tau_ratio 1000 at H = 1e4: the balls meet late
+        (1.0, 2e6),  # elastic: every flight alike, the meeting on the seventh or so
+        (0.3, 1e6),  # the bounces die out first: the upper ball lands on the lower at rest
+    ],
+)
+def test_icm_meets_on_the_flight_where_the_balls_really_meet(eps01, gap):
+    """A gap too large for the lower ball's first flight: the meeting is on a later one (or on
+    the ball at rest), found flight by flight; the first flight's formula put it below the
+    floor and gave a negative h_ICM. Arrays give what each number gives."""
+    from twoball.model import icm_meeting
+
+    expected = _meeting_flight_by_flight(1e4, gap, eps01)
+    found = icm_meeting(1e4, gap, eps01)
+    assert found == pytest.approx(expected, rel=1e-9, abs=1e-9 * math.sqrt(2e4))
+    assert found[1] >= 0.0
+    assert icm_height(1e4, gap, eps01, eps01, 0.1) > 0.0
+    gaps = np.array([37.0, gap])
+    times, _, _ = icm_meeting(1e4, gaps, np.full(2, eps01))
+    assert times[1] == pytest.approx(found[0], rel=1e-14)
+
+
 @pytest.mark.parametrize(
     ("name", "value", "text"),
     [

@@ -462,14 +462,61 @@ def initial_gap_height(height: float, tau_d: float) -> float:
     return root * root  # inf, not OverflowError, for an absurd gap: the domain check refuses it
 
 
+def icm_meeting(height, gap, eps01):
+    """Where the balls first meet in the independent contact model (docs/model.md, "What is
+    measured"): the lower ball dropped from H bouncing on the floor with eps01, the upper one
+    released dH higher, both from rest (g = 1). Returns the time, the height and the lower
+    ball's velocity then (numbers, or arrays of the inputs' broadcast shape).
+
+    The textbook case meets on the lower ball's first flight. A larger gap (dH above about
+    4 eps01 (1 + eps01) H) meets on a later flight, or on the lower ball at rest once its
+    bounces have died out (eps01 < 1): the first flight's formula gave a collision below the
+    floor there, and a negative h_ICM (-3.7e6 at tau_ratio 1000, a researcher's trial). Flight
+    k starts at T_k = v_i (1 + 2 eps01 (1 - eps01^k) / (1 - eps01)) at speed eps01^(k+1) v_i; the
+    upper ball, falling alike, closes in at a constant speed, and flight k holds the meeting
+    when the upper ball would reach the floor by its end (found in closed form, not by
+    stepping through flights)."""
+    v_i = np.sqrt(2.0 * np.asarray(height, dtype=float))
+    gap, eps01 = np.asarray(gap, dtype=float), np.asarray(eps01, dtype=float)
+    landing = np.sqrt(2.0 * (v_i * v_i / 2.0 + gap))  # the upper ball at the floor, alone
+    elastic = eps01 >= 1.0
+    ratio = np.where(elastic, 0.5, eps01)  # (a stand-in where elastic, not used there)
+    # flights needed: T_(k+1) >= landing
+    with np.errstate(divide="ignore", invalid="ignore"):
+        left = 1.0 - (landing / v_i - 1.0) * (1.0 - ratio) / (2.0 * ratio)
+        damped = np.log(np.maximum(left, 1e-300)) / np.log(ratio) - 1.0
+    flights = np.where(elastic, (landing / v_i - 1.0) / 2.0 - 1.0, damped)
+    k = np.maximum(np.ceil(flights - 1e-9), 0.0)  # (rounding: checked below)
+    at_rest = ~elastic & (left <= 0.0)  # the bounces die out before the upper ball arrives
+
+    def flight_start(k):
+        bounced = np.where(elastic, 2.0 * k, 2.0 * ratio * (1.0 - ratio**k) / (1.0 - ratio))
+        return v_i * (1.0 + bounced)
+
+    k = np.where(at_rest, 0.0, k)
+    start, up = flight_start(k), v_i * eps01 ** (k + 1.0)
+    # (a rounded k one flight early: the meeting is then past its end; take the next)
+    late = (v_i * v_i / 2.0 + gap - start * start / 2.0) / (up + start) > 2.0 * up * (1 + 1e-12)
+    k = np.where(late & ~at_rest, k + 1.0, k)
+    start, up = flight_start(k), v_i * eps01 ** (k + 1.0)
+    closing = (v_i * v_i / 2.0 + gap - start * start / 2.0) / (up + start)
+    time = np.where(at_rest, landing, start + closing)
+    level = np.where(at_rest, 0.0, up * closing - closing * closing / 2.0)
+    speed = np.where(at_rest, 0.0, up - closing)
+    if time.ndim == 0:
+        return float(time), float(level), float(speed)
+    return time, level, speed
+
+
 def icm_height(height: float, gap: float, eps01: float, eps12: float, mu: float) -> float:
     """Apex of the upper ball in the independent contact model, the textbook prediction
     (docs/model.md, "What is measured"; paper section II).
 
     The steps of the paper with eps01 at the floor and eps12 between the balls: the lower ball
     reaches the floor at v_i = sqrt(2H) and leaves at eps01 v_i; the balls meet at
-    t_c = dH/(v_i (1 + eps01)); the upper ball leaves that collision at v2' and rises to
-    z_c + v2'^2/2. With eps01 = eps12 = eps this is exactly
+    t_c = dH/(v_i (1 + eps01)) (:func:`icm_meeting`: a later flight for a larger gap); the upper
+    ball leaves that collision at v2' and rises to z_c + v2'^2/2. With eps01 = eps12 = eps and
+    a meeting on the first flight this is exactly
     (H (eps^2 + 2 eps - mu)^2 + dH (1 + mu)(mu - eps)) / (1 + mu)^2.
 
     Parameters
@@ -496,10 +543,7 @@ def icm_height(height: float, gap: float, eps01: float, eps12: float, mu: float)
     >>> round(icm_height(1.0, 0.0, 1.0, 1.0, 1e-12), 9)
     9.0
     """
-    v_i = math.sqrt(2.0 * height)
-    t_c = gap / (v_i * (1.0 + eps01))
-    v1 = eps01 * v_i - t_c
-    v2 = -v_i - t_c
-    z_c = eps01 * v_i * t_c - 0.5 * t_c * t_c
+    time, z_c, v1 = icm_meeting(height, gap, eps01)
+    v2 = -time
     v2_after = (mu * v2 + v1 + eps12 * (v1 - v2)) / (1.0 + mu)
     return z_c + 0.5 * v2_after * v2_after

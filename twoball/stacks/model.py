@@ -19,6 +19,7 @@ from twoball.model import (
     decay_ratio,
     domain_error,
     floor_contact_time,
+    icm_meeting,
 )
 from twoball.observables import ContactInterval, Measured, RunStats, as_times, check_span
 
@@ -342,22 +343,27 @@ def icm_chain(stack: Stack) -> list[float]:
     restitution eps_i. Returns each ball's apex after its collision, in its own coordinate X_i:
     the collision's height plus v^2/2. Released touching (no gaps), every collision is at
     height 0: for an elastic three-ball stack with vanishing mass ratios the top ball leaves at
-    7 sqrt(2H), 49 times as high. For two balls this is h_ICM of "What is measured" with the gap
-    X_1(0) - H (:func:`twoball.model.icm_height`); the gaps had been left out, and a two-ball
-    stack's h_ICM differed from the same drop's (h1/h_ICM 0.948 against 1.016 at tau_ratio 10).
+    7 sqrt(2H), 49 times as high. Ball 1 meets ball 0 on a later bounce when the gap is large
+    (:func:`twoball.model.icm_meeting`). For two balls this is h_ICM of "What is measured" with
+    the gap X_1(0) - H (:func:`twoball.model.icm_height`); the gaps had been left out, and a
+    two-ball stack's h_ICM differed from the same drop's (h1/h_ICM 0.948 against 1.016 at
+    tau_ratio 10).
     """
     clock = math.sqrt(2.0 * stack.height)  # (g = 1: the time of the floor impact, and its speed)
     level, up = 0.0, stack.eps[0] * clock  # ball i - 1 leaving its collision: height, speed
     heights = [up * up / 2.0]
     for i in range(1, stack.balls):
         below, mass = stack.masses[i - 1], stack.masses[i]
-        falling_from = float(stack.x_start[i])
-        # ball i falls at -clock: the distance to ball i - 1 closes at up + clock
-        apart = falling_from - clock * clock / 2.0 - level
-        flight = apart / (up + clock)
-        level += up * flight - flight * flight / 2.0
-        clock += flight
-        below_speed, speed = up - flight, -clock
+        if i == 1:  # ball 0 bounces on the floor until ball 1 arrives (icm_meeting)
+            gap = float(stack.x_start[1]) - stack.height
+            clock, level, below_speed = icm_meeting(stack.height, gap, stack.eps[0])
+        else:  # ball i falls at -clock: the distance to ball i - 1 closes at up + clock
+            apart = float(stack.x_start[i]) - clock * clock / 2.0 - level
+            flight = apart / (up + clock)
+            level += up * flight - flight * flight / 2.0
+            clock += flight
+            below_speed = up - flight
+        speed = -clock
         # momentum and restitution: (u - u_below) = -eps (v - v_below)
         up = (below * below_speed + mass * speed + stack.eps[i] * below * (below_speed - speed)) / (
             below + mass
