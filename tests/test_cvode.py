@@ -61,3 +61,21 @@ def test_sundials_warnings_stay_off_the_terminal(capfd):
     )
     assert result.contacts_first[0] == 1  # the run went through the impact
     assert _printed_at_fd_level(capfd) == ("", "")
+
+
+def test_the_benchmark_counts_cvodes_failures_apart():
+    """`twoball bench` gives CVODE's times and errors over the runs it finished and says how
+    many it did not: a failed run (its h2 missing, an error of inf) had gone into the median
+    time and made the largest error "inf", with no word of why (2 of 50 at rtol 1e-12, a
+    researcher's run)."""
+    from twoball.studies.bench import _cvode_figures
+
+    rows = [
+        {"cvode_failed": False, "cvode_s": 0.2, "exact_s": 1e-4, "cvode_vs_exact": 1e-9},
+        {"cvode_failed": False, "cvode_s": 0.4, "exact_s": 1e-4, "cvode_vs_exact": 3e-9},
+        {"cvode_failed": True, "cvode_s": 9.0, "exact_s": 1e-4, "cvode_vs_exact": float("inf")},
+    ]
+    figures = _cvode_figures(rows)
+    assert figures["cvode_failed"] == 1
+    assert figures["cvode_median_s"] == pytest.approx(0.3)
+    assert figures["cvode_vs_exact_max"] == pytest.approx(3e-9)
