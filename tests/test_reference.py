@@ -35,3 +35,13 @@ def test_a_loose_tolerance_is_worse_than_a_tight_one():
         result = twoball.simulate(0.9, 0.01, 0.01, height=1e3, method="RK45", rtol=tol, atol=tol)
         errors.append(abs(result.h1 - exact.h1) / exact.h1)
     assert errors[1] < errors[0]
+
+
+def test_a_method_is_named_in_any_case():
+    """ "cvode" (as its extra is called) or "dop853" name the same solver as METHODS does; a
+    name that is none of them is still refused with the list."""
+    lower = twoball.simulate(0.9, 0.01, 0.01, method="dop853", rtol=1e-8, atol=1e-8)
+    named = twoball.simulate(0.9, 0.01, 0.01, method="DOP853", rtol=1e-8, atol=1e-8)
+    assert lower.method == "DOP853" and (lower.h1, lower.h2) == (named.h1, named.h2)
+    with pytest.raises(ValueError, match="method must be one of exact, LSODA"):
+        twoball.simulate(0.9, 0.01, 0.01, method="euler")

@@ -37,6 +37,7 @@ METHODS: dict[str, Solver] = {
     **{name: partial(reference.solve, method=name) for name in reference.METHODS},
     "CVODE": cvode.solve,
 }
+_METHOD_NAMES = {name.lower(): name for name in METHODS}
 
 
 @with_ranges
@@ -118,6 +119,8 @@ def simulate(
     """
     drop = check_parameters(eps, mu, tau_ratio, eps12=eps12, height=height)
     apexes, t_end = stop_rule(until)
+    # in any case ("cvode", as its extra is called, or "dop853"): named as METHODS names it
+    method = _METHOD_NAMES.get(method.lower(), method) if isinstance(method, str) else method
     if method not in METHODS:
         raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     for name, tol in (("rtol", rtol), ("atol", atol)):
