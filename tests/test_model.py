@@ -187,3 +187,18 @@ def test_heights_read_without_an_exponent():
     assert DIMENSIONLESS.height(50076.39) == "50,076"
     # H = 1e4 is 1e4 m1 g / k = 1e4 * 0.6085 kg * 9.81 m/s^2 / 6e4 N/m = 0.99490 m
     assert SI.height(1e4) == "0.995 m"  # three significant digits
+
+
+def test_icm_meeting_over_random_gaps_and_restitutions():
+    """The flight found in closed form is the one stepped to, for 300 random gaps (up to 500
+    times H) and floor restitutions (0.3 to 1): no flight off by one through rounding."""
+    from twoball.model import icm_meeting
+
+    rng = np.random.default_rng(7)
+    gaps = 1e4 * 10 ** rng.uniform(-3, np.log10(500), 300)
+    eps01 = np.where(rng.random(300) < 0.1, 1.0, rng.uniform(0.3, 1.0, 300))
+    times, levels, speeds = icm_meeting(1e4, gaps, eps01)
+    for i in range(300):
+        expected = _meeting_flight_by_flight(1e4, gaps[i], eps01[i])
+        found = (times[i], levels[i], speeds[i])
+        assert found == pytest.approx(expected, rel=1e-8, abs=1e-8 * math.sqrt(2e4)), i

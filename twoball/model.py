@@ -495,9 +495,12 @@ def icm_meeting(height, gap, eps01):
 
     k = np.where(at_rest, 0.0, k)
     start, up = flight_start(k), v_i * eps01 ** (k + 1.0)
-    # (a rounded k one flight early: the meeting is then past its end; take the next)
-    late = (v_i * v_i / 2.0 + gap - start * start / 2.0) / (up + start) > 2.0 * up * (1 + 1e-12)
-    k = np.where(late & ~at_rest, k + 1.0, k)
+    # (k rounded one flight off: the meeting then lies past the flight's end, take the next,
+    # or before its start, take the one before)
+    closing = (v_i * v_i / 2.0 + gap - start * start / 2.0) / (up + start)
+    late = closing > 2.0 * up * (1 + 1e-12)
+    early = (closing < -1e-12 * v_i) & (k > 0)
+    k = np.where(at_rest, k, k + np.where(late, 1.0, 0.0) - np.where(early, 1.0, 0.0))
     start, up = flight_start(k), v_i * eps01 ** (k + 1.0)
     closing = (v_i * v_i / 2.0 + gap - start * start / 2.0) / (up + start)
     time = np.where(at_rest, landing, start + closing)
