@@ -379,10 +379,7 @@ def _bench(args: argparse.Namespace) -> int:
 
 
 def _add_sweep(subparsers: argparse._SubParsersAction) -> None:
-    from twoball.stacks.model import (
-        HERTZ_LARGEST_MASS,
-        HERTZ_SMALLEST_RESTITUTION,
-    )
+    from twoball.stacks.model import HERTZ_LARGEST_MASS, HERTZ_SMALLEST_RESTITUTION
 
     hertz_limits = {
         "eps": f" (hertz: from {HERTZ_SMALLEST_RESTITUTION:g})",

@@ -489,20 +489,20 @@ def icm_meeting(height, gap, eps01):
     k = np.maximum(np.ceil(flights - 1e-9), 0.0)  # (rounding: checked below)
     at_rest = ~elastic & (left <= 0.0)  # the bounces die out before the upper ball arrives
 
-    def flight_start(k):
+    def flight(k):
+        """Flight k's start, its take-off speed and the time into it at which they meet."""
         bounced = np.where(elastic, 2.0 * k, 2.0 * ratio * (1.0 - ratio**k) / (1.0 - ratio))
-        return v_i * (1.0 + bounced)
+        start, up = v_i * (1.0 + bounced), v_i * eps01 ** (k + 1.0)
+        return start, up, (v_i * v_i / 2.0 + gap - start * start / 2.0) / (up + start)
 
     k = np.where(at_rest, 0.0, k)
-    start, up = flight_start(k), v_i * eps01 ** (k + 1.0)
+    start, up, closing = flight(k)
     # (k rounded one flight off: the meeting then lies past the flight's end, take the next,
     # or before its start, take the one before)
-    closing = (v_i * v_i / 2.0 + gap - start * start / 2.0) / (up + start)
     late = closing > 2.0 * up * (1 + 1e-12)
     early = (closing < -1e-12 * v_i) & (k > 0)
     k = np.where(at_rest, k, k + np.where(late, 1.0, 0.0) - np.where(early, 1.0, 0.0))
-    start, up = flight_start(k), v_i * eps01 ** (k + 1.0)
-    closing = (v_i * v_i / 2.0 + gap - start * start / 2.0) / (up + start)
+    start, up, closing = flight(k)
     time = np.where(at_rest, landing, start + closing)
     level = np.where(at_rest, 0.0, up * closing - closing * closing / 2.0)
     speed = np.where(at_rest, 0.0, up - closing)
