@@ -547,6 +547,12 @@ def icm_height(height: float, gap: float, eps01: float, eps12: float, mu: float)
     9.0
     """
     time, z_c, v1 = icm_meeting(height, gap, eps01)
-    v2 = -time
-    v2_after = (mu * v2 + v1 + eps12 * (v1 - v2)) / (1.0 + mu)
+    v2_after = upper_after_collision(v1, -time, eps12, mu)
     return z_c + 0.5 * v2_after * v2_after
+
+
+def upper_after_collision(lower: float, upper: float, eps: float, mu: float) -> float:
+    """The upper ball's velocity after an instantaneous collision (docs/model.md, "What is
+    measured"): momentum kept, and the relative velocity reversed times eps; mu = m_upper /
+    m_lower, velocities before the collision (numbers or arrays)."""
+    return (mu * upper + lower + eps * (lower - upper)) / (1.0 + mu)

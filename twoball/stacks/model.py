@@ -20,6 +20,7 @@ from twoball.model import (
     domain_error,
     floor_contact_time,
     icm_meeting,
+    upper_after_collision,
 )
 from twoball.observables import ContactInterval, Measured, RunStats, as_times, check_span
 
@@ -363,10 +364,6 @@ def icm_chain(stack: Stack) -> list[float]:
             level += up * flight - flight * flight / 2.0
             clock += flight
             below_speed = up - flight
-        speed = -clock
-        # momentum and restitution: (u - u_below) = -eps (v - v_below)
-        up = (below * below_speed + mass * speed + stack.eps[i] * below * (below_speed - speed)) / (
-            below + mass
-        )
+        up = upper_after_collision(below_speed, -clock, stack.eps[i], mass / below)
         heights.append(float(level + up * up / 2.0))  # Python floats, as Result.h_icm
     return heights
