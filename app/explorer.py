@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from pathlib import Path
 from urllib.parse import urlencode
 
 import panel as pn
@@ -252,7 +253,14 @@ class ClassroomTemplate(pn.template.BootstrapTemplate):
       every page before being replaced by none.
     - No notebook view: Panel makes one for every template (its text, a "Launch server" button),
       shown only when a notebook displays the template.
+    - No script area and no modal's actions (app/static/classroom.html, the Bootstrap page
+      whose only state root is the location): two roots of every page that nothing here uses
+      (Panel writes no script into the area; the page has no modal); nor Panel's report of
+      the browser (its time zone, dark mode...: only Panel's chat reads it). 4-5 ms of a
+      page's opening (benchmarks/app_open.py).
     """
+
+    _template = Path(__file__).parent / "static" / "classroom.html"
 
     busy_indicator = param.ClassSelector(
         default=None,
@@ -261,6 +269,12 @@ class ClassroomTemplate(pn.template.BootstrapTemplate):
         allow_None=True,
         doc="None: a page says itself that its change is pending.",
     )
+
+    def __init__(self, **params):
+        super().__init__(**params)
+        for unused in ("js_area", "actions", "browser_info"):  # (Panel adds them for every
+            self._render_items.pop(unused, None)  # template with a state_roots block)
+        self._render_variables["browser_info"] = False
 
     def _build_layout(self) -> pn.Column:
         return pn.Column()

@@ -93,6 +93,35 @@ def test_every_scene_builds_a_valid_document(present):
     assert {issue.name for issue in issues.warning} <= {"EMPTY_LAYOUT"}
 
 
+def test_a_page_carries_no_root_that_nothing_uses():
+    """The page's roots: the sidebar, the main area and the location, not Panel's script area,
+    modal actions or browser report (app/static/classroom.html); its HTML embeds each root
+    it has (a root without a place in the page fails in the browser)."""
+    from bokeh.embed.elements import html_page_for_render_items
+    from bokeh.embed.util import RenderItem, standalone_docs_json_and_render_items
+
+    document = Document()
+    pn.config.browser_info = True  # (main.py turns it off; the template must not need it)
+    try:
+        Explorer({}).page().server_doc(document)
+    finally:
+        pn.config.browser_info = False
+    names = sorted(root.name.split("-")[0] for root in document.roots)
+    assert names == ["location", "main", "nav"]
+    docs_json, _ = standalone_docs_json_and_render_items(document.roots)
+    item = RenderItem(docid=next(iter(docs_json)), roots=document.roots)
+    html = html_page_for_render_items(
+        ({}, {}),
+        docs_json,
+        [item],
+        "page",
+        template=document.template,
+        template_variables=document.template_variables,
+    )
+    for root in document.roots:
+        assert f'data-root-id="{root.id}"' in html
+
+
 def test_the_stack_scene_computes_only_for_its_own_parameters():
     explorer = rendered()
     explorer.state.scene = "stack"
