@@ -18,7 +18,7 @@ from twoball.errors import ParameterError, SolverError, Status
 from twoball.kernels import stack as kernel
 from twoball.stacks import check_stack, icm_chain, simulate_stack
 from twoball.stacks.model import _apex_bound
-from twoball.stacks.stack import _store_for
+from twoball.stacks.stack import METHODS, _store_for
 
 
 def _energy(stack, trajectory) -> np.ndarray:
@@ -601,3 +601,24 @@ def test_dense_output_evaluates_the_run_once_it_has_ended():
         unsampled.evaluate(0.0)
     with pytest.raises(ParameterError, match="compiled methods only"):
         simulate_stack(*stack, force="hertz", method="DOP853", dense_output=True)
+
+
+@pytest.mark.parametrize(
+    ("force", "method"), [(f, m) for f, named in METHODS.items() for m in named]
+)
+def test_t_eval_in_any_order_is_sampled_in_that_order(force, method):
+    """Every force and method gives t_eval's samples in the order asked, as the two-ball
+    simulate and evaluate do (the Hertz methods, which sample in increasing order, gave the
+    times sorted and each row of another time)."""
+    given = np.array([2.5, 0.5, 4.0, 1.0, 0.5])
+    run = simulate_stack([0.2, 0.2], 0.9, 0.2, force=force, method=method, t_eval=given)
+    ordered = simulate_stack(
+        [0.2, 0.2], 0.9, 0.2, force=force, method=method, t_eval=[0.5, 1.0, 2.5, 4.0]
+    )
+    at = {t: i for i, t in enumerate([0.5, 1.0, 2.5, 4.0])}
+    rows = [at[t] for t in given]
+    assert list(run.trajectory.t) == list(given)
+    for field in ("x", "v"):
+        assert np.array_equal(
+            getattr(run.trajectory, field), getattr(ordered.trajectory, field)[rows]
+        )

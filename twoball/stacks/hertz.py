@@ -548,11 +548,11 @@ def _result(
     for ball, when, where in apexes:
         per_ball[ball].append((when, where))
     trajectory = None
-    if times is not None:
-        n = stack.balls
-        trajectory = StackTrajectory(
-            np.sort(times), samples[:, :n], samples[:, n : 2 * n], samples[:, 2 * n :]
-        )
+    if times is not None:  # (sampled in increasing order: given back in the order asked)
+        n, given = stack.balls, np.asarray(times, dtype=float)
+        rows = np.empty_like(samples)
+        rows[np.argsort(given, kind="stable")] = samples
+        trajectory = StackTrajectory(given, rows[:, :n], rows[:, n : 2 * n], rows[:, 2 * n :])
     return StackResult(
         stack=stack,
         force="hertz",
