@@ -232,7 +232,17 @@ def test_a_sweep_that_cannot_write_names_the_store_given(tmp_path):
     line = _one_line_error(
         _run("sweep", store, "--eps", "0.9", "--mu", "0.1", "--tau-ratio", "0.1", "--quiet")
     )
-    assert line.startswith(f"twoball: error: {store}: ")
+    assert line.endswith(f"{store}: the directory it goes in, {blocker}, is not a directory")
+
+
+def test_a_sweep_makes_its_store_not_the_directories_above_it(tmp_path):
+    """A mistyped path made every missing directory above the store, silently."""
+    store = tmp_path / "missing" / "dir" / "x.zarr"
+    line = _one_line_error(
+        _run("sweep", str(store), "--eps", "0.9", "--mu", "0.1", "--tau-ratio", "0.1", "--quiet")
+    )
+    assert f"{tmp_path / 'missing' / 'dir'}, does not exist (make it first)" in line
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_report_on_an_array_inside_a_store_is_one_line(tmp_path):

@@ -145,6 +145,11 @@ def _store(text: str) -> str:
         raise argparse.ArgumentTypeError(
             f"must name the store's own directory, such as cube.zarr; got {text!r}"
         )
+    # the store is made, not the directories above it: a mistyped path made them silently
+    parent = os.path.dirname(os.path.normpath(os.path.abspath(text)))
+    if not os.path.isdir(parent):
+        why = "is not a directory" if os.path.exists(parent) else "does not exist (make it first)"
+        raise argparse.ArgumentTypeError(f"{text}: the directory it goes in, {parent}, {why}")
     return text
 
 
