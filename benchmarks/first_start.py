@@ -4,7 +4,7 @@ the first page with plots, then the time each new page takes while the solver co
 background and after (medians), and when the compiled kernels take over: the two-ball solver's
 (the page's notice goes), then the stacks' (the server's log).
 
-    .venv/bin/python benchmarks/first_start.py [--panel]
+    .venv/bin/python benchmarks/first_start.py [--panel] [--each]
 """
 
 from __future__ import annotations
@@ -39,6 +39,7 @@ def main() -> None:
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--panel", action="store_true", help="serve with panel serve app")
+    parser.add_argument("--each", action="store_true", help="print each page's time as it opens")
     args = parser.parse_args()
     port = free_port()
     if args.panel:
@@ -70,6 +71,9 @@ def main() -> None:
                 compiling = page.get_by_text(NOTICE).filter(visible=True).count() > 0
                 context.close()
                 pages["compiling" if compiling else "compiled"].append(seconds)
+                if args.each:
+                    print(f"{opened - started:6.1f} s: a page in {seconds:.1f} s"
+                          + (" (compiling)" if compiling else ""), flush=True)  # fmt: skip
                 if not compiling and switched is None:
                     switched = time.monotonic() - started
             browser.close()

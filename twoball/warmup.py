@@ -19,22 +19,29 @@ log = logging.getLogger(__name__)
 
 
 def warm_up_two_ball() -> None:
-    """Call the two-ball solver's kernel paths once: a drop to its second apex with a sampled
-    trajectory, and the batch path of sweeps and the map (twoball.kernels.runs.run_block)."""
+    """Call the two-ball solver's kernel paths once: a drop to its second apex for its heights
+    only (twoball.kernels.runs.run_drop) and with its trajectory sampled (runs.run and
+    runs.sample), and the batch path of sweeps and the map (runs.run_block). Each path left out
+    was compiled by the first page to take it, in the server, after this stage: one page then
+    waited 10.8 s (benchmarks/first_start.py)."""
     from twoball.batch.sweep import compute_block
     from twoball.solve import simulate
 
-    simulate(0.9, 0.01, 0.01, until="second", dense_output=True)
+    simulate(0.9, 0.01, 0.01, until="second")
+    simulate(0.9, 0.01, 0.01, until="second", t_eval=[0.0, 1.0])
     compute_block([0.9], [0.01], [0.01])
 
 
 def warm_up_stacks() -> None:
     """Call the N-ball solver's kernel paths once (twoball.kernels.stack), then the Hertz
-    force's (twoball.kernels.hertz)."""
+    force's (twoball.kernels.hertz): each sampled at given times, and kept whole and evaluated
+    afterwards, as the app's Stack scene does (the Hertz force's cubics between its steps,
+    hertz.between_nodes, were otherwise compiled by the first page to draw a Hertz stack)."""
     from twoball.stacks import simulate_stack
 
-    simulate_stack([0.2, 0.2], 0.9, 0.2, t_eval=[0.0, 1.0])
-    simulate_stack([0.2, 0.2], 0.9, 0.2, force="hertz", t_eval=[0.0, 1.0])
+    for force in ("linear", "hertz"):
+        simulate_stack([0.2, 0.2], 0.9, 0.2, force=force, t_eval=[0.0, 1.0])
+        simulate_stack([0.2, 0.2], 0.9, 0.2, force=force, dense_output=True).evaluate([0.0, 1.0])
 
 
 # The kernels compiled in two stages, the two-ball solver's first: what a page opens on, 30-45 s
