@@ -269,19 +269,23 @@ class Lesson(Built):
         # the press revealed again and the lesson stayed, test_a_presentation_clicker_...)
         self.reveal.disabled = True
         self.choices.disabled = True
-        # the answer said once: an explanation that begins with it follows the verdict alone
-        # ("The answer: 4 times. 4 times: the small ball is hit..." on a projector's card)
-        said = shown.explanation.lower().startswith(correct.lower())
-        named = "" if said else f" {correct.lower()}."
+        # the answer said once: an explanation that begins with it (with the choice's words
+        # before any gloss after a colon) follows the verdict alone, and reads on from it
+        # ("The answer: 4 times. 4 times: the small ball is hit..." on a projector's card;
+        # "Not quite: not always: its error can be... Not always: errors 10 to...", a teacher)
+        explanation = shown.explanation
+        said = explanation.lower().startswith(correct.split(":")[0].lower())
         if self.choices.value is None:
-            verdict = f"The answer:{named}"
+            verdict = "The answer is" if said else f"The answer: {correct.lower()}."
+            if said:  # ("The answer is the second, about 5 times higher...")
+                explanation = explanation[0].lower() + explanation[1:]
         elif self.choices.value == correct:
             verdict = "Right."
         else:
-            verdict = f"Not quite:{named}"
+            verdict = "Not quite." if said else f"Not quite: {correct.lower()}."
         for answer in self._answers():
             answer.param.update(
-                object=f"**{verdict}** {self._explained(shown.explanation)}",
+                object=f"**{verdict}** {self._explained(explanation)}",
                 alert_type="success" if self.choices.value == correct else "warning",
                 visible=True,
             )

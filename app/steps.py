@@ -62,9 +62,11 @@ STEPS = (
         "and meets the small ball still falling; "
         "seen from the big ball, the small ball comes in at twice the fall speed and leaves at "
         "twice it, so it goes up at three times the fall speed: 3 x 3 = 9 times the height for "
-        "a very light ball. (Its second bounce goes higher still, to 21.1 m, when the balls "
-        "meet again: the summary calls any h2 > h1 a delayed rebound. The surprise of step 3 "
-        "is another: a first bounce far below the textbook's.)",
+        "a very light ball. The model's small ball goes a little above the textbook's line (8.7 "
+        "m): its balls are springy and touch for a while, where the textbook's collide in an "
+        "instant; the textbook is right to within 2 %. (Its second bounce goes higher still, "
+        "to 21.1 m, when the balls meet again: the summary calls any h2 > h1 a delayed "
+        "rebound. The surprise of step 3 is another: a first bounce far below the textbook's.)",
         aside="The second peak, h2 = 21.1 m, comes after the balls meet again; any h2 above "
         "h1 counts as a delayed rebound. Step 3 shows another kind.",
     ),
@@ -80,7 +82,7 @@ STEPS = (
         },
         look_for="Real balls from the rule books: a basketball (it keeps 85 % of its speed in "
         "a bounce), a tennis ball (75 %, ten times lighter), held a little apart and dropped "
-        "from 1 m. (The tennis preset holds them touching: that is the next step's story.)",
+        "from 1 m. (The tennis preset holds them touching: step 4 tells that story.)",
         question="Real balls lose energy. How high does the tennis ball go now?",
         choices=(
             "Lower than it was dropped from",
@@ -98,9 +100,9 @@ STEPS = (
         title="A ping-pong ball: the delayed rebound",
         scene="drop",
         drop={"eps": 0.9, "eps12": None, "mu": 0.01, "tau_ratio": 0.01, "height": HEIGHT},
-        look_for="Now a much lighter ball (a hundred times lighter, like a ping-pong ball) held "
-        "touching the big one. Think of the small ball's first two bounces (the peaks of the "
-        "orange curve, once revealed).",
+        look_for="Now a much lighter ball, a hundred times lighter (a real ping-pong ball, the "
+        "ping-pong preset, is lighter still), held touching the big one. Think of the small "
+        "ball's first two bounces (the peaks of the orange curve, once revealed).",
         question="Which bounce of the small ball is higher?",
         choices=("The first", "The second", "Both the same"),
         answer=1,
@@ -141,16 +143,20 @@ STEPS = (
             "None with real balls",
         ),
         answer=1,
-        explanation="A light top ball held close: the collisions then overlap in time, as in "
-        "the close-up. Far apart, they are separate and the textbook prediction holds.",
+        explanation="The map is red there for top balls up to about a third of the big "
+        "ball's mass, the second bounce up to nearly 7 times the first: the collisions overlap "
+        "in time, as in the close-up. Far apart, they are separate and a light ball's first "
+        "bounce is the textbook's; only top balls much lighter than the big one (mostly below "
+        "a thirtieth of its mass) still bounce higher the second time, when the balls meet "
+        "again as in step 1, and by at most 1.5 times.",
     ),
     Step(
         title="How sure can we be?",
         scene="accuracy",
         drop={"eps": 0.9, "eps12": None, "mu": 0.01, "tau_ratio": 0.01, "height": HEIGHT},
         look_for="The same drop solved by general-purpose methods at several tolerances: each "
-        "point is a run time (across) against an error (up); the point labelled exact is this "
-        "app's own solver.",
+        "point is a run time (across) against an error (up); the point named exact in the "
+        "legend is this app's own solver.",
         question="A general-purpose solver is asked for 6 correct digits. Does it give them?",
         choices=("Always", "Not always: its error can be far larger than asked", "Never"),
         answer=1,
