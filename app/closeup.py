@@ -47,7 +47,7 @@ def collision_window(contacts: list[twoball.ContactInterval], end: float) -> tup
 # presentation mode (scene.py): positions; each force half of it. Under them the summary's line
 # and the contacts' table, a contact a column: within 1280 x 720 with 360 (with 400, and the
 # table a contact a row, it ran 200 px below the screen)
-PROJECTOR_PLOT_HEIGHT = 360
+PROJECTOR_PLOT_HEIGHT = 340
 # beside the forces, each at least 380 px wide (a phone wraps them one above the other)
 BESIDE_STYLES = {"flex": "1 1 380px", "min-width": "0"}
 

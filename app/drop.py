@@ -242,15 +242,16 @@ def heights_and_stage(heights, animation, presentation: bool) -> pn.viewable.Vie
 
 # Presentation mode (scene.py), 1280 x 720: under the header (80 px) and the tabs (60) a one-line
 # summary (:meth:`DropScene._projected_text`, 40 px), the heights, the player (112) and the row
-# of the trails box, Pin and Download (50): the heights get 370 px, their data area 270 of them
-# (the legend's row above it, the time axis below). With the three-line summary they had 290,
-# 193 px of data (the summary and the header took the rest of the screen).
-PROJECTOR_PLOT_HEIGHT = 370
+# of the trails box, Pin and Download (50): the heights get 345 px, their data area about 250 of
+# them (the legend's row above it, the time axis below; at 370 px the main area ran 20 px under
+# the screen's foot, a teacher's trial). With the three-line summary they had 290, 193 px of
+# data (the summary and the header took the rest of the screen).
+PROJECTOR_PLOT_HEIGHT = 345
 # ... and under a lesson's revealed answer, which stands for the summary but is taller (a line
 # of 30 px text, 70 px, and the step's aside if it has one, two lines more, above the tabs): the
 # player stays on the screen
-PROJECTOR_PLOT_UNDER_ANSWER = 340
-PROJECTOR_PLOT_UNDER_ANSWER_AND_ASIDE = 290
+PROJECTOR_PLOT_UNDER_ANSWER = 315
+PROJECTOR_PLOT_UNDER_ANSWER_AND_ASIDE = 265
 # the drop's stage there, beside the heights and the player, as tall as both: 220 x 290 beside
 # the heights alone, its balls were small for a room (the player's row, beside the trails box,
 # left the width unused)
@@ -365,9 +366,30 @@ class DropScene(Scene):
         )
         for span in (self.drop_line, self.icm_line, self.cursor):
             fig.add_layout(span)
-        legend_above(fig, [LegendItem(label="lower ball", renderers=[lower]),
-                           LegendItem(label="upper ball", renderers=[upper])])  # fmt: skip
+        items = [LegendItem(label="lower ball", renderers=[lower]),
+                 LegendItem(label="upper ball", renderers=[upper])]  # fmt: skip
+        if self.state.presentation:  # (the summary's line that names the lines is not shown)
+            items += self._line_keys(fig)
+        legend_above(fig, items)
         return fig
+
+    def _line_keys(self, fig) -> list[LegendItem]:
+        """Legend entries for the textbook's apex and the release height, drawn as those
+        lines are, from a point that is not drawn: on a projector the summary's line that names
+        them is left out, and nothing on the screen said what the dotted green and dashed grey
+        lines were (a teacher's trial)."""
+        nothing = ColumnDataSource({"t": [np.nan], "y": [np.nan]})  # (none: no key drawn)
+        keys = []
+        for span, label in ((self.icm_line, "textbook (ICM)"), (self.drop_line, "released at")):
+            line = Line(
+                x="t",
+                y="y",
+                line_color=span.line_color,
+                line_dash=span.line_dash,
+                line_width=span.line_width,
+            )
+            keys.append(LegendItem(label=label, renderers=[draw(fig, line, nothing)]))
+        return keys
 
     def _animation_figure(self):
         """The two balls, one on the other, above the floor (a grey band below height 0)."""
