@@ -622,3 +622,22 @@ def test_t_eval_in_any_order_is_sampled_in_that_order(force, method):
         assert np.array_equal(
             getattr(run.trajectory, field), getattr(ordered.trajectory, field)[rows]
         )
+
+
+def test_evaluate_after_a_proven_rest_is_that_rest_or_says_how_to_sample_it():
+    """A linear stack's dense output after its proven rest is the rest, as t_eval gives it and
+    the two-ball Result.evaluate does (it was refused, with a hint to run further that could
+    not help); the Hertz force's, which ends with its run, says to use t_eval."""
+    stack = ([0.2], 0.3, 0.2)
+    linear = simulate_stack(*stack, height=10, dense_output=True)
+    assert linear.status is Status.REST
+    times = [0.5 * linear.end_time, 1e4]
+    sampled = simulate_stack(*stack, height=10, t_eval=times).trajectory
+    evaluated = linear.evaluate(times)
+    for field in ("x", "v", "f"):
+        assert np.allclose(getattr(evaluated, field), getattr(sampled, field), atol=1e-12)
+    assert np.allclose(evaluated.v[1], 0.0) and np.allclose(evaluated.f[1], [1.2, 0.2])  # weights
+    hertz = simulate_stack(*stack, height=10, force="hertz", dense_output=True)
+    assert hertz.status is Status.REST
+    with pytest.raises(ParameterError, match="t_eval"):
+        hertz.evaluate(1e4)

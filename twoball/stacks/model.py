@@ -282,7 +282,18 @@ class StackResult(Measured):
         if self.dense is None:
             raise ValueError("evaluate needs a run with dense_output=True")
         times = as_times("t", t)
-        check_span("t", times, self.end_time, False)
+        at_rest = self.status is Status.REST
+        if at_rest and self.force == "hertz" and float(times.max()) > self.end_time:
+            # (its balls still quiver in their contacts after the proof that none flies again,
+            # and its cubics end with the run: t_eval carries the integration on)
+            raise ParameterError(
+                f"t must lie within the run's time span [0, {self.end_time:.10g}] for the Hertz "
+                "force's dense output, which ends at the proven rest; sample later times with "
+                "t_eval=..."
+            )
+        # after a linear stack's proven rest every later time is that rest (as t_eval, and
+        # the two-ball Result.evaluate): they were refused, with a hint that could not help
+        check_span("t", times, self.end_time, at_rest)
         return self.dense(times)
 
     @property
