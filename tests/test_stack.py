@@ -641,3 +641,26 @@ def test_evaluate_after_a_proven_rest_is_that_rest_or_says_how_to_sample_it():
     assert hertz.status is Status.REST
     with pytest.raises(ParameterError, match="t_eval"):
         hertz.evaluate(1e4)
+
+
+@pytest.mark.parametrize("gaps", [0.0, [0.0, 0.0], [0.0, 0.1], [0.1, 0.0]])
+def test_balls_released_touching_push_only_once_something_pushes_them(gaps):
+    """Balls released touching fall together with no force between them: no ball contact
+    pushes before the floor's impact at sqrt(2H) (three touching balls had both pushing from
+    t = 0), and two balls released touching count the ball contacts simulate counts (a contact
+    of no length at t = 0 made them [1, 2] against simulate's [1, 1]: a researcher's trial)."""
+    ratios = [0.2] if gaps == 0.0 else [0.2, 0.2]
+    result = simulate_stack(ratios, 0.9, gaps, height=1e4)
+    impact = math.sqrt(2.0 * 1e4)
+    assert all(c.end > c.start for c in result.contacts)
+    assert all(c.start >= impact * (1 - 1e-12) for c in result.contacts)
+    first_bounce = [c for c in result.contacts if c.start < result.apex_t[0]]
+    counted = [sum(c.contact == k for c in first_bounce) for k in range(len(ratios) + 1)]
+    assert counted == result.contacts_first
+    if gaps == 0.0:
+        drop = twoball.simulate(0.9, 0.2, 0.0, height=1e4)
+        assert result.contacts_first == drop.contacts_first
+        ball = [c for c in result.contacts if c.contact == 1]
+        # (a root where the overlap grows as the cube of the time since the impact: each
+        # solver's to ~1e-10 of the 3-unit contact)
+        assert ball[0].start == pytest.approx(drop.contacts[1].start, abs=1e-8)
