@@ -2,7 +2,7 @@
 
 At start-up the kernels' Python functions stand in for them (same results, a drop in ~25 ms)
 while another process compiles them (about 3 minutes on a new machine or CPU, ~2 s from the
-disk cache); the machine code takes over as it comes, the two-ball solver's in under a minute
+disk cache); the machine code takes over as it comes, the two-ball solver's in 1-2 minutes
 (:func:`twoball.warmup.compile_in_background`). The map cube is
 opened once per server. A page closed while an update is being sent to it is a client leaving,
 not an error (:func:`drop_messages_to_closed_sockets`).

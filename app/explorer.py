@@ -189,7 +189,7 @@ class Explorer(Built):
         if warmup.in_use("two-ball"):  # (a stack's solver follows 2 minutes later)
             return []
         text = (
-            "First start on this machine: the solver is still being compiled (under a minute, "
+            "First start on this machine: the solver is still being compiled (a minute or two, "
             "more on a busy machine). "
             "Until then drops are computed in plain Python: the same results, a little slower."
         )
