@@ -202,3 +202,16 @@ def test_icm_meeting_over_random_gaps_and_restitutions():
         expected = _meeting_flight_by_flight(1e4, gaps[i], eps01[i])
         found = (times[i], levels[i], speeds[i])
         assert found == pytest.approx(expected, rel=1e-8, abs=1e-8 * math.sqrt(2e4)), i
+
+
+def test_icm_meeting_on_a_ball_at_rest_is_quiet():
+    """A drop height of 1e-320: the lower ball lies on the floor, and the upper one meets it
+    there after falling its gap, sqrt(2 dH); the flights' values, not taken, overflowed and the
+    command line printed a RuntimeWarning (a researcher's trial)."""
+    import warnings
+
+    from twoball.model import icm_meeting
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert icm_meeting(1e-320, 0.1, 0.9) == (math.sqrt(0.2), 0.0, 0.0)

@@ -496,16 +496,19 @@ def icm_meeting(height, gap, eps01):
         return start, up, (v_i * v_i / 2.0 + gap - start * start / 2.0) / (up + start)
 
     k = np.where(at_rest, 0.0, k)
-    start, up, closing = flight(k)
-    # (k rounded one flight off: the meeting then lies past the flight's end, take the next,
-    # or before its start, take the one before)
-    late = closing > 2.0 * up * (1 + 1e-12)
-    early = (closing < -1e-12 * v_i) & (k > 0)
-    k = np.where(at_rest, k, k + np.where(late, 1.0, 0.0) - np.where(early, 1.0, 0.0))
-    start, up, closing = flight(k)
-    time = np.where(at_rest, landing, start + closing)
-    level = np.where(at_rest, 0.0, up * closing - closing * closing / 2.0)
-    speed = np.where(at_rest, 0.0, up - closing)
+    # (where the lower ball is at rest the flight's values are not taken, and may overflow:
+    # H = 1e-320 printed a RuntimeWarning from the command line, a researcher's trial)
+    with np.errstate(over="ignore", invalid="ignore"):
+        start, up, closing = flight(k)
+        # (k rounded one flight off: the meeting then lies past the flight's end, take the
+        # next, or before its start, take the one before)
+        late = closing > 2.0 * up * (1 + 1e-12)
+        early = (closing < -1e-12 * v_i) & (k > 0)
+        k = np.where(at_rest, k, k + np.where(late, 1.0, 0.0) - np.where(early, 1.0, 0.0))
+        start, up, closing = flight(k)
+        time = np.where(at_rest, landing, start + closing)
+        level = np.where(at_rest, 0.0, up * closing - closing * closing / 2.0)
+        speed = np.where(at_rest, 0.0, up - closing)
     if time.ndim == 0:
         return float(time), float(level), float(speed)
     return time, level, speed
