@@ -242,6 +242,11 @@ class Explorer(Built):
         return template
 
 
+# Panel's report of the browser, made for every session and added to every template's roots
+# unless switched off: nothing here reads it (ClassroomTemplate)
+pn.config.browser_info = False
+
+
 class ClassroomTemplate(pn.template.BootstrapTemplate):
     """Panel's BootstrapTemplate without what a served page never shows, made anew for every
     page: 3-5 ms of a page's opening (benchmarks/app_open.py).
@@ -256,8 +261,9 @@ class ClassroomTemplate(pn.template.BootstrapTemplate):
     - No script area and no modal's actions (app/static/classroom.html, the Bootstrap page
       whose only state root is the location): two roots of every page that nothing here uses
       (Panel writes no script into the area; the page has no modal); nor Panel's report of
-      the browser (its time zone, dark mode...: only Panel's chat reads it). 4-5 ms of a
-      page's opening (benchmarks/app_open.py).
+      the browser (its time zone, dark mode...: only Panel's chat reads it; switched off
+      below, for every page, however the app is served or built). 4-5 ms of a page's opening
+      (benchmarks/app_open.py).
     """
 
     _template = Path(__file__).parent / "static" / "classroom.html"
@@ -272,9 +278,8 @@ class ClassroomTemplate(pn.template.BootstrapTemplate):
 
     def __init__(self, **params):
         super().__init__(**params)
-        for unused in ("js_area", "actions", "browser_info"):  # (Panel adds them for every
-            self._render_items.pop(unused, None)  # template with a state_roots block)
-        self._render_variables["browser_info"] = False
+        for unused in ("js_area", "actions"):  # (Panel adds them for every template with a
+            self._render_items.pop(unused, None)  # state_roots block)
 
     def _build_layout(self) -> pn.Column:
         return pn.Column()

@@ -24,7 +24,7 @@ NOTICE = "solver is still being compiled"
 # filled; then each kernel signature that was not in the cache (compiled by this process, as a
 # server would compile it for the first page to take its path, the page waiting)
 PAGES_FROM_THE_CACHE = """
-import importlib, sys
+import importlib
 from bokeh.document import Document
 from numba.core.registry import CPUDispatcher
 from panel.io.state import set_curdoc
