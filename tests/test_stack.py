@@ -181,6 +181,83 @@ def test_the_icm_chain_with_gaps_against_a_root_finder():
     assert chain == pytest.approx(_chain_by_root_finding(touching), rel=1e-9)
 
 
+def _hard_balls_by_integration(stack) -> list[float]:
+    """The ICM chain found another way: hard balls in free fall integrated by scipy's
+    solve_ivp, each collision (the floor, or two balls meeting) an event located by it; the
+    velocities updated there (momentum kept, the relative velocity reversed times eps) and the
+    integration restarted; each ball's apex after its first collision with what is below it."""
+    from scipy.integrate import solve_ivp
+
+    balls, masses, eps = stack.balls, stack.masses, stack.eps
+    state = np.concatenate([np.asarray(stack.x_start, dtype=float), np.zeros(balls)])
+    heights = [None] * balls
+
+    def falling(t, y):
+        return np.concatenate([y[balls:], -np.ones(balls)])
+
+    def meeting(i):
+        def event(t, y):
+            return y[0] if i == 0 else y[i] - y[i - 1]
+
+        event.terminal, event.direction = True, -1.0
+        return event
+
+    events = [meeting(i) for i in range(balls)]
+    while heights[-1] is None:
+        run = solve_ivp(falling, (0.0, 1e9), state, events=events, rtol=1e-13, atol=1e-12)
+        (hit,) = [i for i, found in enumerate(run.t_events) if len(found)]
+        state = run.y_events[hit][0].copy()
+        x, v = state[:balls], state[balls:]
+        if hit == 0:
+            x[0], v[0] = 0.0, -eps[0] * v[0]
+        else:
+            below, above = hit - 1, hit
+            total = masses[below] * v[below] + masses[above] * v[above]
+            apart = eps[above] * (v[below] - v[above])
+            v[above] = (total + masses[below] * apart) / (masses[below] + masses[above])
+            v[below] = v[above] - apart
+            x[above] = x[below]
+        if heights[hit] is None:
+            heights[hit] = x[hit] + v[hit] ** 2 / 2
+    return heights
+
+
+@pytest.mark.parametrize(
+    ("ratios", "eps", "gaps", "height"),
+    [
+        ([0.3, 0.3], 0.95, [3.0, 30.0], 10.0),
+        ([0.3, 0.5, 0.4], 1.0, [3.0, 30.0, 100.0], 10.0),
+        ([0.3, 0.5, 0.4], 0.95, [3.0, 30.0, 60.0], 10.0),
+    ],
+)
+def test_the_icm_chain_follows_every_collision_before_the_next_ball(ratios, eps, gaps, height):
+    """A top ball far above: the balls below collide again (ball 1 falls back onto ball 0,
+    which bounces on the floor) before it arrives. The chain follows them, as hard balls
+    integrated with their collisions as events; it had taken ball 1 to fly on and met it far
+    below the floor (the top ball's h_ICM negative: -2.5e3 for the first stack here). (The
+    integration's events are left to solve_ivp: stacks whose bounces die out, infinitely many
+    collisions, are left to the two-ball test below.)"""
+    made = check_stack(ratios, eps, gaps, height=height)
+    chain = icm_chain(made)
+    assert chain == pytest.approx(_hard_balls_by_integration(made), rel=1e-9)
+    assert min(chain) > 0
+
+
+def test_the_icm_chain_of_two_balls_is_the_closed_form_for_any_gap():
+    """Two balls, gaps from touching to the lower ball's bounces dying out before the upper
+    arrives: the chain, collision by collision, is :func:`twoball.model.icm_height`, whose
+    meeting is found in closed form (icm_meeting)."""
+    from twoball.model import icm_height
+
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        eps, mu = rng.uniform(0.3, 1.0), 10 ** rng.uniform(-3, 0)
+        made = check_stack([mu], eps, 10 ** rng.uniform(-2, 3), height=10 ** rng.uniform(0, 6))
+        gap = made.x_start[1] - made.height
+        expected = icm_height(made.height, gap, eps, eps, mu)
+        assert icm_chain(made)[-1] == pytest.approx(expected, rel=1e-9, abs=1e-9 * made.height)
+
+
 def test_eight_balls_run_to_the_second_apex():
     result = simulate_stack([0.6] * 7, 0.9, 0.3)
     assert result.success and result.status is Status.DONE
