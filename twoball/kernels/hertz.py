@@ -444,8 +444,9 @@ def contact_phase(
         if count > 0:
             S[0, 0] = 0.0
             _series(
-                masses, lam, used, moving, on, count, deta0, S, D, Q, Cb, L, F, G, J, Jo, Pre, Suf
-            )
+                masses, lam, used, moving, on, count, deta0, scales, S, D, Q, Cb, L, F, G, J, Jo,
+                Pre, Suf,
+            )  # fmt: skip
             tau = _taylor_step(S, scales, rows[:used_rows])
         else:
             # every active contact left out: free flight, tau = t

@@ -24,16 +24,27 @@ ORDER = 20  # Taylor coefficients per step (the series' degree)
 TOLERANCE = 1e-16  # each series' last term at the step, relative to its variable's scale
 LAST = 6  # coefficients that estimate the radius of convergence (more than a lacunary gap)
 ROOT_TOLERANCE = TOLERANCE ** (1.0 / ORDER)
+# the first-order rates (relative to scale) within which tau is left unscaled (:func:`_pace`):
+# their powers to ORDER stay within 2^(+-600), and results there are those before it, bit for bit
+RATES_IN_RANGE = 2.0**30
 
 
 @njit(borrow=True)
-def _series(masses, lam, used, moving, on, count, deta0, S, D, Q, Cb, L, F, G, J, Jo, Pre, Suf):
+def _series(
+    masses, lam, used, moving, on, count, deta0, scales, S, D, Q, Cb, L, F, G, J, Jo, Pre, Suf
+):  # fmt: skip
     """Taylor coefficients 1..ORDER in tau of a step's series (rows of S, coefficient 0 given):
     S[0] the clock t, S[1 + j] w_j and S[1 + n + j] w_j' (the displacement and velocity the
     contact forces add to ball j's parabola since the step's start, for the ``moving`` balls),
     S[1 + 2n + c] rho_c = sqrt(delta_c) (the ``on`` contacts, the first ``count`` of the ``used``
-    ones), with dt = J dtau, J the product of their rho; ``D`` receives the series of every
+    ones), with dt = J dtau / K, J the product of their rho; ``D`` receives the series of every
     eta_c'.
+
+    K (:func:`_pace`) is 1, or, where it is far from 1, a power of two near the fastest
+    first-order rate of the series, each relative to its scale (``scales``, the rows of S): a
+    constant, so the motion is the same on a clock scaled exactly, but with K = 1 the
+    coefficients go as J^k, and J, a product of up to N rho, under- or overflowed by order 20
+    (docs/stacks.md, "Why a Taylor series of the time-changed motion").
 
     Each coefficient k of a product is the Cauchy sum over m = 0..k in that order; the sums
     that do not wait for each other (a contact's rho^2, rho^3 and force; a ball's J w' and J
@@ -43,7 +54,10 @@ def _series(masses, lam, used, moving, on, count, deta0, S, D, Q, Cb, L, F, G, J
     forces": a product's additions wait for each other, and the loops' sums did not overlap)."""
     n = masses.size
     W, U, R = 1, 1 + n, 1 + 2 * n
+    pace = 1.0  # 1 / K, chosen once the first-order coefficients (K = 1) are known
     for k in range(ORDER):
+        if k == 1:
+            pace = _pace(moving, on, count, S, scales)
         for c in range(n):
             rate = deta0[c] if k == 0 else 0.0
             if c == 0:
@@ -77,7 +91,7 @@ def _series(masses, lam, used, moving, on, count, deta0, S, D, Q, Cb, L, F, G, J
                 for m in range(k + 1):
                     total += Pre[i - 1, m] * Suf[i + 1, k - m]
                 Jo[on[i], k] = total
-        after = 1.0 / (k + 1)
+        after = pace / (k + 1)  # exact: pace is a power of two
         # each contact's rho^2, rho^3 and force (rho^3 (1 - lam eta')), and rho's next term
         for i in range(count):
             c = on[i]
@@ -109,6 +123,37 @@ def _series(masses, lam, used, moving, on, count, deta0, S, D, Q, Cb, L, F, G, J
                     speed += J[m] * G[j, k - m]
                 S[W + j, k + 1] = w * after
                 S[U + j, k + 1] = speed * after
+
+
+@njit
+def _pace(moving, on, count, S, scales) -> float:
+    """1 / K for :func:`_series`, K a power of two near the largest first-order coefficient of
+    the series (computed with K = 1), each relative to its scale, and those coefficients moved to
+    the clock tau K (exact: a power of two). Their sizes in tau are those of J and of the
+    products of the other contacts' rho, which span hundreds of orders over a stack (seven
+    contacts' rho of 1e-8 to 1 gave J = 1e-25, and the clock's last six coefficients underflowed
+    to zero: an infinite step, a clock at 3e260; seven of 110 gave J = 1e14, and NaN); relative to K
+    the fastest is about 1, and the coefficients to order 20 are within the range of a double.
+    Within :data:`RATES_IN_RANGE` K = 1."""
+    n = moving.size
+    W, U, R = 1, 1 + n, 1 + 2 * n
+    fastest = abs(S[0, 1]) / scales[0]
+    for i in range(count):
+        fastest = max(fastest, abs(S[R + on[i], 1]) / scales[R + on[i]])
+    for j in range(n):
+        if moving[j]:
+            fastest = max(fastest, abs(S[U + j, 1]) / scales[U + j])
+    if not 0.0 < fastest < math.inf or 1.0 / RATES_IN_RANGE <= fastest <= RATES_IN_RANGE:
+        return 1.0
+    pace = math.ldexp(1.0, -math.frexp(fastest)[1])
+    S[0, 1] *= pace
+    for i in range(count):
+        S[R + on[i], 1] *= pace
+    for j in range(n):
+        if moving[j]:
+            S[W + j, 1] *= pace
+            S[U + j, 1] *= pace
+    return pace
 
 
 @njit
