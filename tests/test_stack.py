@@ -741,3 +741,38 @@ def test_balls_released_touching_push_only_once_something_pushes_them(gaps):
         # (a root where the overlap grows as the cube of the time since the impact: each
         # solver's to ~1e-10 of the 3-unit contact)
         assert ball[0].start == pytest.approx(drop.contacts[1].start, abs=1e-8)
+
+
+@pytest.mark.parametrize("bound", [1e-320, 5e-324, 1e-310])
+@pytest.mark.parametrize("rate", [0.0, -0.0])
+def test_a_step_bounded_by_a_subnormal_curvature_is_its_quadratic_s_root(bound, rate):
+    """The certified step is the root of f + f' h - bound h^2 / 2, sqrt(2 f / bound) with f' = 0
+    (computed here at 40 digits). A cluster at rest for a thousand time units bounds its
+    curvature by a subnormal number, and 2 bound f underflowed: the step was 0, a run STUCK."""
+    import mpmath
+
+    from twoball.kernels.phases import _safe_step
+
+    f = 1e-3
+    exact = mpmath.sqrt(2 * mpmath.mpf(f) / mpmath.mpf(bound))
+    assert _safe_step(f, rate, bound) == pytest.approx(float(exact), rel=1e-12)
+
+
+def test_a_ball_falling_onto_a_stack_at_rest_for_a_thousand_time_units():
+    """The top ball falls from its first apex (~1.6e7) onto three balls that have come to rest:
+    their motion decays into subnormal numbers over the fall, and the run ended STUCK there
+    (a random search's find). The balls below rest at their static overlaps -W_c (docs/model.md,
+    "Stacks of N balls", the domain), so the top ball touches after a free fall from its apex."""
+    ratios = [0.01267, 0.0803, 28.11]
+    eps = [0.2664727070430738, 0.08127696332023072, 0.32747257073101677, 0.9178657419179851]
+    result = simulate_stack(ratios, eps, 2077.3, height=27)
+    lower = check_stack(ratios, eps, 2077.3, height=27).masses[:3]
+    rest = np.cumsum(-np.cumsum(lower[::-1])[::-1])  # heights from the overlaps -W_c
+    apex_t, apex_h = result.apex_t[0], result.apex_h[0]
+    touch = apex_t + math.sqrt(2.0 * (apex_h - rest[-1]))
+    below = simulate_stack(ratios, eps, 2077.3, height=27, t_eval=[touch - 1.0]).trajectory
+    assert below.x[0, :3] == pytest.approx(rest, abs=1e-9)
+    assert below.v[0, :3] == pytest.approx(0.0, abs=1e-9)
+    second = next(c for c in result.contacts if c.contact == 3 and c.start > apex_t)
+    assert second.start == pytest.approx(touch, rel=1e-9)
+    assert result.apex_h[1] < apex_h  # damped: the energy never rises

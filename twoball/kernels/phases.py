@@ -98,6 +98,7 @@ FALL_SERIES_REACH = 0.25
 FALL_SERIES_TERMS = 40
 FALL_SERIES_STOP = 2.0**-56  # a bound on the next term, relative to the sum so far
 FALL_UNDERDAMPED = 0.01  # 1 - b^2 above which a long floor phase uses the oscillating form
+SMALLEST_NORMAL = 2.2250738585072014e-308  # below it a double keeps fewer digits, then none
 
 # Layout of the per-drop parameter vector passed to the kernel.
 P_MU, P_Z01, P_Z12, P_W2, P_F1, P_F2, P_NOISE = range(7)
@@ -452,7 +453,15 @@ def _safe_step(f, fp, bound):
     """Largest h with f + fp h - bound h^2/2 > 0 on [0, h), for f > 0."""
     if bound <= 0.0:
         return f / (-fp) if fp < 0.0 else np.inf
-    root = math.sqrt(fp * fp + 2.0 * bound * f)
+    room = 2.0 * bound * f
+    if room < SMALLEST_NORMAL:
+        # The product underflowed: a cluster whose motion has decayed into subnormal numbers
+        # (a stack resting for a thousand time units) bounds its curvature by ~1e-320, and
+        # 2 bound f rounded to zero gave h = 0 with fp = 0, a step of nothing (a run STUCK).
+        # Its square root, formed from the factors' roots, keeps its digits.
+        root = math.hypot(fp, math.sqrt(2.0 * bound) * math.sqrt(f))
+    else:
+        root = math.sqrt(fp * fp + room)
     if fp >= 0.0:
         return (fp + root) / bound
     return 2.0 * f / (root - fp)
