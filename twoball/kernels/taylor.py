@@ -286,12 +286,16 @@ def _function_root(lam, used, moving, S, c, low, high, eta0, deta0) -> float:
     for iteration in range(200):
         if high - low <= 1e-16 * high:
             break
-        # (the ends' values, halved by Illinois' rule, can both underflow to zero: then halve
-        # the bracket; compiled, a division by zero raised ZeroDivisionError out of the run, a
-        # researcher's 5-ball Hertz stack, tests/test_hertz.py)
         spread = f_high - f_low
-        middle = (low * f_high - high * f_low) / spread if spread != 0.0 else low
-        if iteration >= 100 or not low < middle < high:
+        # bisection after 100 steps, where the secant leaves the bracket, and where the ends'
+        # values, halved by Illinois' rule, have both underflowed to zero (compiled, the
+        # secant's division by zero raised ZeroDivisionError out of the run: a researcher's
+        # 5-ball Hertz stack, tests/test_hertz.py)
+        bisect = iteration >= 100 or spread == 0.0
+        if not bisect:
+            middle = (low * f_high - high * f_low) / spread
+            bisect = not low < middle < high
+        if bisect:
             middle = 0.5 * (low + high)
             if not low < middle < high:
                 break
