@@ -122,9 +122,16 @@ def check_stack(
     if force not in FORCES:
         raise ParameterError(f"force must be one of {', '.join(FORCES)}; got {force!r}")
     try:
-        ratios = list(np.ravel(np.asarray(mass_ratios, dtype=object)))
+        given = np.asarray(mass_ratios, dtype=object)
     except (TypeError, ValueError):
-        ratios = [mass_ratios]
+        given = np.empty(1, dtype=object)
+        given[0] = mass_ratios  # (its own check says what is wrong with it)
+    if given.ndim > 1:  # (flattened, [[0.2, 0.3], [0.4, 0.5]] was taken for five balls')
+        raise ParameterError(
+            "mass_ratios must be one number or a flat sequence of 1 to "
+            f"{MAX_BALLS - 1} values; got a nested sequence"
+        )
+    ratios = list(np.atleast_1d(given))
     if not 1 <= len(ratios) <= MAX_BALLS - 1:
         raise ParameterError(
             f"mass_ratios must hold 1 to {MAX_BALLS - 1} values (N = 2 to {MAX_BALLS} balls); "
