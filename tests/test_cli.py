@@ -329,6 +329,27 @@ def test_a_first_use_says_the_solver_is_compiling(monkeypatch, tmp_path, capsys)
     assert not jit.compiled_on_disk("twoball.kernels.hertz")
 
 
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["simulate", "--eps", "5", "--mu", "0.01", "--tau-ratio", "0.01"],
+        ["stack", "--mass-ratios", "0.2,0.2", "--eps", "0.9,0.9"],
+        ["sweep", "STORE", "--eps", "0.5:5:3", "--mu", "0.1", "--tau-ratio", "0"],
+    ],
+)
+def test_a_refused_parameter_on_a_first_use_is_the_only_line(monkeypatch, tmp_path, capsys, argv):
+    """Nothing compiled yet and a parameter refused: the error is the one line on stderr (the
+    compiling notice came first, for a run that was never to start)."""
+    from twoball import cli, jit
+
+    monkeypatch.setattr(jit, "CACHE_DIR", tmp_path)
+    store = tmp_path / "cube.zarr"
+    assert cli.main([str(store) if word == "STORE" else word for word in argv]) == 2
+    said = capsys.readouterr().err.splitlines()
+    assert len(said) == 1 and said[0].startswith("twoball: error:"), said
+    assert not store.exists()
+
+
 def test_serve_help_without_the_app_extra_says_what_to_install(tmp_path):
     """Without Panel, ``twoball serve --help`` still helps (status 0, what to install); serving
     itself says which extra it needs, in one line, status 2."""

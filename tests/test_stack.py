@@ -313,6 +313,9 @@ TWO_GAPS = "tau_ratios must be one number or a flat sequence of exactly 2 (one p
         (([0.2, 0.2], 0.9, [0.1, 0.2, 0.3]), f"{TWO_GAPS}; got a sequence of 3"),
         (([0.2, 0.2], 0.9, [0.1]), f"{TWO_GAPS}; got a sequence of 1"),
         (([0.2, 0.2], 0.9, [[0.1, 0.2]]), f"{TWO_GAPS}; got a nested sequence"),
+        (([[0.2, 0.3], [0.4]], 0.9, 0.2), "mass_ratios[0] must be a real number"),
+        (([[0.2, 0.3], [0.4, 0.5]], 0.9, 0.2), "mass_ratios must be one number or a flat sequence"),
+        (([[0.2, 0.3]], 0.9, 0.2), "mass_ratios must be one number or a flat sequence"),
         (([0.2, 0.2], 0.9, np.array([0.1])), "exactly 2"),
         (([0.2, 0.2], [0.9, 0.9, 0.0], 0.2), "eps[2] must be a finite number in [0.01, 1]"),
         (([0.2, 0.2], 0.9, float("nan")), "tau_ratios must be a finite number"),
@@ -776,3 +779,16 @@ def test_a_ball_falling_onto_a_stack_at_rest_for_a_thousand_time_units():
     second = next(c for c in result.contacts if c.contact == 3 and c.start > apex_t)
     assert second.start == pytest.approx(touch, rel=1e-9)
     assert result.apex_h[1] < apex_h  # damped: the energy never rises
+
+
+@pytest.mark.parametrize("force", ["linear", "hertz"])
+def test_contacts_are_listed_in_the_order_they_begin(force):
+    """Every force lists its contact intervals by start, as the two-ball drop does (the linear
+    kernel lists one when it ends: a long floor contact came after the ball contacts within
+    it); each contact's own intervals follow each other without overlapping."""
+    result = simulate_stack([0.2, 0.2], 0.9, 0.2, force=force)
+    starts = [interval.start for interval in result.contacts]
+    assert starts == sorted(starts) and len(starts) > 3
+    for contact in range(3):
+        own = [(c.start, c.end) for c in result.contacts if c.contact == contact]
+        assert all(end <= start for (_, end), (start, _) in zip(own, own[1:], strict=False))

@@ -202,8 +202,11 @@ def _add_simulate(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _simulate(args: argparse.Namespace) -> int:
+    from twoball.model import check_parameters
     from twoball.solve import simulate
 
+    check_parameters(args.eps, args.mu, args.tau_ratio, eps12=args.eps12, height=args.height)
+    say_if_compiling(args)
     result = simulate(
         args.eps,
         args.mu,
@@ -302,12 +305,15 @@ def _add_stack(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _stack(args: argparse.Namespace) -> int:
-    from twoball.stacks import simulate_stack
+    from twoball.stacks import check_stack, simulate_stack
 
+    eps, gaps = _one_or_all(args.eps), _one_or_all(args.tau_ratios)
+    check_stack(args.mass_ratios, eps, gaps, height=args.height, force=args.force)
+    say_if_compiling(args)
     result = simulate_stack(
         args.mass_ratios,
-        _one_or_all(args.eps),
-        _one_or_all(args.tau_ratios),
+        eps,
+        gaps,
         height=args.height,
         force=args.force,
         until=args.until,
@@ -471,6 +477,7 @@ def _sweep(args: argparse.Namespace) -> int:
         raise ParameterError(
             f"refusing {undertaking}: more than {max_drops(grid):,} drops needs --large"
         )
+    say_if_compiling(args)
     print(f"sweep {args.store}: {undertaking}", flush=True)  # on stdout: --quiet keeps it
     try:
         sweep(
@@ -673,7 +680,8 @@ def kernels_used(args: argparse.Namespace) -> str | None:
 
 def say_if_compiling(args: argparse.Namespace) -> None:
     """One line on stderr when the command's kernels are not compiled yet on this machine: the
-    first run then spends seconds to minutes in numba's compiler, silently otherwise."""
+    first run then spends seconds to minutes in numba's compiler, silently otherwise. Said once
+    the command's parameters are checked (a refused one is the only line, not after it)."""
     from twoball import jit
 
     module = kernels_used(args)
@@ -686,6 +694,10 @@ def say_if_compiling(args: argparse.Namespace) -> None:
         )
 
 
+# the commands that say whether they compile once they have checked their parameters
+CHECKED_FIRST = (_simulate, _stack, _sweep)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``twoball`` console script; returns the exit status."""
     argv = sys.argv[1:] if argv is None else argv
@@ -693,7 +705,8 @@ def main(argv: list[str] | None = None) -> int:
         if argv[:1] == ["serve"]:
             return _serve(argv[1:])
         args = build_parser().parse_args(argv)
-        say_if_compiling(args)
+        if args.func not in CHECKED_FIRST:
+            say_if_compiling(args)
         status = args.func(args)
         sys.stdout.flush()  # a closed reader is found here, not at the interpreter's exit
         return status
