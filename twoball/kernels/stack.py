@@ -453,14 +453,18 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
     # Balls released touching (a gap of zero) start with their contact active and unloaded
     # (force zero either way): left inactive, the compression wave of the first impact reaches
     # it as a tangency of high order (eta ~ -(t - t0)^6 for the fourth contact), which rounding
-    # toggles on and off for ever. Active, the contact simply starts to push.
+    # toggles on and off for ever. Active, the contact simply starts to push. Its interval
+    # begins where it does: the balls fall together with no force between them, so it first
+    # pushes (s < 0: docs/model.md, "Stacks of N balls") when the ball below it is first
+    # pushed, as the contact below begins (_begin_unloaded_above). Released before that, it
+    # never pushed: no interval, none counted ("What is measured": intervals with f > 0).
     active = np.zeros(n, dtype=np.bool_)
+    unloaded = np.zeros(n, dtype=np.bool_)
     opened = np.zeros(n)
     first = np.zeros(n, dtype=np.int64)
     for c in range(1, n):
         if x_start[c] == x_start[c - 1]:
-            active[c] = True
-            first[c] = 1
+            active[c] = unloaded[c] = True
     t = 0.0
     apexes = np.empty((8, 3))
     n_apex = 0
@@ -573,7 +577,9 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
             entered_by = index if event == EVENT_SWITCH else -1
             t += tau
             if event == EVENT_SWITCH:
-                if active[index]:
+                if unloaded[index]:  # released before it pushed: no interval
+                    unloaded[index] = False
+                elif active[index]:
                     contacts[n_contacts, 0], contacts[n_contacts, 1] = index, opened[index]
                     contacts[n_contacts, 2] = t
                     n_contacts += 1
@@ -593,6 +599,7 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
                     opened[index] = t
                     if top_apexes == 0:
                         first[index] += 1
+                    _begin_unloaded_above(index, t, top_apexes, unloaded, opened, first)
                 active[index] = not active[index]
                 apex_passed[index] = False
                 if index >= 1:
@@ -622,8 +629,8 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
                 status = STATUS_STUCK
                 running = False
                 break
-    for c in range(n):  # contacts still open at the end end there
-        if active[c]:
+    for c in range(n):  # contacts still open at the end end there (an unloaded one never began)
+        if active[c] and not unloaded[c]:
             contacts = _room_for_one(contacts, n_contacts)
             contacts[n_contacts, 0], contacts[n_contacts, 1], contacts[n_contacts, 2] = (
                 c,
@@ -640,6 +647,19 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
         phases=phases[:n_phases],
         phase_count=phase_count,
     )
+
+
+@njit
+def _begin_unloaded_above(contact, t, top_apexes, unloaded, opened, first):
+    """Contact ``contact`` begins to push at t: the unloaded contacts right above it (balls
+    released touching, see :func:`run`) begin with it, each pushed as the ball below it is."""
+    above = contact + 1
+    while above < unloaded.size and unloaded[above]:
+        unloaded[above] = False
+        opened[above] = t
+        if top_apexes == 0:
+            first[above] += 1
+        above += 1
 
 
 @njit

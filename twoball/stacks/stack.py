@@ -160,8 +160,7 @@ def solve_linear(
         # tolist: Python floats at once, not a numpy scalar per value (a third of the
         # three-ball drop's time outside the kernel)
         apexes = _apexes_by_ball(out.apexes, stack.balls)
-        rows, counts = _pushing_from_the_first_force(out.contacts, out.contacts_first)
-        contacts = _intervals(rows)
+        contacts = _intervals(out.contacts)
     states = partial(_linear_states, out.phases, stack)
     return StackResult(
         stack=stack,
@@ -169,7 +168,7 @@ def solve_linear(
         method="compiled",
         apexes=apexes,
         contacts=contacts,
-        contacts_first=[int(count) for count in counts],
+        contacts_first=[int(count) for count in out.contacts_first],
         end_time=float(out.end_time),
         status=Status(out.status),
         trajectory=None if times is None else states(times),
@@ -193,40 +192,6 @@ def _apexes_by_ball(rows: np.ndarray, balls: int) -> list[list[tuple[float, floa
         mine = rows[rows[:, 0] == ball]
         apexes.append(list(zip(mine[:, 1].tolist(), mine[:, 2].tolist(), strict=True)))
     return apexes
-
-
-def _pushing_from_the_first_force(
-    rows: np.ndarray, counts: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The kernel's contact rows (contact, start, end) and first-bounce counts, each interval of
-    a contact between balls released touching begun where it first pushes.
-
-    Balls released touching fall together with no force between them: a contact c >= 1 closed
-    at release first pushes when ball c - 1 below it is first pushed, at the first force of
-    contact c - 1 (the floor's impact, for contact 1 on ball 0). The kernel's interval began
-    at release: three balls released touching had both ball contacts pushing from t = 0
-    through the free fall, and two had a contact of no length at t = 0 counted, [1, 2] ball
-    contacts where ``simulate`` gives [1, 1] (a researcher's trial; ContactInterval is a time
-    the contact pushes). A closed interval that ends before that force is dropped, and its
-    count with it."""
-    touching = (rows[:, 1] == 0.0) & (rows[:, 0] >= 1)
-    if not touching.any():
-        return rows, counts
-    rows, counts = rows.copy(), counts.copy()
-    kept = np.ones(rows.shape[0], dtype=bool)
-    pushed = math.inf  # the first force of the contact below
-    for contact in range(counts.size):
-        mine = np.flatnonzero(rows[:, 0] == contact)
-        mine = mine[np.argsort(rows[mine, 1], kind="stable")]
-        if contact >= 1 and mine.size and rows[mine[0], 1] == 0.0:
-            if rows[mine[0], 2] <= pushed:
-                kept[mine[0]] = False
-                counts[contact] -= 1
-                mine = mine[1:]
-            else:
-                rows[mine[0], 1] = pushed
-        pushed = rows[mine[0], 1] if mine.size else math.inf
-    return rows[kept], counts
 
 
 def _intervals(rows: np.ndarray) -> list[ContactInterval]:
