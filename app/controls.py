@@ -32,6 +32,10 @@ POWER_OF_TEN = "return Number((10 ** tick).toPrecision(3)).toString()"
 EPS_STEP = 0.01
 LOG_STEP = 0.05
 LOG_SLIDERS = ("mu", "tau_ratio")
+# A log slider's value, moved by a user, to 3 significant digits, as its title shows it: ten to
+# its log10 gave mu = 0.0446683592151 in a shared link (a teacher's trial); 0.0447 is 0.0016 %
+# of a step off, and a factor 1.12 a step keeps every step's value distinct
+LOG_DIGITS = 3
 MARKDOWN_SPECIALS = re.compile(r"([\\`*_{}\[\]()#+!|<>~])")
 LONG_WORD = re.compile(r"\S{41,}")  # a bad value quoted in a message is cut to 40 characters
 
@@ -126,7 +130,16 @@ class Released:
 
 
 class ReleasedSlider(Released, pn.widgets.FloatSlider):
-    """:class:`Released` for real numbers."""
+    """:class:`Released` for real numbers, taken as the slider shows them: the browser's
+    start + n * step carries the float's noise (eps 0.01 + 56 * 0.01 = 0.5700000000000001,
+    which a worksheet's header printed: a teacher's trial), cut to 12 significant digits."""
+
+    def _process_property_change(self, props: dict) -> dict:
+        props = super()._process_property_change(props)
+        for name in ("value", "value_throttled"):
+            if isinstance(props.get(name), float):
+                props[name] = float(f"{props[name]:.12g}")
+        return props
 
 
 class ReleasedIntSlider(Released, pn.widgets.IntSlider):
@@ -164,14 +177,22 @@ def _log_slider(label: str, name: str) -> pn.widgets.FloatSlider:
     )
 
 
+def log_slider_value(position: float) -> float:
+    """The value a log slider at ``position`` (log10) sets: :data:`LOG_DIGITS` significant
+    digits of ten to it (-1.35: 0.0447)."""
+    return float(f"{10.0**position:.{LOG_DIGITS}g}")
+
+
 def follow_log_sliders(sliders: dict[str, pn.widgets.Widget], state: ExplorerState) -> None:
     """Move the log sliders to the state (eps follows it by its link)."""
     for name in LOG_SLIDERS:
         slider = sliders[name]
         value = getattr(state, name)
         shown = min(max(math.log10(value), slider.start), slider.end)
-        if abs(shown - slider.value) < 1e-9:
-            continue  # already there (a round trip through log10 is not exact)
+        # already there (a round trip through log10 is not exact), or the value this slider
+        # set, where the user left it (moved to log10(0.0447), the handle would leave its step)
+        if abs(shown - slider.value) < 1e-9 or log_slider_value(slider.value) == value:
+            continue
         with param.edit_constant(slider):
             slider.param.update(value=shown, value_throttled=shown)
 
@@ -246,7 +267,7 @@ class PhoneSliders(Built):
     def _moved(self, name: str, value: float | None) -> None:
         if not self._syncing and value is not None:
             self.state.slider_moved = True
-            setattr(self.state, name, 10.0**value)
+            setattr(self.state, name, log_slider_value(value))
 
     def _follow(self, *events: param.parameterized.Event) -> None:
         self._syncing = True
@@ -411,7 +432,7 @@ class Controls(Built):
             return
         self.state.slider_moved = True  # (the messages go)
         if name in LOG_SLIDERS:
-            setattr(self.state, name, 10.0**value)
+            setattr(self.state, name, log_slider_value(value))
 
     def _apply_preset(self, event: param.parameterized.Event) -> None:
         """A preset chosen (its drop set, in metres), or shown for a link that names it

@@ -19,7 +19,14 @@ from twoball.units import Units
 
 
 def _header(lines: dict[str, object]) -> str:
-    return "".join(f"# {name} = {value}\n" for name, value in lines.items())
+    """``# name = value`` lines; a parameter's number to 12 significant digits, as a link
+    carries it (state.url_query): eps = 0.57, not the 0.5700000000000001 of a slider's
+    arithmetic (a teacher's trial). The results, written by :func:`_number`, keep every digit."""
+    return "".join(f"# {name} = {_parameter(value)}\n" for name, value in lines.items())
+
+
+def _parameter(value: object) -> object:
+    return f"{value:.12g}" if isinstance(value, float) else value
 
 
 def _number(value: float | None) -> str:

@@ -11,6 +11,7 @@ from panel.io.state import set_curdoc
 from panel.reactive import Syncable
 
 from app.explorer import Explorer
+from app.state import url_query
 
 
 @pytest.mark.parametrize(("scene", "name"), [("drop", "eps"), ("drop", "mu"), ("stack", "eps")])
@@ -44,7 +45,8 @@ def test_a_drag_costs_the_server_nothing_until_its_release(monkeypatch, scene, n
     assert model.value == steps[-1] and slider.value == before
     assert handled == [] and shown.computations == computed
     model.set_from_json("value_throttled", steps[-1], setter="browser")  # the release
-    assert slider.value == slider.value_throttled == steps[-1]
+    # (to 12 digits: the float's noise of a browser's step goes, ReleasedSlider)
+    assert slider.value == slider.value_throttled == pytest.approx(steps[-1], rel=1e-12)
     assert [set(events) for events in handled] == [{"value_throttled"}]
     assert shown.computations == computed + 1
 
@@ -101,3 +103,29 @@ def test_a_key_press_is_a_visible_step_and_a_link_keeps_its_digits():
     assert explorer.state.eps == 0.9137 and sliders["eps"].value == 0.9137
     assert explorer.state.mu == 0.0137
     assert math.isclose(sliders["mu"].value, math.log10(0.0137), rel_tol=1e-12)
+
+
+def test_a_moved_slider_sets_a_short_value_and_an_old_link_keeps_its_digits():
+    """A link shared after a drag carried mu=0.0446683592151 (ten to the log slider's -1.35),
+    and a worksheet eps = 0.5700000000000001 (the browser's 0.01 + 56 * 0.01; a teacher's
+    trial). A log slider released sets 3 significant digits, as its title shows, and eps the
+    value without the float's noise; the handle stays where it was left. A link with long
+    values still opens on them."""
+    document = Document()
+    with set_curdoc(document):
+        explorer = Explorer({})
+        explorer.page().server_doc(document)
+    sliders = explorer.controls.sliders
+    released = {"eps": 0.01 + 56 * 0.01, "mu": -4 + 53 * 0.05, "tau_ratio": -4 + 61 * 0.05}
+    for name, position in released.items():
+        slider = sliders[name]
+        model = next(m for m, _ in slider._models.values() if m.document is document)
+        model.set_from_json("value_throttled", position, setter="browser")
+    state = explorer.state
+    assert (state.eps, state.mu, state.tau_ratio) == (0.57, 0.0447, 0.112)
+    assert url_query(state)["mu"] == "0.0447" and url_query(state)["tau_ratio"] == "0.112"
+    assert sliders["mu"].value == pytest.approx(-1.35, abs=1e-12)  # (not log10(0.0447))
+    old = Explorer({"eps": "0.5700000000000001", "mu": "0.0446683592151"})
+    assert old.state.mu == 0.0446683592151 and url_query(old.state)["mu"] == "0.0446683592151"
+    assert old.state.eps == 0.5700000000000001  # (accepted; the link's eps reads 0.57)
+    assert old.controls.sliders["mu"].value == pytest.approx(math.log10(0.0446683592151))

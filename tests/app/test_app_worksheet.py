@@ -102,3 +102,14 @@ def test_a_click_downloads_the_drop_in_the_browser(browser, app_server, artifact
         assert errors == []
     finally:
         context.close()
+
+
+def test_the_header_writes_a_parameter_as_a_link_does():
+    """A worksheet's header read eps = 0.5700000000000001 (a slider's arithmetic, a teacher's
+    trial): a parameter is written to 12 significant digits, as a link carries it; an old
+    link's long mu keeps its 12 digits."""
+    query = {"eps": "0.5700000000000001", "mu": "0.0446683592151", "tau_ratio": "0.01"}
+    scene = rendered(query).scenes["drop"]
+    header, _, _ = read(scene.download.callback().getvalue())
+    assert header["eps"] == "0.57" and header["mu"] == "0.0446683592151"
+    assert header["tau_ratio"] == "0.01" and header["eps12"] == "0.57"  # (equal to eps)
