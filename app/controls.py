@@ -83,6 +83,34 @@ HEIGHT_MEANINGS = {
 }
 
 
+# On a phone (narrower than 768 px, as PAGE_CSS in app/explorer.py) a slider's handle is a
+# thumb's touch target, 44 x 44 CSS px (WCAG 2.5.5, as the player's buttons: app/animation.py):
+# the theme's 15 px handle was hard to catch (a teacher's trial). A transparent border of the
+# target surrounds the disc drawn, 24 px; the slider's margins make room for the disc, not the
+# border, which reaches over the blank between sliders (with room for the border, three sliders
+# took 90 px more, and the Map's plot and its sliders no longer fitted a phone's screen). Set on
+# the slider, not :host, whose sizes the theme's style sheet, linked after this one, sets;
+# Bokeh's sizes from the handle's (its place, the margins) are set again with it. The track
+# is 12 px shorter at each end, where the handle stands half past it (at eps = 1 it stood past
+# the sidebar's edge). A wider screen keeps 15 px.
+PHONE_SLIDER = """
+@media (max-width: 767px) {
+  .noUi-target {
+    --handle-width: 44px; --handle-height: 44px; --handle-right: -22px;
+    --handle-top: calc(-1 * (44px - var(--slider-size)) / 2 - 1px);
+    --slider-margin: calc((24px - var(--slider-size)) / 2 + 1.5px);
+  }
+  .noUi-target.noUi-horizontal { width: calc(100% - 24px); margin-left: 12px; margin-right: 12px; }
+  .noUi-handle {
+    box-sizing: border-box; border: 10px solid transparent !important;
+    background-clip: padding-box;
+  }
+}
+"""
+# the drawn disc's margin in the handle's box on a phone (PHONE_SLIDER's border)
+PHONE_HANDLE_BORDER = 10
+
+
 class Released:
     """A slider whose release is handled at once, and marks the page as waiting for it.
 
@@ -105,6 +133,7 @@ class Released:
         # no value bubble: the title shows the value, and after a click the bubble stayed up
         # over the title ('eps (re[0.208]n)', a new user)
         params.setdefault("tooltips", False)
+        params["stylesheets"] = [*params.get("stylesheets", []), PHONE_SLIDER]
         super().__init__(**params)
 
     def _get_model(self, doc, root=None, parent=None, comm=None):

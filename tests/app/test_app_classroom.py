@@ -23,6 +23,7 @@ from appdriver import (
 )
 from playwright.sync_api import expect
 
+from app.controls import PHONE_HANDLE_BORDER
 from app.scenes import SCENE_REGISTRY
 
 pytestmark = pytest.mark.browser
@@ -1154,6 +1155,55 @@ def test_every_scene_of_a_phone_has_its_sliders_under_its_plots(
     try:
         page.wait_for_timeout(500)
         assert page.evaluate(PHONE_COPIES_JS) == 0  # (a laptop's page pays for no copies)
+        assert errors == []
+    finally:
+        context.close()
+
+
+@pytest.mark.parametrize("scene", ["drop", "stack"])
+def test_a_phone_s_slider_handles_are_touch_targets(browser, app_server, artifacts, scene):
+    """A slider's handle was 15 px on a phone, hard to catch with a thumb (a teacher's trial):
+    each is at least 40 x 40 CSS px there (the sidebar's and those under the plots), none over
+    another, and none past the page's width at the slider's end (eps = 1); the disc drawn in
+    it lies over no title, text, button or plot. A laptop keeps its 15 px handles."""
+    base, _ = app_server
+    url = f"{base}/app?scene={scene}" + ("&eps=1" if scene == "drop" else "&stack_eps=1")
+    context, page, errors = phone_page(browser)
+    try:
+        page.goto(url)
+        wait_for_plots(page)
+        page.wait_for_timeout(800)
+        handles = [h for h in deep_query(page, ".noUi-handle") if h["visible"]]
+        assert len(handles) >= (6 if scene == "drop" else 8), handles  # (copies and sidebar)
+        assert all(h["width"] >= 40 and h["height"] >= 40 for h in handles), handles
+        outside = [
+            (h["left"], h["right"], h["top"]) for h in handles if h["left"] < 0 or h["right"] > 390
+        ]
+        assert outside == [], outside
+        assert page.evaluate("document.documentElement.scrollWidth") <= 390
+        others = [
+            b
+            for b in deep_query(page, ".bk-slider-title, button, p, label, select, canvas")
+            if b["visible"] and b["width"] > 0
+        ]
+        # (the handle's transparent border reaches over the blank between sliders)
+        inset = PHONE_HANDLE_BORDER
+        discs = [
+            _box([h["left"] + inset, h["top"] + inset, h["right"] - inset, h["bottom"] - inset])
+            for h in handles
+        ]
+        over = [(d, b) for d in discs for b in others if _overlap(d, b)]
+        assert over == [], over
+        apart = [(a, b) for i, a in enumerate(handles) for b in handles[i + 1 :] if _overlap(a, b)]
+        assert apart == [], apart
+        page.screenshot(path=artifacts / f"phone-slider-handles-{scene}.png", full_page=True)
+        assert errors == []
+    finally:
+        context.close()
+    context, page, errors = open_page(browser, f"{base}/app?scene={scene}", viewport=(1366, 768))
+    try:
+        handles = [h for h in deep_query(page, ".noUi-handle") if h["visible"]]
+        assert handles and all(h["height"] < 20 for h in handles), handles
         assert errors == []
     finally:
         context.close()
