@@ -63,9 +63,12 @@ from .scene import (
 )
 from .state import contact_eps
 
-# Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first (all
-# eight: up to eight balls)
-PALETTE = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#F0E442", "#000000")
+# Okabe-Ito: told apart with every common colour-vision deficiency, bottom ball first, up to
+# eight balls; its bluish green left out, a grey (its usual eighth) in its place: a stack of
+# three drew its top ball in it, next to the chain's dotted green line (ICM_COLOUR), and a
+# class took the one for the other (a teacher's trial)
+PALETTE = ("#0072B2", "#E69F00", "#CC79A7", "#D55E00", "#56B4E9", "#F0E442", "#999999", "#000000")
+ICM_COLOUR = "green"  # the chain's line, "dotted green" as every scene and the lesson say
 # The stage draws the stack at rest STACK_SHARE of its height tall, the bottom ball's radius at
 # most BALL_RADIUS of it: eight balls, each with a radius of 0.05, had made the stage five
 # times the heights' span, the stack 40 px tall on a projector with its top ball under a pixel.
@@ -184,7 +187,7 @@ class StackScene(Scene):
         answers_pending(self.refusals)
         self.balls_drawn = ColumnDataSource({"x": [], "y": [], "r": [], "color": []})
         self.icm_line = Span(
-            dimension="width", line_color="green", line_dash="dotted", line_width=2
+            dimension="width", line_color=ICM_COLOUR, line_dash="dotted", line_width=2
         )
         self.cursor = Span(dimension="height", location=0.0, line_color="black", line_width=1)
         self.heights = self._heights_figure()

@@ -1333,3 +1333,32 @@ def test_every_text_renders_as_panels_markdown_pane(query):
     for pane in texts.values():
         markdown = pn.pane.Markdown(pane.object)
         assert pane._transform_object(pane.object) == markdown._transform_object(pane.object)
+
+
+def _hue_and_saturation(colour: str) -> tuple[float, float]:
+    """(hue in degrees, saturation) of a colour Bokeh names or writes in hex."""
+    import colorsys
+
+    from bokeh.colors import named
+
+    hex_colour = getattr(named, colour).to_hex() if not colour.startswith("#") else colour
+    red, green, blue = (int(hex_colour[i : i + 2], 16) / 255 for i in (1, 3, 5))
+    hue, _, saturation = colorsys.rgb_to_hls(red, green, blue)
+    return 360 * hue, saturation
+
+
+def test_the_stack_s_balls_are_drawn_apart_from_the_chain_s_green():
+    """A stack of three drew its top ball in Okabe-Ito's bluish green (hue 164 degrees) beside
+    the chain's dotted green line (120 degrees), and a class took the one for the other (a
+    teacher's trial): every ball's line, up to eight balls, is a grey, black or a colour at
+    least 60 degrees of hue from the line's green, and no two balls share a colour."""
+    explorer = Explorer({"scene": "stack", "N": "8"})
+    scene = explorer.scenes["stack"]
+    scene.__panel__().get_root(Document())
+    colours = [line.glyph.line_color for line in scene._lines]
+    assert len(colours) == 8 and len(set(colours)) == 8, colours
+    icm_hue, _ = _hue_and_saturation(scene.icm_line.line_color)
+    for colour in colours:
+        hue, saturation = _hue_and_saturation(colour)
+        apart = min(abs(hue - icm_hue), 360 - abs(hue - icm_hue))
+        assert saturation < 0.05 or apart >= 60, (colour, hue, scene.icm_line.line_color)
