@@ -404,8 +404,11 @@ class Controls(Built):
     # opening to make (a text box, and its own watchers of the state)
     @functools.cached_property
     def preset_source(self) -> pn.pane.Markdown:
-        """Where a chosen preset's numbers come from, under the preset."""
-        return pn.pane.Markdown("", styles={"font-size": "0.8em"})
+        """Where a chosen preset's numbers come from, under the preset, and its note
+        (:data:`PRESET_NOTES`): smaller than the controls' text, but at least 13 px (0.8 em
+        alone was 9.6 px, too small to read on a phone: a teacher's trial); 16 px on a
+        projector."""
+        return pn.pane.Markdown("", styles={"font-size": "max(13px, 0.8em)"})
 
     @functools.cached_property
     def height(self) -> pn.widgets.TextInput:

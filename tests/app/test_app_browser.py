@@ -483,3 +483,25 @@ def test_play_at_the_last_frame_plays_from_the_first(browser, app_server, artifa
         assert errors == []
     finally:
         context.close()
+
+
+@pytest.mark.parametrize("size", [(1366, 768), (390, 844)], ids=["laptop", "phone"])
+def test_a_preset_s_sources_and_note_are_readable(browser, app_server, artifacts, size):
+    """A preset's sources and its note (the tennis preset's "Why no textbook bounce") were
+    9.6 px, too small to read (a teacher's trial): at least 13 px, on a laptop and a phone."""
+    base, _ = app_server
+    context, page, errors = open_page(browser, f"{base}/app?preset=tennis", viewport=size)
+    try:
+        page.get_by_text("Why no textbook bounce").wait_for()
+        shown = [
+            p
+            for p in deep_query(page, "p")
+            if p["visible"] and re.match(r"Drop from|Why no", p["text"])
+        ]
+        assert len(shown) == 2, shown
+        assert all(p["font"] >= 13 for p in shown), shown
+        page.get_by_text("Why no textbook bounce").scroll_into_view_if_needed()
+        page.screenshot(path=artifacts / f"preset-note-{size[0]}.png")
+        assert errors == []
+    finally:
+        context.close()
