@@ -31,6 +31,7 @@ def plural(count: int, noun: str) -> str:
     return f"{count} {noun}{'s' * (count != 1)}"
 
 
+FROM_CONTACT = "from contact"  # the positions' axis: each ball's height from its contact
 SAMPLES = 600  # over the collision, with every contact's start and end: ~2 px apart at 1366 px
 MARGIN = 0.08  # of the collision's duration, shown before and after it
 
@@ -127,7 +128,9 @@ class CloseUpScene(Scene):
         }
         for fig in (self.positions, self.floor_force, self.ball_force):
             fig.xaxis.axis_label = units.time_label
-        self.positions.yaxis.axis_label = units.length_label
+        # each ball's own coordinate, 0 where it touches what is below it: a teacher read the
+        # upper ball's -135 as a height above the floor (SCENE_REGISTRY's caption says more)
+        self.positions.yaxis.axis_label = f"{units.length_label}, {FROM_CONTACT}"
         self.floor_force.yaxis.axis_label = f"f01 {units.force_label}"
         self.ball_force.yaxis.axis_label = f"f12 {units.force_label}"
 

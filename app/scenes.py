@@ -37,7 +37,11 @@ SCENE_REGISTRY = {
         "The first collision, slowed down: the floor's push on the big ball and the push "
         "between the balls. Each separate hump of the ball force is one contact. The floor "
         "force starts with a jump, not from 0: in this spring-and-dashpot model the damping "
-        "pushes in proportion to the speed, largest at the moment of touching.",
+        "pushes in proportion to the speed, largest at the moment of touching. Each ball's "
+        "height is its own, from contact: X1 is 0 where the big ball just touches the floor, "
+        "X2 where the small ball just touches the big one resting on the floor; below 0 they "
+        "are pressed in: X2 as deep as the big ball sinks into the floor, plus the squash "
+        "between the balls.",
         "closeup:CloseUpScene",
     ),
     "map": SceneEntry(

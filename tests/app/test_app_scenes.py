@@ -1362,3 +1362,19 @@ def test_the_stack_s_balls_are_drawn_apart_from_the_chain_s_green():
         hue, saturation = _hue_and_saturation(colour)
         apart = min(abs(hue - icm_hue), 360 - abs(hue - icm_hue))
         assert saturation < 0.05 or apart >= 60, (colour, hue, scene.icm_line.line_color)
+
+
+@pytest.mark.parametrize("units", ["dimensionless", "SI"])
+def test_the_first_collision_says_what_its_heights_are_measured_from(units):
+    """The First collision's upper ball went to "height X" -135, which a teacher read as a
+    height above the floor: each ball's coordinate is its own, 0 where it touches what is
+    below it, and the axis and the scene's explanation say so."""
+    explorer = Explorer({"scene": "closeup", "units": units})
+    scene = explorer.scenes["closeup"]
+    scene.__panel__().get_root(Document())
+    label = scene.positions.yaxis[0].axis_label
+    assert label.endswith(", from contact"), label
+    assert label.startswith("height [m]" if units == "SI" else "height X"), label
+    caption = SCENE_REGISTRY["closeup"].caption
+    assert "Each ball's height is its own, from contact" in caption
+    assert "X1 is 0 where the big ball just touches the floor" in caption
