@@ -242,11 +242,6 @@ class Explorer(Built):
         return template
 
 
-# Panel's report of the browser, made for every session and added to every template's roots
-# unless switched off: nothing here reads it (ClassroomTemplate)
-pn.config.browser_info = False
-
-
 class ClassroomTemplate(pn.template.BootstrapTemplate):
     """Panel's BootstrapTemplate without what a served page never shows, made anew for every
     page: 3-5 ms of a page's opening (benchmarks/app_open.py).
@@ -261,9 +256,8 @@ class ClassroomTemplate(pn.template.BootstrapTemplate):
     - No script area and no modal's actions (app/static/classroom.html, the Bootstrap page
       whose only state root is the location): two roots of every page that nothing here uses
       (Panel writes no script into the area; the page has no modal); nor Panel's report of
-      the browser (its time zone, dark mode...: only Panel's chat reads it; switched off
-      below, for every page, however the app is served or built). 4-5 ms of a page's opening
-      (benchmarks/app_open.py).
+      the browser (its time zone, dark mode...: only Panel's chat reads it). 4-5 ms of a
+      page's opening (benchmarks/app_open.py).
     """
 
     _template = Path(__file__).parent / "static" / "classroom.html"
@@ -278,8 +272,16 @@ class ClassroomTemplate(pn.template.BootstrapTemplate):
 
     def __init__(self, **params):
         super().__init__(**params)
-        for unused in ("js_area", "actions"):  # (Panel adds them for every template with a
-            self._render_items.pop(unused, None)  # state_roots block)
+        # (Panel adds them for every template with a state_roots block.) The browser's report
+        # is also switched off where the app is served, pn.extension(browser_info=False) in
+        # main.py, which spares a session the report's object; this drop is for a page built
+        # elsewhere (tests, benchmarks). Not one module-level pn.config.browser_info = False:
+        # set while a session is current (the first page imports this module), Panel keeps it
+        # for that session alone: the next pages had the root again, and the first page never
+        # connected (test_axe_finds_no_serious_violation, which a try of it failed)
+        for unused in ("js_area", "actions", "browser_info"):
+            self._render_items.pop(unused, None)
+        self._render_variables["browser_info"] = False
 
     def _build_layout(self) -> pn.Column:
         return pn.Column()

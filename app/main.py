@@ -17,6 +17,7 @@ from .scene import send_without_delay
 # header's link to the projector view and back
 pn.extension(
     notifications=False,
+    browser_info=False,  # (the browser's report: only Panel's chat reads it)
     js_files={
         "history": "app/static/history.js",
         "keys": "app/static/keys.js",

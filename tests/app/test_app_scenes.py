@@ -101,8 +101,11 @@ def test_a_page_carries_no_root_that_nothing_uses():
     from bokeh.embed.util import RenderItem, standalone_docs_json_and_render_items
 
     document = Document()
-    assert pn.config.browser_info is False  # (app/explorer.py, however the app is served)
-    Explorer({}).page().server_doc(document)
+    pn.config.browser_info = True  # (main.py turns it off; the template must not need it)
+    try:
+        Explorer({}).page().server_doc(document)
+    finally:
+        pn.config.browser_info = False
     names = sorted(root.name.split("-")[0] for root in document.roots)
     assert names == ["location", "main", "nav"]
     docs_json, _ = standalone_docs_json_and_render_items(document.roots)
