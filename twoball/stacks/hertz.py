@@ -82,6 +82,7 @@ class _Stack:
         self.masses = masses
         self.lam = lam
         self.n = len(masses)
+        self.rest_level = -math.inf  # the energy below which it is at rest (set by solve)
         # eta = D x: eta_0 = x_0, eta_c = x_c - x_(c-1); ball j feels (D^T f)_j = f_j - f_(j+1)
         self.difference = np.eye(self.n) - np.eye(self.n, k=-1)
 
@@ -188,6 +189,9 @@ def solve(
     lam = np.array([damping_factor(float(e)) for e in eps]) / speeds
     stack = _Stack(masses, lam)
     y = np.concatenate([x_start, np.zeros(n)])
+    weights = np.cumsum(masses[::-1])[::-1]
+    room = stack.energy(y) + 0.6 * float((weights ** (5.0 / 3.0)).sum())  # above the minimum
+    stack.rest_level = hertz_kernel.rest_level(masses, room)
     force_bound = _force_bounds(stack, stack.energy(y))
     active = np.zeros(n, dtype=bool)
     t = 0.0
@@ -472,12 +476,10 @@ def _settled(stack: _Stack, y: np.ndarray) -> bool:
     Hertz force", rest): with W_c the weight above contact c, the potential is a sum over contacts
     of W_c eta_c + (2/5) delta_c^(5/2), least at delta_c = W_c^(2/3), where it is -(3/5) W_c^(5/3);
     contact c open (eta_c >= 0) costs at least (3/5) W_c^(5/3) more. The energy never rises, so
-    once it lies below the least of these (the top ball's) above the minimum, no ball flies again.
+    once it lies below the least of these (the top ball's) above the minimum, less the
+    integration's error in it (:func:`twoball.kernels.hertz.rest_level`), no ball flies again.
     """
-    weights = np.cumsum(stack.masses[::-1])[::-1]
-    lowest = -0.6 * float((weights ** (5.0 / 3.0)).sum())
-    # half the proven margin leaves room for the integrator's error in the energy (~1e-12 E)
-    return stack.energy(y) - lowest < 0.3 * weights[-1] ** (5.0 / 3.0)
+    return stack.energy(y) < stack.rest_level
 
 
 def solve_compiled(
