@@ -334,6 +334,7 @@ def test_a_first_use_says_the_solver_is_compiling(monkeypatch, tmp_path, capsys)
     [
         ["simulate", "--eps", "5", "--mu", "0.01", "--tau-ratio", "0.01"],
         ["stack", "--mass-ratios", "0.2,0.2", "--eps", "0.9,0.9"],
+        ["stack", "--mass-ratios", "0.2", "--method", "DOP853"],
         ["sweep", "STORE", "--eps", "0.5:5:3", "--mu", "0.1", "--tau-ratio", "0"],
     ],
 )

@@ -306,9 +306,11 @@ def _add_stack(subparsers: argparse._SubParsersAction) -> None:
 
 def _stack(args: argparse.Namespace) -> int:
     from twoball.stacks import check_stack, simulate_stack
+    from twoball.stacks.stack import solver_for
 
     eps, gaps = _one_or_all(args.eps), _one_or_all(args.tau_ratios)
     check_stack(args.mass_ratios, eps, gaps, height=args.height, force=args.force)
+    solver_for(args.force, args.method)
     say_if_compiling(args)
     result = simulate_stack(
         args.mass_ratios,

@@ -29,6 +29,22 @@ from twoball.stacks.model import (
 )
 
 
+def solver_for(force: str, method: str) -> StackSolver:
+    """The solver of ``method`` for ``force`` (:data:`METHODS`); ``ParameterError`` naming the
+    methods that force has, where it has no such method."""
+    solvers = METHODS[force]
+    if method not in solvers:
+        elsewhere = [other for other, named in METHODS.items() if method in named]
+        hint = f" (it applies to the {elsewhere[0]} force only)" if elsewhere else ""
+        if method == "exact":  # the two-ball name of the exact solver
+            hint = " ('compiled' is the stacks' exact solver)"
+        raise ParameterError(
+            f"method must be one of {', '.join(solvers)} with the {force} force; got {method!r}"
+            + hint
+        )
+    return solvers[method]
+
+
 def simulate_stack(
     mass_ratios: object,
     eps: object,
@@ -99,22 +115,13 @@ def simulate_stack(
     (True, 4)
     """
     stack = check_stack(mass_ratios, eps, tau_ratios, height=height, force=force)
-    solvers = METHODS[force]
-    if method not in solvers:
-        elsewhere = [other for other, named in METHODS.items() if method in named]
-        hint = f" (it applies to the {elsewhere[0]} force only)" if elsewhere else ""
-        if method == "exact":  # the two-ball name of the exact solver
-            hint = " ('compiled' is the stacks' exact solver)"
-        raise ParameterError(
-            f"method must be one of {', '.join(solvers)} with the {force} force; got {method!r}"
-            + hint
-        )
+    solve = solver_for(force, method)
     apexes_wanted, t_end = stop_rule(until)
     times = None
     if t_eval is not None:
         times = as_times("t_eval", t_eval)
         check_span("t_eval", times, math.inf, False)  # no time before the release
-    result = solvers[method](stack, apexes_wanted, t_end, times, dense_output)
+    result = solve(stack, apexes_wanted, t_end, times, dense_output)
     stack = result.stack  # with the Hertz force its gaps are in units of the Hertz floor contact
     # after the end the closed form (linear) would be extrapolated, or nothing sampled (Hertz);
     # after a proven rest every later state is that rest's
