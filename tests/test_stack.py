@@ -181,6 +181,20 @@ def test_the_icm_chain_with_gaps_against_a_root_finder():
     assert chain == pytest.approx(_chain_by_root_finding(touching), rel=1e-9)
 
 
+def test_the_icm_chain_of_two_balls_is_the_closed_form_for_any_gap():
+    """Two balls, gaps from touching to the lower ball's bounces dying out before the upper
+    arrives: the chain is :func:`twoball.model.icm_height`, the two-ball drop's h_ICM."""
+    from twoball.model import icm_height
+
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        eps, mu = rng.uniform(0.3, 1.0), 10 ** rng.uniform(-3, 0)
+        made = check_stack([mu], eps, 10 ** rng.uniform(-2, 3), height=10 ** rng.uniform(0, 6))
+        gap = made.x_start[1] - made.height
+        expected = icm_height(made.height, gap, eps, eps, mu)
+        assert icm_chain(made)[-1] == pytest.approx(expected, rel=1e-9, abs=1e-9 * made.height)
+
+
 def test_eight_balls_run_to_the_second_apex():
     result = simulate_stack([0.6] * 7, 0.9, 0.3)
     assert result.success and result.status is Status.DONE
