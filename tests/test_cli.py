@@ -368,3 +368,14 @@ def test_serve_help_without_the_app_extra_says_what_to_install(tmp_path):
     assert "usage: twoball serve" in helped.stdout and "pip install 'twoball[app]'" in helped.stdout
     served = subprocess.run(run, capture_output=True, text=True, timeout=120, env=environment)
     assert "'app' extra" in _one_line_error(served)
+
+
+def test_json_output_is_strict_json(capsys):
+    """A value that is not a number (nan, inf) goes out as null: Python's NaN is not JSON, and
+    jq or a browser's JSON.parse refused the line (a researcher's trial)."""
+    from twoball import cli
+
+    cli._print_summary({"h_icm": float("nan"), "apexes": [1.5, float("inf")], "n": 2}, True)
+    line = capsys.readouterr().out
+    parsed = json.loads(line, parse_constant=lambda name: pytest.fail(f"{name} in {line}"))
+    assert parsed == {"h_icm": None, "apexes": [1.5, None], "n": 2}

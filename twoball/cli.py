@@ -232,8 +232,8 @@ def _missing_apexes(until: str | float, found: int, ball: str) -> str | None:
 
 def _print_summary(summary: dict, as_json: bool) -> int:
     """A run's observables: one JSON object, or a column of names and values ("-" for none)."""
-    if as_json:
-        print(json.dumps(summary))
+    if as_json:  # strict JSON: a number that is not one (nan, inf) is null, as none is
+        print(json.dumps(_json_numbers(summary), allow_nan=False))
         return 0
     width = max(len(key) for key in summary)
     for key, value in summary.items():
@@ -243,6 +243,17 @@ def _print_summary(summary: dict, as_json: bool) -> int:
         )
         print(f"{key:<{width}}  {shown}")
     return 0
+
+
+def _json_numbers(value: object) -> object:
+    """``value`` with every float that JSON cannot carry (nan, inf) as None."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {key: _json_numbers(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [_json_numbers(item) for item in value]
+    return value
 
 
 # stack
