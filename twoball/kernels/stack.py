@@ -575,6 +575,7 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
                     offset += abs(eta_rest[cid, c])
                 carried = max(carried, ROUNDING * noise[cid] * offset)
             entered_by = index if event == EVENT_SWITCH else -1
+            phase_start = t
             t += tau
             if event == EVENT_SWITCH:
                 if unloaded[index]:  # released before it pushed: no interval
@@ -615,6 +616,12 @@ def run(masses, zeta, x_start, apexes_wanted, t_end, record_phases, store):
                     break
             elif event == EVENT_TIME:
                 status = STATUS_DONE
+                if tau == np.inf:
+                    # run without an end (to an apex) and a phase certified for ever: no
+                    # contact switches again and no ball flies, a grounded cluster decaying to
+                    # its static rest: at rest from the phase's start (it ended DONE at t = inf,
+                    # no apex and no reason: a researcher's trial)
+                    status, t = STATUS_REST, phase_start
                 running = False
                 break
             elif event == EVENT_REST:
