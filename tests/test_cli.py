@@ -335,9 +335,11 @@ def test_a_first_use_says_the_solver_is_compiling(monkeypatch, tmp_path, capsys)
         ["simulate", "--eps", "5", "--mu", "0.01", "--tau-ratio", "0.01"],
         ["stack", "--mass-ratios", "0.2,0.2", "--eps", "0.9,0.9"],
         ["stack", "--mass-ratios", "0.2", "--method", "DOP853"],
+        ["stack", "--mass-ratios", "0.2", "--tau-ratios", "1e300"],
         ["sweep", "STORE", "--eps", "0.5:5:3", "--mu", "0.1", "--tau-ratio", "0"],
     ],
 )
+@pytest.mark.filterwarnings("error")  # (a warning printed is a line more: overflow, 1e300)
 def test_a_refused_parameter_on_a_first_use_is_the_only_line(monkeypatch, tmp_path, capsys, argv):
     """Nothing compiled yet and a parameter refused: the error is the one line on stderr (the
     compiling notice came first, for a run that was never to start)."""

@@ -195,6 +195,11 @@ def test_the_icm_chain_of_two_balls_is_the_closed_form_for_any_gap():
         assert icm_chain(made)[-1] == pytest.approx(expected, rel=1e-9, abs=1e-9 * made.height)
 
 
+def test_the_icm_chain_asks_for_a_stack():
+    with pytest.raises(ParameterError, match="stack must be a Stack, made by check_stack"):
+        icm_chain([0.2])
+
+
 def test_eight_balls_run_to_the_second_apex():
     result = simulate_stack([0.6] * 7, 0.9, 0.3)
     assert result.success and result.status is Status.DONE
@@ -729,3 +734,24 @@ def test_contacts_are_listed_in_the_order_they_begin(force):
     for contact in range(3):
         own = [(c.start, c.end) for c in result.contacts if c.contact == contact]
         assert all(end <= start for (_, end), (start, _) in zip(own, own[1:], strict=False))
+
+
+def test_a_stack_that_never_switches_again_is_at_rest():
+    """A heavy ball on a light one under two very light balls (a researcher's trial): the last
+    phase, the lower balls pressed together, is certified to infinity, with no contact to switch
+    and no ball to fly. That is a rest (it ended DONE at t = inf, no apex and no reason). From
+    its end on, every state is the static rest: no speed, and each contact pressed by exactly
+    the weight above it (docs/model.md, "Stacks of N balls": f_c = sum of the masses above)."""
+    ratios = [7.587320770044136, 0.018440037514196074, 0.0003249705022031509, 1.1485495516829e-4]
+    result = simulate_stack(ratios, 0.10791136768877864, 1e-9, height=0.702557003277761)
+    assert result.status is Status.REST and math.isfinite(result.end_time)
+    assert result.h1 is None and result.reason
+    later = result.end_time + np.array([1e3, 1e6])
+    rest = simulate_stack(
+        ratios, 0.10791136768877864, 1e-9, height=0.702557003277761, t_eval=later
+    ).trajectory
+    masses = result.stack.masses
+    weights = np.cumsum(masses[::-1])[::-1]  # above each contact, the floor's included
+    assert np.abs(rest.v).max() <= 1e-9 * np.sqrt(2 * result.stack.height)
+    for forces in rest.f:  # (to the rounding of the largest, the floor's)
+        assert forces == pytest.approx(weights, rel=1e-9, abs=1e-14 * weights[0])

@@ -238,7 +238,8 @@ def _check_domain(ratios, masses, restitutions, gaps, height, force, tau_f, x_st
 def release_heights(height: float, tau_ratios: tuple[float, ...], tau_f: float) -> np.ndarray:
     """X_i at release: (sqrt(H) + sum_(j<i) td_j / sqrt(2))^2 with td_j = tau_ratio_j tau_f."""
     delays = np.concatenate([[0.0], np.cumsum(tau_ratios)]) * tau_f
-    return (math.sqrt(height) + delays / math.sqrt(2.0)) ** 2
+    with np.errstate(over="ignore"):  # (inf for an absurd gap: the domain check refuses it,
+        return (math.sqrt(height) + delays / math.sqrt(2.0)) ** 2  # its warning a second line)
 
 
 @dataclass
@@ -368,6 +369,11 @@ def icm_chain(stack: Stack) -> list[float]:
     two-ball stack's h_ICM differed from the same drop's (h1/h_ICM 0.948 against 1.016 at
     tau_ratio 10).
     """
+    if not isinstance(stack, Stack):
+        raise ParameterError(
+            f"stack must be a Stack, made by check_stack(mass_ratios, eps, tau_ratios, ...) "
+            f"or a StackResult's .stack; got {type(stack).__name__}"
+        )
     clock = math.sqrt(2.0 * stack.height)  # (g = 1: the time of the floor impact, and its speed)
     level, up = 0.0, stack.eps[0] * clock  # ball i - 1 leaving its collision: height, speed
     heights = [up * up / 2.0]
