@@ -427,7 +427,12 @@ def contact_phase(
         eta0[:], deta0[:] = eta, deta
         # the series and their values now; a contact touching with neither compression nor
         # speed (balls released touching) would stall the time change (rho = rho' = 0): it is
-        # left out of a first step short enough that its force could not move anything
+        # left out of a first step short enough that its force could not move anything, one the
+        # clock can take: a shorter one (the stall test is against the run's scales, and the
+        # force bounded by the run's energy, so at H of 1e8 to 1e10 a contact closing at 6e-3
+        # was left out of steps of 1e-12, below the clock's spacing) and it is in the series,
+        # its rho or rho' not zero, so J grows from zero and the clock moves
+        spacing = 10.0 * (np.nextafter(t, np.inf) - t)
         count, used_rows = 0, 1
         rows[0] = 0
         for c in range(n):
@@ -439,7 +444,7 @@ def contact_phase(
                 mass = min(masses[c], masses[c - 1]) if c >= 1 else masses[c]
                 limit = 1e-3 * TOLERANCE * scales[U + c] * mass
                 left = _left_out_span(lam, eta[c], deta[c], c, bounds[c], max_step, limit)
-                if left > 0.0:
+                if left > spacing:
                     max_step = min(max_step, left)
                     continue
             used[c] = True
@@ -479,7 +484,6 @@ def contact_phase(
             max_step = min(certified - t, max_step)
         # the step's span on the clock; past a release (in the step) the clock runs back
         natural = _value(S, 0, tau)
-        spacing = 10.0 * (np.nextafter(t, np.inf) - t)
         if not natural <= max_step and max_step < spacing:
             if max_step == t_end - t:  # the end, closer than a step can go
                 return K_TIME, -1, t_end, 0.0, steps, next_sample, h_abs, nodes, n_nodes
