@@ -26,6 +26,7 @@ import panel.reactive
 import panel.widgets.slider
 import tornado.netutil
 from bokeh.models import InlineStyleSheet
+from bokeh.server.views.ws import WSHandler
 from bokeh.settings import settings as bokeh_settings
 from panel.io.state import state as panel_state
 from panel.reactive import Reactive, Syncable
@@ -85,6 +86,33 @@ def drop_messages_to_closed_sockets() -> None:
     panel.io.document.dispatch_tornado = dispatch_to_open_sockets
 
 
+def sockets_let_go_once() -> None:
+    """Bokeh 3.9's keep-alive ping, finding a page's socket closed, lets the page's session go
+    (``client_lost`` detaches it from its connection); when tornado reports the close later,
+    ``WSHandler.on_close`` asks that connection for its session, asserts that it has one, and
+    the server logged a traceback. A page closed while the server was busy for seconds does it
+    (a fresh clone's test run under load: every later test then failed on the log). Such a
+    close is a client leaving that was already let go: logged, nothing more. Idempotent.
+
+    A patch of Bokeh's ``WSHandler.on_close``, kept with its reproducer:
+    tests/app/test_app_hooks.py::test_a_socket_let_go_by_the_keep_alive_closes_quietly first
+    shows Bokeh's own raising; when a Bokeh release checks for it, that assertion fails, and
+    this patch is to be removed."""
+    on_close = WSHandler.on_close
+    if getattr(on_close, "let_go_once", False):
+        return
+
+    @functools.wraps(on_close)
+    def on_close_once(self) -> None:
+        if self.connection is not None and self.connection._session is None:
+            log.info("a page's socket closed after its session was let go")
+            self.connection = None  # (let go already: Bokeh's own close has nothing to do)
+        on_close(self)
+
+    on_close_once.let_go_once = True
+    WSHandler.on_close = on_close_once
+
+
 def closed_socket_handler(previous):
     """An exception handler for the server's event loop: a write that failed because its page
     had closed is a client leaving, logged as a warning; anything else goes to ``previous`` (the
@@ -114,6 +142,7 @@ def on_server_loaded(server_context) -> None:
     panel.config.session_key_func = page_kind
     bokeh_as_served()
     drop_messages_to_closed_sockets()
+    sockets_let_go_once()
     loop = IOLoop.current().asyncio_loop
     loop.set_exception_handler(closed_socket_handler(loop.get_exception_handler()))
     started = time.monotonic()
