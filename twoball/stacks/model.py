@@ -119,6 +119,11 @@ def check_stack(
     another length is refused, not shared out. ``force`` the contact law, which sets the
     smallest gap (:data:`TOUCHING_LIMIT_BALLS`) and, for Hertz, the smallest eps. Raises
     ``ParameterError`` (a ``ValueError``) naming the parameter and its allowed range.
+
+    The stack's ``tau_f`` and release heights ``x_start`` are the linear force's, whatever
+    ``force``: a Hertz run measures its gaps in its own floor contact time, and the stack it
+    ran (``simulate_stack(...).stack``) has that ``tau_f`` and those heights. Take a Hertz run's
+    h_ICM from its result (:func:`icm_chain` of this stack is the linear one's).
     """
     if force not in FORCES:
         raise ParameterError(f"force must be one of {', '.join(FORCES)}; got {force!r}")
