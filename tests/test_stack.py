@@ -755,3 +755,16 @@ def test_a_stack_that_never_switches_again_is_at_rest():
     assert np.abs(rest.v).max() <= 1e-9 * np.sqrt(2 * result.stack.height)
     for forces in rest.f:  # (to the rounding of the largest, the floor's)
         assert forces == pytest.approx(weights, rel=1e-9, abs=1e-14 * weights[0])
+
+
+@pytest.mark.parametrize("flag", ["dense_output", "throw", "nan_past_end"])
+@pytest.mark.parametrize("value", ["no", 0, None, 1.0])
+def test_a_switch_is_true_or_false(flag, value):
+    """A switch given anything but True or False is refused, naming it, by both entry points
+    ('no' had been taken as true, a researcher's trial); numpy's booleans are booleans."""
+    with pytest.raises(ParameterError, match=f"{flag} must be True or False; got"):
+        simulate_stack([0.2, 0.2], 0.9, 0.2, **{flag: value})
+    if flag != "nan_past_end":  # (the two-ball simulate has no such switch)
+        with pytest.raises(ParameterError, match=f"{flag} must be True or False; got"):
+            twoball.simulate(0.9, 0.2, 0.2, **{flag: value})
+    assert simulate_stack([0.2, 0.2], 0.9, 0.2, until="first", **{flag: np.bool_(True)}).success

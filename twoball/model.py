@@ -131,6 +131,14 @@ def check_value(name: str, value: object, *, text: bool = True) -> float:
     return number
 
 
+def check_flag(name: str, value: object) -> bool:
+    """A switch of the library's entry points (``dense_output``, ``throw``...): True or False
+    (Python's or numpy's); anything else is refused, naming it ('no' had been taken as true)."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise ParameterError(f"{name} must be True or False; got {value!r}")
+
+
 def is_real_number(value: object) -> bool:
     """True for a real number: an int or float of Python or numpy (or a 0-d array of one), not a
     string, bytes or a boolean."""

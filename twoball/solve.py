@@ -14,6 +14,7 @@ from twoball.model import (
     DEFAULT_HEIGHT,
     apex_bound,
     beyond_bound,
+    check_flag,
     check_parameters,
     with_ranges,
 )
@@ -118,6 +119,7 @@ def simulate(
     (True, 'DONE')
     """
     drop = check_parameters(eps, mu, tau_ratio, eps12=eps12, height=height)
+    dense_output, throw = check_flag("dense_output", dense_output), check_flag("throw", throw)
     apexes, t_end = stop_rule(until)
     # in any case ("cvode", as its extra is called, or "dop853"): named as METHODS names it
     method = _METHOD_NAMES.get(method.lower(), method) if isinstance(method, str) else method

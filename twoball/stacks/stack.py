@@ -18,7 +18,7 @@ from twoball.errors import ParameterError, SolverError, Status, phase_limit_hint
 # by module, not by name: jit.use_python_kernels swaps the kernels in their own modules
 from twoball.kernels import clusters
 from twoball.kernels import stack as kernel
-from twoball.model import DEFAULT_HEIGHT, beyond_bound
+from twoball.model import DEFAULT_HEIGHT, beyond_bound, check_flag
 from twoball.observables import ContactInterval, RunStats, as_times, check_span, stop_rule
 from twoball.stacks.model import (
     Stack,
@@ -115,6 +115,8 @@ def simulate_stack(
     (True, 4)
     """
     stack = check_stack(mass_ratios, eps, tau_ratios, height=height, force=force)
+    nan_past_end = check_flag("nan_past_end", nan_past_end)
+    dense_output, throw = check_flag("dense_output", dense_output), check_flag("throw", throw)
     solve = solver_for(force, method)
     apexes_wanted, t_end = stop_rule(until)
     times = None
