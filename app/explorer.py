@@ -2,13 +2,19 @@
 
 from __future__ import annotations
 
+import functools
+import os
 from collections.abc import Mapping
 from pathlib import Path
 from urllib.parse import urlencode
 
 import panel as pn
 import param
-from panel.widgets.indicators import BooleanIndicator
+from bokeh.document import Document
+from panel.io.document import init_doc
+from panel.io.model import add_to_doc
+from panel.io.resources import use_cdn
+from panel.io.state import set_curdoc, state
 
 from twoball import warmup
 
@@ -222,66 +228,134 @@ class Explorer(Built):
             controls.messages_at = layout
         return layout
 
-    def page(self) -> ClassroomTemplate:
-        """The served page: a template gives the viewport meta tag, a sidebar that folds away
-        (the button top left), and a header; on a narrow screen the controls stack below the
-        scenes (PAGE_CSS). BootstrapTemplate, not FastListTemplate: the latter loads a font
-        from Google, and the app must not reach the network."""
-        template = ClassroomTemplate(
-            title="Two-ball bounce explorer",
-            design=PAGE_DESIGN,  # (a text pane's own: app.scene.Text)
-            sidebar=[self.sidebar()],
-            main=[self],
-            sidebar_width=330,
-            header_background="#0072B2",
-            meta_viewport="width=device-width, initial-scale=1",
-        )
-        template.config.raw_css.extend([PAGE_CSS, PENDING_CSS])
-        if self.state.presentation:
-            template.config.raw_css.append(PRESENTATION_CSS)
-        return template
+    def page(self) -> ClassroomPage:
+        """The served page: the controls in a sidebar that folds away (the button top left),
+        the scenes in the main area, under a header; on a narrow screen the controls stack
+        below the scenes (PAGE_CSS)."""
+        return ClassroomPage(self.sidebar(), self, presentation=self.state.presentation)
 
 
-class ClassroomTemplate(pn.template.BootstrapTemplate):
-    """Panel's BootstrapTemplate without what a served page never shows, made anew for every
-    page: 3-5 ms of a page's opening (benchmarks/app_open.py).
+TITLE = "Two-ball bounce explorer"
 
-    - No busy spinner. Panel's reflects the whole server process: every slider move in any
-      session turned it on and off in every open page, two patches to each of N pages a move
-      (60 pages moving: 3600 patches a second, the server saturated). A page says itself that
-      its own change is pending (scene.PENDING_JS). Panel's default, a spinner, was copied for
-      every page before being replaced by none.
-    - No notebook view: Panel makes one for every template (its text, a "Launch server" button),
-      shown only when a notebook displays the template.
-    - No script area and no modal's actions (app/static/classroom.html, the Bootstrap page
-      whose only state root is the location): two roots of every page that nothing here uses
-      (Panel writes no script into the area; the page has no modal); nor Panel's report of
-      the browser (its time zone, dark mode...: only Panel's chat reads it). 4-5 ms of a
-      page's opening (benchmarks/app_open.py).
+
+@functools.cache
+def page_shell(presentation: bool, rel_path: str, cdn: bool) -> pn.template.BootstrapTemplate:
+    """Panel's Bootstrap page as this app's pages have it, made once per process (for each
+    way of presenting and of serving resources): its Jinja template (app/static/classroom.html),
+    its variables, its design and the style sheets and scripts it loads are the same for every
+    page. BootstrapTemplate, not FastListTemplate: the latter loads a font from Google, and the
+    app must not reach the network."""
+    shell = _ClassroomTemplate(
+        title=TITLE,
+        design=PAGE_DESIGN,  # (a text pane's own: app.scene.Text)
+        sidebar=[pn.Column()],  # (a page has a sidebar: the template's menu button)
+        sidebar_width=330,
+        header_background="#0072B2",
+        meta_viewport="width=device-width, initial-scale=1",
+    )
+    shell.config.raw_css.extend([PAGE_CSS, PENDING_CSS])
+    if presentation:
+        shell.config.raw_css.append(PRESENTATION_CSS)
+    shell._update_vars()
+    return shell
+
+
+class ClassroomPage:
+    """A session's page: its sidebar and its main area put into the session's document as the
+    two roots of Panel's Bootstrap page (:func:`page_shell`), beside the location.
+
+    Not a Panel template object for each page: BootstrapTemplate made, for every page, its lists,
+    its config, a notebook view, a busy spinner and a common root through which Panel's
+    preprocessing links components across the roots (this page has no such link: its
+    callbacks are Bokeh's own, on each model), and gave the same Jinja template and variables
+    each time: 12 ms of a page's opening, of 93 (benchmarks/app_open.py, paired). What a page
+    does here is what that template did with each root: the root's models, the design's pass
+    (the page's design given to every component without its own, isolated=False: the page
+    loads the design's style sheets once), its hooks kept for components added later (a scene
+    built when first visited), Panel's preprocessing and its clean-up when the session ends.
+    The page has no busy spinner (Panel's reflects the whole server process: every slider
+    move in any session turned it on and off in every open page, two patches to each of N
+    pages a move; a page says itself that its own change is pending, scene.PENDING_JS), no
+    script area, no modal and no report of the browser (app/static/classroom.html).
     """
+
+    design = PAGE_DESIGN
+
+    def __init__(self, sidebar: pn.viewable.Viewable, main: object, presentation: bool = False):
+        self.sidebar = sidebar
+        self.main = pn.panel(main)
+        self.presentation = presentation
+
+    def roots(self) -> dict[str, pn.viewable.Viewable]:
+        """The page's areas by the tag the template places them with."""
+        return {"main": self.main, "nav": self.sidebar}
+
+    def servable(self, title: str = TITLE) -> ClassroomPage:
+        """Into the current session's document (as Panel's ``servable``), if there is one."""
+        document = pn.state.curdoc
+        if document is not None and document.session_context is not None:
+            self.server_doc(document, title)
+        return self
+
+    def server_doc(self, document: Document | None = None, title: str = TITLE) -> Document:
+        """The page's roots, template and variables put into ``document``."""
+        shell = page_shell(self.presentation, state.rel_path or "", use_cdn())
+        design = shell._design
+        document = init_doc(document)
+        document.title = title
+        document.on_session_destroyed(state._destroy_session)
+        self.sidebar._add_location(document, True)
+        stylesheets, sizing_modes = {}, {}
+        cache = state._stylesheets.setdefault(document, {})
+        for tag, viewable in self.roots().items():
+            with pn.config.set(design=PAGE_DESIGN):
+                model = viewable.get_root(document, preprocess=False)
+            model.name = f"{tag}-{id(viewable)}"
+            model.tags = [*model.tags, tag]
+            sizing_modes[model.ref["id"]] = model.sizing_mode
+            viewable._documents[document] = model
+            add_to_doc(model, document)
+            document.on_session_destroyed(viewable._server_destroy)
+            # (Design.apply, given the document: the root is not in it until the caller's
+            # freeze ends, and Design.apply then cached the style sheets process-wide, where a
+            # closed page's emptied ones met the next page, and pointed them at Panel's CDN,
+            # not where the server serves them, its dist_url: app/main.py)
+            design._reapply(viewable, model, isolated=False, cache=cache, document=document)
+            viewable._preprocess(model)
+            viewable._hooks.append(design._apply_hooks)  # (components added later)
+            stylesheets.update(_style_sheet_files(viewable))
+        with set_curdoc(document):  # (components made later in the session, as a template)
+            pn.config.design = PAGE_DESIGN
+        document.template = shell.template
+        variables = document._template_variables
+        variables.update(shell._render_variables)
+        variables["template_resources"] = shell.resolve_resources(extras={"css": stylesheets})
+        variables["sizing_modes"] = sizing_modes
+        return document
+
+
+def _style_sheet_files(viewable: pn.viewable.Viewable) -> dict[str, str]:
+    """The CSS files of the components' own style sheets, which the page loads (as Panel's
+    templates do)."""
+    files = {}
+    for component in viewable.select(pn.viewable.Viewable):
+        for sheet in getattr(component, "_stylesheets", []):
+            sheet = str(sheet)
+            if sheet.endswith(".css"):
+                files[f"extra_{os.path.basename(sheet)}"] = sheet
+    return files
+
+
+class _ClassroomTemplate(pn.template.BootstrapTemplate):
+    """Panel's BootstrapTemplate as :func:`page_shell` keeps it: its page without a script area,
+    a modal's actions or the browser's report (app/static/classroom.html)."""
 
     _template = Path(__file__).parent / "static" / "classroom.html"
 
-    busy_indicator = param.ClassSelector(
-        default=None,
-        class_=BooleanIndicator,
-        constant=True,
-        allow_None=True,
-        doc="None: a page says itself that its change is pending.",
-    )
-
     def __init__(self, **params):
-        super().__init__(**params)
-        # (Panel adds them for every template with a state_roots block.) The browser's report
-        # is also switched off where the app is served, pn.extension(browser_info=False) in
-        # main.py, which spares a session the report's object; this drop is for a page built
-        # elsewhere (tests, benchmarks). Not one module-level pn.config.browser_info = False:
-        # set while a session is current (the first page imports this module), Panel keeps it
-        # for that session alone: the next pages had the root again, and the first page never
-        # connected (test_axe_finds_no_serious_violation, which a try of it failed)
+        super().__init__(busy_indicator=None, **params)
+        # (Panel adds them for every template with a state_roots block; the report of the
+        # browser, the first session's, would be kept for the process's life)
         for unused in ("js_area", "actions", "browser_info"):
             self._render_items.pop(unused, None)
         self._render_variables["browser_info"] = False
-
-    def _build_layout(self) -> pn.Column:
-        return pn.Column()

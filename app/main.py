@@ -46,4 +46,4 @@ if pn.state.location is not None:
 # root (about 30 ms of a session's opening: docs/performance.md, "A class at once")
 frozen = pn.state.curdoc.models.freeze() if pn.state.curdoc is not None else nullcontext()
 with frozen:
-    explorer.page().servable(title="Two-ball bounce explorer")
+    explorer.page().servable()

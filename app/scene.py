@@ -212,7 +212,7 @@ def answers_pending(source) -> None:
     source.js_on_change("data", CustomJS(code=ANSWERED_JS))
 
 
-# The page's design (explorer.ClassroomTemplate, a BootstrapTemplate): a Text pane has it as its
+# The page's design (explorer.ClassroomPage, Panel's Bootstrap page): a Text pane has it as its
 # own, so its model is made with the design's style sheets for a component of its own (below)
 PAGE_DESIGN = pn.theme.Bootstrap
 

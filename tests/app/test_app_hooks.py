@@ -317,9 +317,7 @@ def test_synced_parameters_listed_once_give_panels_own_values(monkeypatch):
             page = Explorer({"scene": scene, "step": "2" if scene == "drop" else "0"}).page()
             page.server_doc(document)
         components = [
-            component
-            for item, _ in page._render_items.values()
-            for component in item.select(Syncable)
+            component for item in page.roots().values() for component in item.select(Syncable)
         ]
         for component in components:
             assert Syncable._init_params(component) == own(component), component

@@ -18,7 +18,7 @@ from bokeh.document import Document
 import twoball
 from app.collisions import collisions
 from app.drop import TRAILS
-from app.explorer import Explorer
+from app.explorer import Explorer, page_shell
 from app.map_slices import map_cube
 from app.scene import Scene
 from app.scenes import SCENE_REGISTRY, SCENES
@@ -120,6 +120,36 @@ def test_a_page_carries_no_root_that_nothing_uses():
     )
     for root in document.roots:
         assert f'data-root-id="{root.id}"' in html
+
+
+def test_a_page_asks_its_style_sheets_of_the_server_only():
+    """Every style sheet a page imports (the design's, the components' own), on the page opened
+    and on a scene built when first visited, is asked of where the server serves Panel's files
+    (the document's dist_url, as app/main.py sets it), never of Panel's CDN: the app must not
+    reach the network. (A page built for a served session is held by the wheel's browser test,
+    test_app_serve.py, which caught the design's pass pointing them at the CDN there: a fault
+    this document without a session does not show.)"""
+    from bokeh.models import ImportedStyleSheet
+    from panel.io.state import set_curdoc
+
+    document = Document()
+    document.template_variables["dist_url"] = "served/"
+    with set_curdoc(document):
+        explorer = Explorer({"scene": "drop"})
+        with document.models.freeze():  # (as app/main.py)
+            explorer.page().server_doc(document)
+        explorer.state.scene = "stack"  # (built now: the design's hooks style it)
+    urls = {m.url for m in document.models if isinstance(m, ImportedStyleSheet)}
+    assert any(url.startswith("served/") for url in urls)
+    assert all(not url.startswith("http") for url in urls), sorted(urls)
+    stack = {
+        sheet.url
+        for component in explorer.scenes["stack"].__panel__().select(pn.viewable.Viewable)
+        for model, _ in component._models.values()
+        for sheet in getattr(model, "stylesheets", [])
+        if isinstance(sheet, ImportedStyleSheet)
+    }
+    assert stack and stack <= urls
 
 
 def test_the_stack_scene_computes_only_for_its_own_parameters():
@@ -1199,31 +1229,42 @@ def test_the_lessons_buttons_run_their_scripts_without_panels_links():
         for model, _ in models:
             (click,) = model.js_event_callbacks["button_click"]
             assert isinstance(click, CustomJS) and click.code == script, button.label
-    components = [c for item, _ in page._render_items.values() for c in item.select(Reactive)]
+    components = [c for item in page.roots().values() for c in item.select(Reactive)]
     assert len(components) > 20
     assert not [c for c in components if c in Callback.registry]
 
 
-def test_a_page_makes_no_busy_spinner_and_no_notebook_view(monkeypatch):
-    """app/explorer.ClassroomTemplate: a page's template copies no busy spinner (Panel's default
-    one, copied for each template before ``busy_indicator=None`` replaced it) and makes no
-    notebook view (Panel's: the template's text and a "Launch server" button)."""
+def test_a_page_makes_no_template_object_and_no_busy_spinner(monkeypatch):
+    """app/explorer.ClassroomPage: after the process's first page, a page makes no Panel template
+    (its lists, config, busy spinner and notebook view with its "Launch server" button: 12 ms
+    of a page's opening); its document still gets the page's template and variables, without
+    a busy area."""
     import panel as pn
 
+    Explorer({}).page().server_doc(Document())  # (the process's shell: app.explorer.page_shell)
     made = []
-    own = pn.widgets.Button.__init__
+    monkeypatch.setattr(
+        pn.template.BaseTemplate, "__init__", counted(pn.template.BaseTemplate.__init__, made)
+    )
+    monkeypatch.setattr(pn.widgets.Button, "__init__", counted(pn.widgets.Button.__init__, made))
+    document = Explorer({}).page().server_doc(Document())
+    assert "BaseTemplate" not in made and "Launch server" not in made
+    assert document.template is page_shell(False, "", False).template
+    assert document.template_variables["busy"] is False
+    assert document.template_variables["nav"] is True
+    pn.template.BootstrapTemplate()  # (Panel's own makes both: the count sees them)
+    assert {"BaseTemplate", "Launch server"} <= set(made)
 
-    def counted(self, *args, **params):
-        made.append(params.get("label"))
+
+def counted(own, made: list):
+    """``own`` (an ``__init__``), noting each call in ``made``: a button by its label, any other
+    object by its class's name."""
+
+    def init(self, *args, **params):
+        made.append(params.get("label") if isinstance(self, pn.widgets.Button) else "BaseTemplate")
         own(self, *args, **params)
 
-    page = Explorer({}).page()
-    assert page.busy_indicator is None and type(page).param.busy_indicator.default is None
-    monkeypatch.setattr(pn.widgets.Button, "__init__", counted)
-    page = Explorer({}).page()
-    assert "Launch server" not in made and page._layout.objects == []
-    pn.template.BootstrapTemplate()  # (Panel's own makes both: the count sees it)
-    assert "Launch server" in made
+    return init
 
 
 def test_moves_made_while_the_accuracy_is_measured_are_measured_together_once(monkeypatch):
@@ -1328,7 +1369,7 @@ def test_every_text_renders_as_panels_markdown_pane(query):
     scene = explorer.scene(query["scene"])
     scene.active = True
     scene.redraw_now()
-    shown = [*page.main, *page.sidebar, scene.__panel__()]
+    shown = [page.main, page.sidebar, scene.__panel__()]
     texts = {id(pane): pane for area in shown for pane in area.select(Text) if pane.object}
     assert texts
     if query.get("ratio") == "0.02":
