@@ -90,7 +90,14 @@ class Explorer(Built):
         # once built it stays rendered (a re-rendered tab, dynamic=True, left Bokeh
         # ranges that no longer followed the units or a preset)
         self.scenes: dict[str, Scene] = {}
-        self._holders = {name: pn.Column(sizing_mode="stretch_width") for name in SCENE_REGISTRY}
+        # a scene's tab holds a column of its caption and the scene once it is built, an empty
+        # spacer until then (four empty columns were 4.7 ms of a page's opening, the spacers
+        # about a third of that: benchmarks/app_open.py)
+        self._holders: dict[str, pn.viewable.Viewable] = {
+            name: pn.Spacer(margin=0) for name in SCENE_REGISTRY
+        }
+        self.tabs: pn.Tabs | None = None
+        shown = self.scene(self.state.scene)  # (on screen: Explorer.scene)
         self.tabs = pn.Tabs(
             *((entry.title, self._holders[name]) for name, entry in SCENE_REGISTRY.items()),
             dynamic=False,
@@ -105,7 +112,6 @@ class Explorer(Built):
         self.tabs.param.watch(self._tab_chosen, "active")
         self.stage = self.lesson.stage()  # a step's question, in place of its covered scene
         self._cover()
-        shown = self.scene(self.state.scene)  # (on screen: Explorer.scene)
         self.controls.show_scene_controls(shown.own_controls())
 
     def scene(self, name: str) -> Scene:
@@ -119,7 +125,10 @@ class Explorer(Built):
             self.scenes[name].active = name == self.state.scene
             # on a projector the teacher says what the scene shows: its plots get the room
             caption = [] if self.state.presentation else [self._caption(name)]
-            self._holders[name].extend([*caption, self.scenes[name]])
+            holder = pn.Column(*caption, self.scenes[name], sizing_mode="stretch_width")
+            self._holders[name] = holder
+            if self.tabs is not None:  # (the page's first scene is built before its tabs)
+                self.tabs[SCENES.index(name)] = (SCENE_REGISTRY[name].title, holder)
         return self.scenes[name]
 
     @staticmethod
