@@ -248,6 +248,28 @@ def test_hertz_refuses_overdamped_slow_impacts_with_the_smallest_height():
         simulate_stack([1e6], 0.9, 0.2, force="hertz")  # ran a minute, then failed
 
 
+def test_a_hertz_stack_checked_is_the_stack_its_run_starts_from():
+    """check_stack(..., force="hertz") gives the stack a Hertz run starts from: its gaps in the
+    Hertz floor contact time (not the linear one, 15 % apart here), each ball released at the
+    height the gaps above it give, and its ICM chain the run's h_ICM (a researcher took
+    check_stack's for the run's)."""
+    from twoball.stacks import check_stack
+    from twoball.stacks.model import floor_contact_time as linear_contact_time
+
+    checked = check_stack([0.2, 0.3], 0.9, [1.0, 0.5], height=100.0, force="hertz")
+    run = simulate_stack([0.2, 0.3], 0.9, [1.0, 0.5], height=100.0, force="hertz", until="first")
+    assert checked.tau_f == run.stack.tau_f
+    np.testing.assert_array_equal(checked.x_start, run.stack.x_start)
+    assert abs(checked.tau_f / linear_contact_time(checked.zeta[0]) - 1) > 0.05
+    # each ball released where free fall from it reaches the floor delay_i after ball 0 does,
+    # delay_i the gaps below it in units of tau_f: H + sqrt(2H) delay + delay^2 / 2
+    impact = math.sqrt(2.0 * 100.0)
+    for ball, delay in enumerate(np.cumsum([0.0, 1.0, 0.5]) * checked.tau_f):
+        expected = 100.0 + impact * delay + delay * delay / 2
+        assert checked.x_start[ball] == pytest.approx(expected, rel=1e-13)
+    assert icm_chain(checked)[-1] == run.h_icm
+
+
 def test_an_integrator_failure_is_a_solver_error(monkeypatch):
     """DOP853 failing in a contact phase raised a RuntimeError (a traceback on the command
     line); it is the run's status FAILED: SolverError, or success False with throw=False."""

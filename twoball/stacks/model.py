@@ -120,10 +120,11 @@ def check_stack(
     smallest gap (:data:`TOUCHING_LIMIT_BALLS`) and, for Hertz, the smallest eps. Raises
     ``ParameterError`` (a ``ValueError``) naming the parameter and its allowed range.
 
-    The stack's ``tau_f`` and release heights ``x_start`` are the linear force's, whatever
-    ``force``: a Hertz run measures its gaps in its own floor contact time, and the stack it
-    ran (``simulate_stack(...).stack``) has that ``tau_f`` and those heights. Take a Hertz run's
-    h_ICM from its result (:func:`icm_chain` of this stack is the linear one's).
+    The stack's ``tau_f`` (the floor contact time that measures the gaps) and release heights
+    ``x_start`` are ``force``'s own: the Hertz floor contact time for ``force="hertz"``
+    (docs/stacks.md), so that the stack is the one a run of that force starts from
+    (``simulate_stack(...).stack``) and :func:`icm_chain` of it is the run's h_ICM. ``zeta`` is
+    the linear dashpots' (a Hertz run calibrates its own damping).
     """
     if force not in FORCES:
         raise ParameterError(f"force must be one of {', '.join(FORCES)}; got {force!r}")
@@ -183,7 +184,12 @@ def check_stack(
     for i in range(1, balls):
         reduced = masses[i - 1] * masses[i] / (masses[i - 1] + masses[i])
         zeta[i] = decay_ratio(restitutions[i]) * math.sqrt(reduced)
-    tau_f = floor_contact_time(zeta[0])
+    if force == "hertz":
+        from twoball.stacks import hertz_contact  # scipy: imported with the Hertz force only
+
+        tau_f = hertz_contact.floor_contact_time(restitutions[0], height)
+    else:
+        tau_f = floor_contact_time(zeta[0])
     x_start = release_heights(height, gaps, tau_f)
     _check_domain(ratios, masses, restitutions, gaps, height, force, tau_f, x_start)
     return Stack(
@@ -218,11 +224,6 @@ def _check_domain(ratios, masses, restitutions, gaps, height, force, tau_f, x_st
     """Refuse a stack beyond the domain double precision can carry, as ``simulate`` refuses a
     drop (docs/model.md, "Stacks of N balls", the domain): the rounding of the top ball's
     height at release, over the smallest contact overlap, at most :data:`RESOLUTION`."""
-    if force == "hertz":
-        from twoball.stacks import hertz_contact as hertz
-
-        tau_f = hertz.floor_contact_time(restitutions[0], height)
-        x_start = release_heights(height, gaps, tau_f)
     if chain_rounding_ratio(height, masses, x_start[-1], force) <= RESOLUTION:
         return
     shown = ", ".join(f"{r:g}" for r in ratios)
