@@ -1,10 +1,11 @@
 """Benchmark: the server's CPU to open a page, per scene, without a browser or a network.
 
-Builds a session's page as ``panel serve`` does (the explorer from the URL query, its template
+Builds a session's page as ``panel serve`` does (the explorer from the URL query, its page
 put into a fresh Bokeh document under one ``freeze``, as app/main.py does) and serialises the
 document as the first message to the browser would carry it. The baseline, in the same process,
-is a page with one slider and a 10-point line. Medians of ``--pages`` pages after three warm-up
-pages; CPU time of the process (``time.process_time``).
+is a page with one slider and a 10-point line. Medians of ``--pages`` pages of each kind after
+three warm-up pages, the kinds built in turn (one page of each a round); CPU time of the
+process (``time.process_time``).
 
     .venv/bin/python benchmarks/app_open.py [--pages 10] [--scene drop closeup] [--profile drop]
         [--query map_force=hertz]
@@ -130,10 +131,29 @@ def baseline_page(query: dict[str, str]) -> tuple[dict[str, float], int, int]:
 def measure(build, query: dict[str, str], pages: int) -> tuple[dict[str, float], int, int]:
     for _ in range(3):
         build(query)
-    runs = [build(query) for _ in range(pages)]
+    return summary([build(query) for _ in range(pages)])
+
+
+def summary(runs: list) -> tuple[dict[str, float], int, int]:
+    """The medians of pages' parts and totals, the last page's model count and bytes."""
     parts = {k: statistics.median(r[0][k] for r in runs) for k in runs[0][0]}
     parts["total"] = statistics.median(sum(r[0].values()) for r in runs)
     return parts, runs[-1][1], runs[-1][2]
+
+
+def measure_in_turn(kinds: list[tuple[str, object, dict]], pages: int) -> list[tuple]:
+    """(label, parts, models, bytes) of each kind of page (label, build, query), the pages
+    built in turn, one of each kind a round: a spell of a slower machine (this one's CPU time
+    for the same page swung by a third within minutes) falls on every kind alike, where
+    one kind after another put it on whichever kind was being built."""
+    for _ in range(3):
+        for _, build, query in kinds:
+            build(query)
+    runs: dict[str, list] = {label: [] for label, _, _ in kinds}
+    for _ in range(pages):
+        for label, build, query in kinds:
+            runs[label].append(build(query))
+    return [(label, *summary(runs[label])) for label, _, _ in kinds]
 
 
 def served(scene: str, pages: int) -> tuple[list[float], list[int]]:
@@ -323,10 +343,13 @@ def main() -> None:
         profile.runcall(lambda: [explorer_page(query) for _ in range(args.pages)])
         pstats.Stats(profile).sort_stats("cumulative").print_stats(40)
         return
-    rows = [("baseline (slider, line)", *measure(baseline_page, {}, args.pages))]
-    for scene in args.scene:
-        rows.append((scene, *measure(explorer_page, {"scene": scene, **extra}, args.pages)))
-    print(f"server CPU to open a page, median of {args.pages} (ms); models; document (bytes)")
+    kinds = [("baseline (slider, line)", baseline_page, {})]
+    kinds += [(scene, explorer_page, {"scene": scene, **extra}) for scene in args.scene]
+    rows = measure_in_turn(kinds, args.pages)
+    print(
+        f"server CPU to open a page, median of {args.pages} built in turn (ms); models; "
+        "document (bytes)"
+    )
     heads = ("total", "build", "models", "json")
     print(f"{'page':26s} " + " ".join(f"{h:>7s}" for h in heads) + f" {'n':>5s} {'bytes':>8s}")
     for label, parts, count, size in rows:
