@@ -17,7 +17,10 @@ from .scene import send_without_delay
 # header's link to the projector view and back
 pn.extension(
     notifications=False,
-    browser_info=False,  # (the browser's report: only Panel's chat reads it)
+    # (the browser's report: only Panel's chat reads it; switched off here, for each session:
+    # a module-level pn.config.browser_info = False, set while the first page imports the app,
+    # was kept by Panel for that session alone, and that first page never connected)
+    browser_info=False,
     js_files={
         "history": "app/static/history.js",
         "keys": "app/static/keys.js",
