@@ -242,6 +242,10 @@ def test_until_a_time_and_rest():
 
 
 TWO_GAPS = "tau_ratios must be one number or a flat sequence of exactly 2 (one per pair: 3 balls)"
+# a set has no order and a generator is read once: each was taken as one item, "[0]", before
+UNORDERED = (
+    "must be one number or a flat sequence (a list, tuple or array, the balls from the floor up)"
+)
 
 
 @pytest.mark.parametrize(
@@ -264,6 +268,10 @@ TWO_GAPS = "tau_ratios must be one number or a flat sequence of exactly 2 (one p
         (([1e-5, 1e-5], 0.9, 0.2), "masses relative to ball 0"),
         (([0.2] * 16, 0.9, 0.2), "mass_ratios must hold 1 to 15"),
         (([0.5] * 3, 0.9, 0.0), "tau_ratios must be at least 1e-09 with 4 or more balls"),
+        (({0.2, 0.3}, 0.9, 0.2), f"mass_ratios {UNORDERED}; got a set"),
+        (((r for r in [0.2, 0.3]), 0.9, 0.2), f"mass_ratios {UNORDERED}; got a generator"),
+        (([0.2, 0.3], frozenset([0.9]), 0.2), f"eps {UNORDERED}; got a frozenset"),
+        (([0.2, 0.3], 0.9, iter([0.1, 0.2])), f"tau_ratios {UNORDERED}; got a list_iterator"),
     ],
 )
 def test_bad_input_names_the_parameter(arguments, words):

@@ -4,7 +4,7 @@ bound, and what a run of it returns (:class:`StackResult`; docs/model.md, "Stack
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -85,10 +85,22 @@ def _checked(declared: str, shown: str, value: object) -> float:
         raise ParameterError(str(error).replace(declared, shown, 1)) from None
 
 
+def _refuse_unordered(name: str, values: object) -> None:
+    """Refuse a set or an iterator for ``name``: the balls are in order, from the floor up, and
+    a set has none (a generator is read once); a ParameterError naming ``name``. (They were
+    taken as one item and reported as ``name[0]``, not a number.)"""
+    if isinstance(values, (set, frozenset, Iterator)):
+        raise ParameterError(
+            f"{name} must be one number or a flat sequence (a list, tuple or array, the balls "
+            f"from the floor up); got a {type(values).__name__}"
+        )
+
+
 def _values(name: str, declared: str, values: object, count: int, what: str) -> list[float]:
     """A declared parameter given as one number (every one alike) or as a flat sequence of
     exactly ``count`` values, checked. A sequence of another length is refused, one of one
     value too when ``count`` is more: it is not taken for every one (a list that lost entries)."""
+    _refuse_unordered(name, values)
     try:
         items = np.asarray(values, dtype=object)
     except (TypeError, ValueError):  # not array-like: checked (and refused) as one number
@@ -128,6 +140,7 @@ def check_stack(
     """
     if force not in FORCES:
         raise ParameterError(f"force must be one of {', '.join(FORCES)}; got {force!r}")
+    _refuse_unordered("mass_ratios", mass_ratios)
     try:
         given = np.asarray(mass_ratios, dtype=object)
     except (TypeError, ValueError):
