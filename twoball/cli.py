@@ -308,7 +308,8 @@ def _add_stack(subparsers: argparse._SubParsersAction) -> None:
         "--method",
         default="compiled",
         help="with --force hertz: compiled (default) or DOP853 (scipy's, the reference); the "
-        "linear force has one method, the exact solver, and refuses any other",
+        "linear force has one, compiled (the exact solver: 'method compiled' in its output), and "
+        "refuses any other",
     )
     parser.add_argument("--until", type=_until, default="second", help="first, second or a time")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
