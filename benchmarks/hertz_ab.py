@@ -58,10 +58,10 @@ def inputs(balls: int) -> tuple:
     """The arguments of ``run`` for the documented drop of ``balls`` balls (as
     twoball.stacks.hertz.solve_compiled makes them)."""
     stack = check_stack([0.2] * (balls - 1), 0.9, 0.2, height=1e4, force="hertz")
-    hertz_stack, eps = hertz._in_hertz_units(stack)
+    eps = np.asarray(stack.eps, dtype=float)
     lam = np.array([hertz.damping_factor(float(e)) for e in eps])
-    lam /= hertz.calibration_speeds(hertz_stack.masses, eps, stack.height)
-    return hertz_stack.masses, lam, hertz_stack.x_start, 2, np.inf, np.empty(0)
+    lam /= hertz.calibration_speeds(stack.masses, eps, stack.height)
+    return stack.masses, lam, stack.x_start, 2, np.inf, np.empty(0)
 
 
 def median_time(call, repeats: int) -> float:

@@ -44,7 +44,6 @@ proven. A root is refined by Brent's method on the dense output.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 from functools import partial
 
 import numpy as np
@@ -62,8 +61,12 @@ from twoball.kernels.codes import (
     EVENT_TIME,
 )
 from twoball.observables import ContactInterval, RunStats
-from twoball.stacks.hertz_contact import calibration_speeds, damping_factor, floor_contact_time
-from twoball.stacks.model import StackResult, StackTrajectory, release_heights
+from twoball.stacks.hertz_contact import (  # (floor_contact_time: this module's name too)
+    calibration_speeds,
+    damping_factor,
+    floor_contact_time,  # noqa: F401
+)
+from twoball.stacks.model import StackResult, StackTrajectory
 
 # The work a run may take: 30 000 steps, 15-40 s. Inside the domain check_stack accepts the
 # largest measured runs take about 10 000 (masses 1e4: 9 825; six balls: 6 004; a heavy stack
@@ -486,22 +489,23 @@ def solve_compiled(
     stack, apexes_wanted: int, t_end: float, times: np.ndarray | None, dense: bool
 ) -> StackResult:
     """The compiled path, :func:`twoball.kernels.hertz.run` (the default, accurate to rounding):
-    a :class:`~twoball.stacks.model.StackResult` for a validated stack, its gaps in units of the
-    Hertz floor contact time (:func:`floor_contact_time`); with ``dense`` the state at every
-    step's end kept, for :func:`between_nodes`."""
-    hertz_stack, eps = _in_hertz_units(stack)
+    a :class:`~twoball.stacks.model.StackResult` for a stack checked for the Hertz force
+    (``check_stack(..., force="hertz")``: its gaps in units of the Hertz floor contact time,
+    :func:`floor_contact_time`); with ``dense`` the state at every step's end kept, for
+    :func:`between_nodes`."""
+    eps = np.asarray(stack.eps, dtype=float)
     lam = np.array([damping_factor(float(e)) for e in eps])
-    lam /= calibration_speeds(hertz_stack.masses, eps, stack.height)
+    lam /= calibration_speeds(stack.masses, eps, stack.height)
     sorted_times = np.empty(0) if times is None else np.sort(np.asarray(times, dtype=float))
     code, end, apex_rows, contact_rows, first, samples, steps, nodes = hertz_kernel.run(
-        hertz_stack.masses, lam, hertz_stack.x_start, apexes_wanted, t_end, sorted_times, dense
+        stack.masses, lam, stack.x_start, apexes_wanted, t_end, sorted_times, dense
     )
     apexes = [(int(b), float(w), float(h)) for b, w, h in apex_rows]
     contacts = [(int(c), float(a), float(b)) for c, a, b in contact_rows]
     run = (Status(code), float(end), apexes, contacts, first, samples, int(steps))
-    result = _result(hertz_stack, "compiled", times, *run)
+    result = _result(stack, "compiled", times, *run)
     if dense:
-        result.dense = partial(between_nodes, nodes, hertz_stack.masses)
+        result.dense = partial(between_nodes, nodes, stack.masses)
     return result
 
 
@@ -521,24 +525,13 @@ def solve_dop853(
     :func:`solve_compiled`, without a dense output."""
     if dense:
         raise ParameterError("dense_output is for the compiled methods only; use t_eval")
-    hertz_stack, eps = _in_hertz_units(stack)
-    run = solve(
-        hertz_stack.masses, eps, hertz_stack.x_start, stack.height, apexes_wanted, t_end, times
-    )
-    return _result(hertz_stack, "DOP853", times, *run)
+    eps = np.asarray(stack.eps, dtype=float)
+    run = solve(stack.masses, eps, stack.x_start, stack.height, apexes_wanted, t_end, times)
+    return _result(stack, "DOP853", times, *run)
 
 
 # The Hertz methods by name, all of :data:`twoball.stacks.stack.METHODS`' one signature.
 METHODS = {"compiled": solve_compiled, "DOP853": solve_dop853}
-
-
-def _in_hertz_units(stack) -> tuple:
-    """(the stack with its gaps in units of the Hertz floor contact time, its eps as an array)."""
-    tau_f = floor_contact_time(stack.eps[0], stack.height)
-    hertz_stack = replace(
-        stack, tau_f=tau_f, x_start=release_heights(stack.height, stack.tau_ratios, tau_f)
-    )
-    return hertz_stack, np.asarray(stack.eps, dtype=float)
 
 
 def _result(

@@ -124,7 +124,7 @@ def simulate_stack(
         times = as_times("t_eval", t_eval)
         check_span("t_eval", times, math.inf, False)  # no time before the release
     result = solve(stack, apexes_wanted, t_end, times, dense_output)
-    stack = result.stack  # with the Hertz force its gaps are in units of the Hertz floor contact
+    stack = result.stack  # (the stack the run reports: its apexes are bounded by it)
     # after the end the closed form (linear) would be extrapolated, or nothing sampled (Hertz);
     # after a proven rest every later state is that rest's
     if times is not None and nan_past_end and result.status is not Status.REST:
@@ -262,9 +262,10 @@ def _solve_hertz(
 
 
 # Every method by force, then by name (as :data:`twoball.METHODS` for two balls): one signature,
-# solve(stack, apexes_wanted, t_end, times, dense) -> StackResult, on a validated stack
-# (check_stack), with the apex count and end time of stop_rule, the sample times (or None)
-# checked, and whether to keep the dense output (StackResult.evaluate).
+# solve(stack, apexes_wanted, t_end, times, dense) -> StackResult, on a stack validated for
+# that force (check_stack(..., force=...): a Hertz stack's gaps in its own units), with the
+# apex count and end time of stop_rule, the sample times (or None) checked, and whether to keep
+# the dense output (StackResult.evaluate).
 StackSolver = Callable[[Stack, int, float, np.ndarray | None, bool], StackResult]
 METHODS: dict[str, dict[str, StackSolver]] = {
     "linear": {"compiled": solve_linear},

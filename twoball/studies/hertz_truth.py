@@ -59,14 +59,13 @@ class HertzTruth:
 def inputs(mass_ratios, eps, tau_ratios, height: float) -> tuple:
     """(masses, lam, heights at release) of a Hertz stack, from the model's public functions:
     the values the solvers are handed."""
-    from twoball.stacks import check_stack, hertz, release_heights
+    from twoball.stacks import check_stack, hertz
 
     stack = check_stack(mass_ratios, eps, tau_ratios, height=height, force="hertz")
     restitutions = np.asarray(stack.eps, dtype=float)
     lam = np.array([hertz.damping_factor(float(e)) for e in restitutions])
     lam /= hertz.calibration_speeds(stack.masses, restitutions, height)
-    tau_f = hertz.floor_contact_time(stack.eps[0], height)
-    return stack.masses.copy(), lam, release_heights(height, stack.tau_ratios, tau_f)
+    return stack.masses.copy(), lam, stack.x_start.copy()  # (released in the Hertz units)
 
 
 def _product(a: list, b: list, k: int):
