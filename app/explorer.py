@@ -313,36 +313,33 @@ class ClassroomPage:
         document.title = title
         document.on_session_destroyed(state._destroy_session)
         self.sidebar._add_location(document, True)
-        # the page's design for its components made from now on in the session (as Panel's
-        # templates do; once for the session, not a config.set around each root: 1.1 ms each)
-        with set_curdoc(document):
-            pn.config.design = PAGE_DESIGN
-        stylesheets, sizing_modes = {}, {}
+        stylesheets = {}
         cache = state._stylesheets.setdefault(document, {})
-        for tag, viewable in self.roots().items():
-            with set_curdoc(document):
+        with set_curdoc(document):  # (the served session's own document: as its script runs)
+            # the page's design for its components made from now on in the session (as Panel's
+            # templates do; once for the session, not a config.set around each root: 1.1 ms)
+            pn.config.design = PAGE_DESIGN
+            for tag, viewable in self.roots().items():
                 model = viewable.get_root(document, preprocess=False)
-            model.name = f"{tag}-{id(viewable)}"
-            model.tags = [*model.tags, tag]
-            sizing_modes[model.ref["id"]] = model.sizing_mode
-            viewable._documents[document] = model
-            # (Panel's add_to_doc first walks every model of the root to take it out of any
-            # other document: 4 ms of a page; this page's models are new, made for it)
-            document.add_root(model)
-            document.on_session_destroyed(viewable._server_destroy)
-            # (Design.apply, given the document: the root is not in it until the caller's
-            # freeze ends, and Design.apply then cached the style sheets process-wide, where a
-            # closed page's emptied ones met the next page, and pointed them at Panel's CDN,
-            # not where the server serves them, its dist_url: app/main.py)
-            design._reapply(viewable, model, isolated=False, cache=cache, document=document)
-            viewable._preprocess(model)
-            viewable._hooks.append(design._apply_hooks)  # (components added later)
-            stylesheets.update(_style_sheet_files(viewable))
+                model.name = f"{tag}-{id(viewable)}"
+                model.tags = [*model.tags, tag]
+                viewable._documents[document] = model
+                # (Panel's add_to_doc first walks every model of the root to take it out of
+                # any other document: 4 ms of a page; this page's models are new, made for it)
+                document.add_root(model)
+                document.on_session_destroyed(viewable._server_destroy)
+                # (Design.apply, given the document: the root is not in it until the caller's
+                # freeze ends, and Design.apply then cached the style sheets process-wide,
+                # where a closed page's emptied ones met the next page, and pointed them at
+                # Panel's CDN, not where the server serves them, its dist_url: app/main.py)
+                design._reapply(viewable, model, isolated=False, cache=cache, document=document)
+                viewable._preprocess(model)
+                viewable._hooks.append(design._apply_hooks)  # (components added later)
+                stylesheets.update(_style_sheet_files(viewable))
         document.template = shell.template
         variables = document._template_variables
         variables.update(shell._render_variables)
         variables["template_resources"] = shell.resolve_resources(extras={"css": stylesheets})
-        variables["sizing_modes"] = sizing_modes
         return document
 
 
